@@ -1,0 +1,120 @@
+"""Benchmark tasks on disk in the LLM+P layout.
+
+A data root holds one folder per domain::
+
+    <root>/<domain>/domain.pddl  domain.nl
+    <root>/<domain>/p01.pddl .. p20.pddl   p01.nl .. p20.nl
+    <root>/<domain>/p_example.pddl  p_example.nl  p_example.sol
+    <root>/<domain>/expert.yaml      (optional: hand-written helper subgoals)
+
+:func:`load_task` reads one task (PDDL, its English description and the domain's example)
+into a :class:`BenchmarkTask`. Any directory in this layout works, e.g. a checkout of the
+LLM+P benchmark, whose files are read as they are.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from twostep.pddl import PDDLError, Problem, load_problem
+
+DEFAULT_DATA_ROOT = Path(__file__).resolve().parent.parent / "data"
+_TASK_FILE = re.compile(r"^p(\d+)\.pddl$")
+
+
+class BenchmarkError(Exception):
+    """An unknown domain or task, or a data folder that is not in the expected layout."""
+
+
+@dataclass(frozen=True)
+class BenchmarkTask:
+    """One task of a benchmark domain, with everything the prompts need."""
+
+    domain_name: str
+    task_id: int
+    problem: Problem
+    problem_path: Path
+    domain_path: Path
+    task_nl: str  # English description of this task (empty if the .nl file is missing)
+    domain_nl: str
+    example_nl: str  # the domain's in-context example task, in English
+    example_plan: tuple[str, ...]  # ... and its single-agent plan
+    example_pddl: str
+
+    @property
+    def name(self) -> str:
+        return f"{self.domain_name}/p{self.task_id:02d}"
+
+
+def _read(path: Path) -> str:
+    return path.read_text() if path.is_file() else ""
+
+
+def list_domains(root: Path = DEFAULT_DATA_ROOT) -> list[str]:
+    if not root.is_dir():
+        raise BenchmarkError(f"data root {root} does not exist")
+    return sorted(p.name for p in root.iterdir() if (p / "domain.pddl").is_file())
+
+
+def list_tasks(domain: str, root: Path = DEFAULT_DATA_ROOT) -> list[int]:
+    folder = domain_dir(domain, root)
+    return sorted(int(m.group(1)) for p in folder.iterdir() if (m := _TASK_FILE.match(p.name)))
+
+
+def domain_dir(domain: str, root: Path = DEFAULT_DATA_ROOT) -> Path:
+    folder = Path(root) / domain
+    if not (folder / "domain.pddl").is_file():
+        known = ", ".join(list_domains(Path(root))) or "none"
+        raise BenchmarkError(f"unknown domain '{domain}' in {root}; domains: {known}")
+    return folder
+
+
+def task_path(domain: str, task: int, root: Path = DEFAULT_DATA_ROOT) -> Path:
+    folder = domain_dir(domain, root)
+    for candidate in (folder / f"p{task:02d}.pddl", folder / f"p{task}.pddl"):
+        if candidate.is_file():
+            return candidate
+    tasks = list_tasks(domain, root)
+    listing = f"{tasks[0]}..{tasks[-1]}" if tasks else "none"
+    raise BenchmarkError(f"unknown task {task} of domain '{domain}'; tasks: {listing}")
+
+
+def load_task(domain: str, task: int, root: Path = DEFAULT_DATA_ROOT) -> BenchmarkTask:
+    """Load task ``task`` (1-based) of ``domain`` from the data root ``root``."""
+    root = Path(root)
+    folder = domain_dir(domain, root)
+    path = task_path(domain, task, root)
+    problem = load_problem(folder / "domain.pddl", path)
+    plan_text = _read(folder / "p_example.sol")
+    example_plan = tuple(
+        line.split(";", 1)[0].strip()
+        for line in plan_text.splitlines()
+        if line.split(";", 1)[0].strip()
+    )
+    return BenchmarkTask(
+        domain_name=domain,
+        task_id=task,
+        problem=problem,
+        problem_path=path,
+        domain_path=folder / "domain.pddl",
+        task_nl=_read(path.with_suffix(".nl")).strip(),
+        domain_nl=_read(folder / "domain.nl").strip(),
+        example_nl=_read(folder / "p_example.nl").strip(),
+        example_plan=example_plan,
+        example_pddl=_read(folder / "p_example.pddl"),
+    )
+
+
+__all__ = [
+    "DEFAULT_DATA_ROOT",
+    "BenchmarkError",
+    "BenchmarkTask",
+    "PDDLError",
+    "domain_dir",
+    "list_domains",
+    "list_tasks",
+    "load_task",
+    "task_path",
+]

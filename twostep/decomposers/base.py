@@ -1,0 +1,58 @@
+"""What a decomposer is: the source of helper subgoals in TwoStep.
+
+A decomposer proposes, for N agents, up to N-1 helper subgoals. Each proposal carries the
+PDDL goal text (and, for the LLM, the English subgoal and every prompt and answer). The
+pipeline (:mod:`twostep.pipeline`) then checks every proposal against the task and plans
+the accepted ones; a decomposer never plans.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from twostep.benchmark import BenchmarkTask
+
+
+@dataclass
+class SubgoalProposal:
+    """One helper's subgoal as proposed, before the pipeline checks and plans it.
+
+    ``pddl`` is the goal text (None when no usable PDDL came out); ``status`` is
+    ``"proposed"`` until the pipeline decides, or ``"discarded"`` when the decomposer
+    already knows it is unusable (``reason`` then says why).
+    """
+
+    helper: int  # 1-based helper index
+    pddl: str | None
+    english: str | None = None
+    status: str = "proposed"
+    reason: str | None = None
+    llm_time_s: float = 0.0
+    exchanges: list[dict[str, Any]] = field(default_factory=list)  # prompts and answers
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "helper": self.helper,
+            "english": self.english,
+            "pddl": self.pddl,
+            "status": self.status,
+            "reason": self.reason,
+            "llm_time_s": round(self.llm_time_s, 6),
+            "exchanges": self.exchanges,
+        }
+
+
+@dataclass(frozen=True)
+class DecompositionRequest:
+    task: BenchmarkTask
+    agents: int
+    seed: int = 0
+
+
+class Decomposer(Protocol):
+    """Proposes helper subgoals for a task; at most ``request.agents - 1`` of them."""
+
+    name: str
+
+    def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]: ...
