@@ -153,13 +153,23 @@ def fact_to_pddl(fact: Fact) -> str:
 _TOKEN = re.compile(r"\(|\)|[^\s()]+")
 
 
-def read_sexp(text: str, source: str | None = None) -> list[SExp]:
-    """Read all top-level s-expressions of ``text``; PDDL comments (``;``) are skipped."""
+def read_sexp(text: str, source: str | None = None, single: bool = False) -> list[SExp]:
+    """Read all top-level s-expressions of ``text``; PDDL comments (``;``) are skipped.
+
+    With ``single``, anything after the first complete expression is an error (a ``)``
+    too many closes a PDDL file's ``define`` early).
+    """
     stack: list[list[SExp]] = [[]]
     opened: list[int] = []
     for lineno, line in enumerate(text.splitlines(), start=1):
         line = line.split(";", 1)[0]
         for token in _TOKEN.findall(line):
+            if single and len(stack) == 1 and stack[0]:
+                raise PDDLError(
+                    f"unexpected '{token}' after the end of the define: a ')' too many before it?",
+                    source,
+                    lineno,
+                )
             if token == "(":
                 stack.append([])
                 opened.append(lineno)
@@ -414,8 +424,8 @@ def parse_problem(
     problem_source: str | None = None,
 ) -> Problem:
     """Parse a domain and a problem given as PDDL text."""
-    read_sexp(domain_text, domain_source)  # unbalanced parentheses: exact file and line
-    read_sexp(problem_text, problem_source)
+    read_sexp(domain_text, domain_source, single=True)  # unbalanced parentheses: file and line
+    read_sexp(problem_text, problem_source, single=True)
     domain_text, problem_text = _repair_undeclared_constants(
         domain_text, problem_text, domain_source, problem_source
     )
@@ -541,7 +551,7 @@ def domain_to_pddl(domain: Domain, extra_requirements: Iterable[str] = ()) -> st
     lines.append(" (:requirements " + " ".join(_requirements(domain, extra_requirements)) + ")")
     if typed:
         entries = [
-            f"{t} - {parent}" if parent else t for t, parent in domain.types.items() if t != "object"
+            f"{t} - {parent or 'object'}" for t, parent in domain.types.items() if t != "object"
         ]
         lines.append(" (:types " + " ".join(entries) + ")")
     if domain.constants:

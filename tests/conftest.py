@@ -1,0 +1,50 @@
+"""Shared fixtures: the project's data set and small named example problems."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
+os.environ.setdefault("MLFLOW_DISABLE_TELEMETRY", "true")
+os.environ.setdefault("PREFECT_SERVER_ANALYTICS_ENABLED", "false")
+
+REPO = Path(__file__).resolve().parent.parent
+DATA = REPO / "data"
+FIXTURES = Path(__file__).resolve().parent / "fixtures"
+
+BLOCKS_DOMAIN = """
+(define (domain blocks)
+  (:requirements :strips)
+  (:predicates (clear ?x) (on-table ?x) (arm-empty) (holding ?x) (on ?x ?y))
+  (:action pickup :parameters (?b)
+    :precondition (and (clear ?b) (on-table ?b) (arm-empty))
+    :effect (and (holding ?b) (not (clear ?b)) (not (on-table ?b)) (not (arm-empty))))
+  (:action putdown :parameters (?b)
+    :precondition (holding ?b)
+    :effect (and (clear ?b) (arm-empty) (on-table ?b) (not (holding ?b))))
+  (:action stack :parameters (?b ?under)
+    :precondition (and (clear ?under) (holding ?b))
+    :effect (and (arm-empty) (clear ?b) (on ?b ?under) (not (clear ?under)) (not (holding ?b))))
+  (:action unstack :parameters (?b ?under)
+    :precondition (and (on ?b ?under) (clear ?b) (arm-empty))
+    :effect (and (holding ?b) (clear ?under) (not (on ?b ?under)) (not (clear ?b)) (not (arm-empty)))))
+"""
+
+
+def blocks_problem(init: str, goal: str, objects: str = "a b c d") -> str:
+    return f"(define (problem p) (:domain blocks) (:objects {objects}) (:init {init}) (:goal (and {goal})))"
+
+
+@pytest.fixture(scope="session")
+def data_root() -> Path:
+    if not (DATA / "blocksworld" / "domain.pddl").is_file():
+        pytest.skip("data/ has not been generated")
+    return DATA
+
+
+@pytest.fixture(scope="session")
+def quirks_root() -> Path:
+    return FIXTURES / "llmp_quirks"

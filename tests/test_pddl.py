@@ -1,0 +1,87 @@
+"""twostep.pddl: reading real-world files, errors with file and line, goals, writing."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import BLOCKS_DOMAIN, blocks_problem
+from twostep.pddl import PDDLError, load_problem, parse_goal, parse_problem, problem_to_pddl, domain_to_pddl
+
+
+def test_blocks_model() -> None:
+    p = parse_problem(BLOCKS_DOMAIN, blocks_problem("(on-table a) (on b a) (clear b) (arm-empty)", "(on a b)", "a b"))
+    assert set(p.domain.actions) == {"pickup", "putdown", "stack", "unstack"}
+    assert p.domain.predicates["on"] == ("object", "object")
+    assert ("on", "b", "a") in p.init and ("arm-empty",) in p.init
+    assert p.goal.positive == {("on", "a", "b")}
+    stack = p.domain.actions["stack"]
+    assert [str(a) for a in stack.delete] == ["(clear ?under)", "(holding ?b)"]
+
+
+def test_quirky_tyreworld_is_read_as_is(quirks_root: Path) -> None:
+    folder = quirks_root / "tyreworld"
+    p = load_problem(folder / "domain.pddl", folder / "p01.pddl")
+    # tools the domain uses but only the problem declares become typed constants
+    assert p.domain.constants == {"jack": "tool", "pump": "tool", "wrench": "tool"}
+    assert "wrench" not in p.objects and "wrench" in p.all_objects
+    # an action and a predicate share the name "open"
+    assert "open" in p.domain.actions and "open" in p.domain.predicates
+
+
+def test_written_pddl_reads_back_identically(quirks_root: Path) -> None:
+    folder = quirks_root / "tyreworld"
+    p = load_problem(folder / "domain.pddl", folder / "p01.pddl")
+    q = parse_problem(domain_to_pddl(p.domain), problem_to_pddl(p))
+    assert q.init == p.init and q.goal == p.goal and q.all_objects == p.all_objects
+    assert q.domain.actions == p.domain.actions
+
+
+@pytest.mark.parametrize(
+    ("problem_text", "line", "fragment"),
+    [
+        ("(define (problem p) (:domain blocks)\n(:objects a b)\n(:init (on-table a)\n(:goal (on a b)))", 1, "never closed"),
+        ("(define (problem p) (:domain blocks)\n(:objects a b)\n(:init (on-table z))\n(:goal (on a b)))", 3, "z"),
+        ("(define (problem p) (:domain blocks)\n(:objects a b))\n(:init)", 3, "a ')' too many"),
+    ],
+)
+def test_malformed_problem_names_file_and_line(tmp_path: Path, problem_text: str, line: int, fragment: str) -> None:
+    (tmp_path / "d.pddl").write_text(BLOCKS_DOMAIN)
+    (tmp_path / "p.pddl").write_text(problem_text)
+    with pytest.raises(PDDLError) as info:
+        load_problem(tmp_path / "d.pddl", tmp_path / "p.pddl")
+    assert info.value.source == str(tmp_path / "p.pddl")
+    assert info.value.line == line
+    assert fragment in str(info.value)
+
+
+def test_malformed_domain_is_blamed_on_the_domain(tmp_path: Path) -> None:
+    (tmp_path / "d.pddl").write_text(BLOCKS_DOMAIN.replace(":precondition (holding ?b)", ":precondition (holdin ?b)"))
+    (tmp_path / "p.pddl").write_text(blocks_problem("(arm-empty)", "(arm-empty)"))
+    with pytest.raises(PDDLError) as info:
+        load_problem(tmp_path / "d.pddl", tmp_path / "p.pddl")
+    assert info.value.source == str(tmp_path / "d.pddl")
+    assert info.value.line is not None and info.value.line > 1
+
+
+def test_parse_goal_checks_predicates_arity_objects() -> None:
+    p = parse_problem(BLOCKS_DOMAIN, blocks_problem("(arm-empty)", "(on a b)", "a b"))
+    g = parse_goal("(:goal (and (on-table a) (not (holding b))))", p)
+    assert g.positive == {("on-table", "a")} and g.negative == {("holding", "b")}
+    assert parse_goal("(on a b)", p).positive == {("on", "a", "b")}
+    for text, fragment in [
+        ("(and (stacked a b))", "unknown predicate 'stacked'"),
+        ("(on a)", "takes 2"),
+        ("(on a q)", "unknown object 'q'"),
+        ("(and (on a b) (not (on a b)))", "negation"),
+        ("", "empty"),
+    ]:
+        with pytest.raises(PDDLError, match=fragment):
+            parse_goal(text, p)
+
+
+def test_goal_holds_and_unmet() -> None:
+    p = parse_problem(BLOCKS_DOMAIN, blocks_problem("(arm-empty) (on a b)", "(on a b) (not (holding a))", "a b"))
+    assert p.goal.holds(p.init)
+    assert p.goal.unmet(frozenset({("holding", "a")})) == ["(on a b)", "(not (holding a))"]

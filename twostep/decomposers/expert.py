@@ -1,0 +1,41 @@
+"""``expert``: hand-written helper subgoals from ``<data>/<domain>/expert.yaml``.
+
+The file maps a task (``p01``) to a number of agents and the list of helper goals in
+PDDL, as a PDDL expert annotated them for the paper's TwoStep-Human ablation::
+
+    p01:
+      2:
+        - "(and (on-table b2) (arm-empty))"
+
+A task or agent count without an entry gets no helper (TwoStep returns the SA plan).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
+
+
+def load_expert_subgoals(path: Path) -> dict[str, dict[int, list[str]]]:
+    if not path.is_file():
+        return {}
+    raw: Any = yaml.safe_load(path.read_text()) or {}
+    return {
+        str(task): {int(n): [str(g) for g in goals or []] for n, goals in (per_n or {}).items()}
+        for task, per_n in raw.items()
+    }
+
+
+class ExpertDecomposer:
+    name = "expert"
+
+    def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]:
+        table = load_expert_subgoals(request.task.domain_path.parent / "expert.yaml")
+        goals = table.get(f"p{request.task.task_id:02d}", {}).get(request.agents, [])
+        return [
+            SubgoalProposal(helper=i, pddl=g) for i, g in enumerate(goals[: request.agents - 1], start=1)
+        ]

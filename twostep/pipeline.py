@@ -1,0 +1,324 @@
+"""The three methods of the paper, end to end: SA PDDL, MA PDDL and TwoStep.
+
+TwoStep, readable top to bottom in :func:`run_twostep`:
+
+    propose (decomposer: generate + translate)  ->  check each subgoal
+    ->  plan each helper from the current environment  ->  progress the state
+    ->  plan the main agent to the full goal  ->  score the parallel execution
+
+Each step is one function here so that the Prefect flow (``flows/``) can run it as a task.
+Every method returns a :class:`RunResult`, which serialises to the common result.json.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Collection, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from twostep.benchmark import BenchmarkTask
+from twostep.decomposers.base import Decomposer, DecompositionRequest, SubgoalProposal
+from twostep.execution import ParallelExecution, ScheduleError, parallel_length
+from twostep.multiagent import compile_multi_agent_problem, split_plan
+from twostep.pddl import Fact, Goal, PDDLError, Problem, parse_goal
+from twostep.planner import PlannerSettings, PlanResult, Status, plan
+from twostep.progression import environment_part, handoff_problem, progress_state
+from twostep.strips import Grounder, PlanError
+
+
+@dataclass
+class AgentPlan:
+    """One planner call of a run: which agent, towards which goal, and what came back."""
+
+    agent: str
+    role: str  # "single", "multi", "helper" or "main"
+    goal: str
+    result: PlanResult
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"agent": self.agent, "role": self.role, "goal": self.goal, **self.result.to_dict()}
+
+
+@dataclass
+class RunResult:
+    """What every method returns; :meth:`to_dict` is the result.json shape."""
+
+    domain: str
+    task: int
+    method: str
+    agents: int
+    seed: int = 0
+    success: bool = False
+    exec_length: int | None = None
+    sa_length: int | None = None
+    planning_time_s: float = 0.0
+    llm_time_s: float = 0.0
+    plans: dict[str, list[str]] = field(default_factory=dict)
+    schedule: list[list[tuple[str, str]]] = field(default_factory=list)
+    subgoals: list[dict[str, Any]] = field(default_factory=list)
+    decomposer: str | None = None
+    status: str = "solved"
+    message: str = ""
+    fallback: str | None = None
+    planner_calls: list[AgentPlan] = field(default_factory=list)
+    state_editing_time_s: float = 0.0
+    score_time_s: float = 0.0
+    wall_time_s: float = 0.0
+    scripted_llm: bool = False
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "domain": self.domain,
+            "task": self.task,
+            "method": self.method,
+            "agents": self.agents,
+            "seed": self.seed,
+            "success": self.success,
+            "exec_length": self.exec_length,
+            "sa_length": self.sa_length,
+            "planning_time_s": round(self.planning_time_s, 4),
+            "llm_time_s": round(self.llm_time_s, 4),
+            "plans": self.plans,
+            "schedule": [[list(pair) for pair in step] for step in self.schedule],
+            "subgoals": self.subgoals,
+            "decomposer": self.decomposer,
+            "status": self.status,
+            "message": self.message,
+            "fallback": self.fallback,
+            "planner_calls": [c.to_dict() for c in self.planner_calls],
+            "state_editing_time_s": round(self.state_editing_time_s, 6),
+            "score_time_s": round(self.score_time_s, 6),
+            "wall_time_s": round(self.wall_time_s, 4),
+            "scripted_llm": self.scripted_llm,
+            **self.extra,
+        }
+
+
+# ----------------------------------------------------------------- steps
+
+
+def plan_agent(problem: Problem, goal: Goal, settings: PlannerSettings) -> PlanResult:
+    """Plan one agent from ``problem``'s initial state to ``goal``."""
+    return plan(problem.with_state(goal=goal), settings)
+
+
+def score(
+    problem: Problem,
+    plans: Sequence[Sequence[str]],
+    agent_predicates: Collection[str],
+    mode: str = "exact",
+) -> ParallelExecution:
+    """Parallel execution length of per-agent plans given in hand-off order."""
+    grounder = Grounder(problem)
+    grounded = [grounder.ground_plan(p) for p in plans]
+    return parallel_length(grounded, problem.init, problem.goal, agent_predicates, mode)
+
+
+def _named_schedule(execution: ParallelExecution, names: Sequence[str]) -> list[list[tuple[str, str]]]:
+    return [[(names[agent], action) for agent, action in step] for step in execution.steps]
+
+
+def check_subgoal(
+    proposal: SubgoalProposal, problem: Problem, environment: frozenset[Fact], agent_predicates: Collection[str]
+) -> Goal | None:
+    """Parse a proposal against the task; on a problem set its status and reason, return None.
+
+    A subgoal is discarded when it is not valid PDDL for this task (unknown predicate or
+    object, wrong arity), already holds for the helper, equals the whole goal, or asks for
+    the opposite of a goal literal.
+    """
+    if proposal.status == "discarded":
+        return None
+    if not proposal.pddl:
+        proposal.status, proposal.reason = "discarded", proposal.reason or "no PDDL subgoal"
+        return None
+    try:
+        goal = parse_goal(proposal.pddl, problem, source=f"helper {proposal.helper} subgoal")
+    except PDDLError as error:
+        proposal.status, proposal.reason = "discarded", f"invalid PDDL: {error.message}"
+        return None
+    start = handoff_problem(problem, environment, goal, agent_predicates).init
+    if goal.holds(start):
+        proposal.status, proposal.reason = "discarded", "already true in the helper's initial state"
+        return None
+    if goal.positive == problem.goal.positive and goal.negative == problem.goal.negative:
+        proposal.status, proposal.reason = "discarded", "equals the full goal"
+        return None
+    conflict = sorted((goal.positive & problem.goal.negative) | (goal.negative & problem.goal.positive))
+    if conflict:
+        shown = " ".join("(" + " ".join(f) + ")" for f in conflict[:3])
+        proposal.status, proposal.reason = "discarded", f"contradicts the goal on {shown}"
+        return None
+    return goal
+
+
+# ----------------------------------------------------------------- methods
+
+
+def run_single_agent(task: BenchmarkTask, settings: PlannerSettings, seed: int = 0) -> RunResult:
+    """SA PDDL: the task solved as is by one agent."""
+    start = time.perf_counter()
+    problem = task.problem
+    result = plan(problem, settings)
+    run = RunResult(task.domain_name, task.task_id, "sa", 1, seed)
+    run.planner_calls.append(AgentPlan("agent0", "single", problem.goal.to_pddl(), result))
+    run.planning_time_s = result.planner_time_s
+    run.status = result.status.value
+    if result.solved and result.plan is not None:
+        run.success = True
+        run.plans = {"agent0": list(result.plan)}
+        run.exec_length = run.sa_length = len(result.plan)
+        run.schedule = [[("agent0", a)] for a in result.plan]
+    else:
+        run.message = result.message
+    run.wall_time_s = time.perf_counter() - start
+    return run
+
+
+def run_multi_agent(
+    task: BenchmarkTask,
+    agents: int,
+    agent_predicates: Collection[str],
+    settings: PlannerSettings,
+    mode: str = "exact",
+    seed: int = 0,
+    sa_length: int | None = None,
+) -> RunResult:
+    """MA PDDL: compile to N agents, solve sequentially, split per agent, score in parallel."""
+    start = time.perf_counter()
+    compiled, names = compile_multi_agent_problem(task.problem, agents, agent_predicates)
+    result = plan(compiled, settings)
+    run = RunResult(task.domain_name, task.task_id, "ma", agents, seed, sa_length=sa_length)
+    run.planner_calls.append(AgentPlan("all", "multi", compiled.goal.to_pddl(), result))
+    run.planning_time_s = result.planner_time_s
+    run.status = result.status.value
+    if not (result.solved and result.plan is not None):
+        run.message = result.message
+        run.wall_time_s = time.perf_counter() - start
+        return run
+    per_agent = split_plan(result.plan, names)
+    run.plans = {f"agent{i}": p for i, p in enumerate(per_agent)}
+    score_start = time.perf_counter()
+    execution = score(task.problem, per_agent, agent_predicates, mode)
+    run.score_time_s = time.perf_counter() - score_start
+    run.schedule = _named_schedule(execution, [f"agent{i}" for i in range(agents)])
+    run.exec_length = execution.length
+    run.success = True
+    run.extra["sequential_length"] = len(result.plan)
+    run.wall_time_s = time.perf_counter() - start
+    return run
+
+
+def run_twostep(
+    task: BenchmarkTask,
+    agents: int,
+    decomposer: Decomposer,
+    agent_predicates: Collection[str],
+    settings: PlannerSettings,
+    mode: str = "exact",
+    seed: int = 0,
+    sa_length: int | None = None,
+) -> RunResult:
+    """TwoStep (the paper's Fig. 2): helpers on subgoals, then the main agent on the goal.
+
+    Helper i is planned with the time limit divided by N, from the environment its
+    predecessors left; discarded subgoals are recorded with the reason. If no subgoal
+    survives, or the main agent cannot finish after the helpers, the result is the
+    single-agent plan (success is guaranteed whenever SA succeeds).
+    """
+    start = time.perf_counter()
+    problem = task.problem
+    run = RunResult(task.domain_name, task.task_id, "twostep", agents, seed, sa_length=sa_length)
+    run.decomposer = decomposer.name
+    per_agent_settings = settings.with_time_limit(settings.search_time_limit_s / max(agents, 1))
+
+    # 1-2. generate + translate (the decomposer)
+    proposals = decomposer.propose(DecompositionRequest(task, agents, seed))[: max(agents - 1, 0)]
+    run.llm_time_s = sum(p.llm_time_s for p in proposals)
+    run.scripted_llm = any(x.get("scripted") for p in proposals for x in p.exchanges)
+
+    # 3-4. check each subgoal, plan its helper, progress the environment
+    environment = environment_part(problem.init, agent_predicates)
+    helper_plans: list[list[str]] = []
+    planner_time = 0.0
+    editing_time = 0.0
+    grounder = Grounder(problem)
+    for proposal in proposals:
+        goal = check_subgoal(proposal, problem, environment, agent_predicates)
+        if goal is None:
+            continue
+        edit_start = time.perf_counter()
+        helper_problem = handoff_problem(problem, environment, goal, agent_predicates)
+        editing_time += time.perf_counter() - edit_start
+        result = plan(helper_problem, per_agent_settings)
+        planner_time += result.planner_time_s
+        run.planner_calls.append(AgentPlan(f"agent{proposal.helper}", "helper", goal.to_pddl(), result))
+        if not result.solved or result.plan is None:
+            proposal.status = "discarded"
+            proposal.reason = {
+                Status.TIMEOUT: "timed out",
+                Status.UNSOLVABLE: "unsolvable from the helper's initial state",
+            }.get(result.status, f"planner error: {result.message}")
+            continue
+        edit_start = time.perf_counter()
+        environment = progress_state(helper_problem.init, grounder.ground_plan(result.plan), agent_predicates)
+        editing_time += time.perf_counter() - edit_start
+        proposal.status = "accepted"
+        helper_plans.append(list(result.plan))
+
+    # 5. the main agent, from the final environment, to the full goal
+    main_plan: list[str] | None = None
+    if helper_plans:
+        edit_start = time.perf_counter()
+        main_problem = handoff_problem(problem, environment, problem.goal, agent_predicates)
+        editing_time += time.perf_counter() - edit_start
+        result = plan(main_problem, per_agent_settings)
+        planner_time += result.planner_time_s
+        run.planner_calls.append(AgentPlan("agent0", "main", problem.goal.to_pddl(), result))
+        if result.solved and result.plan is not None:
+            main_plan = list(result.plan)
+        else:
+            run.fallback = f"main agent after helpers: {result.status.value} ({result.message})"
+
+    # 6. score; fall back to the single-agent plan when nothing usable remains
+    accepted = [p for p in proposals if p.status == "accepted"]
+    execution: ParallelExecution | None = None
+    if main_plan is not None:
+        score_start = time.perf_counter()
+        try:
+            execution = score(problem, [*helper_plans, main_plan], agent_predicates, mode)
+        except (ScheduleError, PlanError) as error:
+            run.fallback = f"joint schedule invalid: {error}"
+        run.score_time_s = time.perf_counter() - score_start
+    if execution is not None:
+        names = [f"agent{p.helper}" for p in accepted] + ["agent0"]
+        run.plans = {"agent0": main_plan or []}
+        run.plans.update({f"agent{p.helper}": hp for p, hp in zip(accepted, helper_plans, strict=True)})
+        run.schedule = _named_schedule(execution, names)
+        run.exec_length = execution.length
+        run.success = True
+    else:
+        if run.fallback is None:
+            run.fallback = "no helper subgoal accepted" if proposals else "no helper subgoal proposed"
+        for proposal in accepted:  # their plans are not used
+            proposal.status, proposal.reason = "unused", run.fallback
+        result = plan(problem, per_agent_settings.with_time_limit(settings.search_time_limit_s))
+        planner_time += result.planner_time_s
+        run.planner_calls.append(AgentPlan("agent0", "single", problem.goal.to_pddl(), result))
+        run.status = result.status.value
+        if result.solved and result.plan is not None:
+            run.success = True
+            run.plans = {"agent0": list(result.plan)}
+            run.exec_length = len(result.plan)
+            run.schedule = [[("agent0", a)] for a in result.plan]
+            if run.sa_length is None:
+                run.sa_length = len(result.plan)
+        else:
+            run.message = result.message
+    run.subgoals = [p.to_dict() for p in proposals]
+    run.state_editing_time_s = editing_time
+    run.planning_time_s = run.llm_time_s + planner_time + editing_time
+    run.wall_time_s = time.perf_counter() - start
+    return run

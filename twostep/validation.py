@@ -1,0 +1,61 @@
+"""Independent plan validation with unified-planning's sequential plan validator.
+
+Our own simulator (:mod:`twostep.strips`) is what the pipeline runs; this module checks a
+plan a second way, against the problem as unified-planning reads it from our PDDL text,
+so a bug in our grounding cannot silently accept a wrong plan.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from twostep.pddl import Problem, _up_environment, domain_to_pddl, problem_to_pddl
+from twostep.strips import parse_action
+
+
+@dataclass(frozen=True)
+class Validation:
+    valid: bool
+    message: str = ""
+
+
+def to_up_problem(problem: Problem) -> Any:
+    """The unified-planning problem for ``problem`` (read back from our PDDL text)."""
+    from unified_planning.io import PDDLReader
+
+    _up_environment()
+    extra = (":negative-preconditions",) if problem.goal.negative else ()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return PDDLReader().parse_problem_string(
+            domain_to_pddl(problem.domain, extra), problem_to_pddl(problem)
+        )
+
+
+def validate_plan(problem: Problem, plan: Sequence[str], up_problem: Any = None) -> Validation:
+    """Check with unified-planning that ``plan`` is applicable and reaches the goal."""
+    from unified_planning.engines import ValidationResultStatus
+    from unified_planning.shortcuts import PlanValidator
+    from unified_planning.plans import ActionInstance, SequentialPlan
+
+    up_problem = up_problem if up_problem is not None else to_up_problem(problem)
+    instances = []
+    for step, text in enumerate(plan, start=1):
+        name, args = parse_action(text)
+        try:
+            action = up_problem.action(name)
+            objects = [up_problem.object(a) for a in args]
+        except Exception:
+            return Validation(False, f"step {step} {text}: unknown action or object")
+        instances.append(ActionInstance(action, objects))
+    with PlanValidator(name="sequential_plan_validator") as validator:
+        result = validator.validate(up_problem, SequentialPlan(instances))
+    if result.status == ValidationResultStatus.VALID:
+        return Validation(True)
+    reason = getattr(result, "reason", None)
+    detail = str(getattr(result, "inapplicable_action", "") or "")
+    message = " ".join(str(x) for x in (reason, detail) if x) or "invalid plan"
+    return Validation(False, message)
