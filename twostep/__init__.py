@@ -1,0 +1,31 @@
+"""twostep: multi-agent task planning with classical planners and LLMs.
+
+The library behind the ``twostep`` commands; importable without Prefect, MLflow or Hydra.
+One module per step of the paper's pipeline:
+
+- :mod:`twostep.pddl`         read domains and problems (unified-planning), the model, writing
+- :mod:`twostep.strips`       grounded actions and states; plan simulation
+- :mod:`twostep.planner`      Fast Downward (the up-fast-downward wheel's driver)
+- :mod:`twostep.validation`   independent plan validation (unified-planning)
+- :mod:`twostep.multiagent`   the MA-PDDL baseline compilation
+- :mod:`twostep.progression`  hand-off of the environment state between agents
+- :mod:`twostep.execution`    parallel execution length and joint schedule
+- :mod:`twostep.decomposers`  where helper subgoals come from (goal-split, expert, llm)
+- :mod:`twostep.llm`          LLM access (litellm), prompts and answer parsing
+- :mod:`twostep.pipeline`     SA, MA and TwoStep end to end
+- :mod:`twostep.benchmark`    tasks on disk in the LLM+P layout
+
+Quick start::
+
+    from twostep.benchmark import load_task
+    from twostep.decomposers.goal_split import GoalSplitDecomposer
+    from twostep.pipeline import run_twostep
+    from twostep.planner import PlannerSettings
+
+    task = load_task("blocksworld", 5)
+    agent_facts = ["arm-empty", "holding"]
+    result = run_twostep(task, 2, GoalSplitDecomposer(agent_facts), agent_facts, PlannerSettings())
+    print(result.exec_length, result.schedule)
+"""
+
+__version__ = "0.1.0"

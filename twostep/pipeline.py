@@ -13,7 +13,7 @@ Every method returns a :class:`RunResult`, which serialises to the common result
 from __future__ import annotations
 
 import time
-from collections.abc import Collection, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -55,6 +55,7 @@ class RunResult:
     planning_time_s: float = 0.0
     llm_time_s: float = 0.0
     plans: dict[str, list[str]] = field(default_factory=dict)
+    agent_order: list[str] = field(default_factory=list)  # hand-off order: who planned after whom
     schedule: list[list[tuple[str, str]]] = field(default_factory=list)
     subgoals: list[dict[str, Any]] = field(default_factory=list)
     decomposer: str | None = None
@@ -81,6 +82,7 @@ class RunResult:
             "planning_time_s": round(self.planning_time_s, 4),
             "llm_time_s": round(self.llm_time_s, 4),
             "plans": self.plans,
+            "agent_order": self.agent_order,
             "schedule": [[list(pair) for pair in step] for step in self.schedule],
             "subgoals": self.subgoals,
             "decomposer": self.decomposer,
@@ -97,11 +99,6 @@ class RunResult:
 
 
 # ----------------------------------------------------------------- steps
-
-
-def plan_agent(problem: Problem, goal: Goal, settings: PlannerSettings) -> PlanResult:
-    """Plan one agent from ``problem``'s initial state to ``goal``."""
-    return plan(problem.with_state(goal=goal), settings)
 
 
 def score(
@@ -154,14 +151,43 @@ def check_subgoal(
     return goal
 
 
+def propose(decomposer: Decomposer, request: DecompositionRequest) -> list[SubgoalProposal]:
+    """Ask the decomposer for helper subgoals (generate + translate for the LLM)."""
+    return decomposer.propose(request)
+
+
+def progress(problem: Problem, plan_steps: Sequence[str], agent_predicates: Collection[str]) -> frozenset[Fact]:
+    """The environment after an agent runs ``plan_steps`` from ``problem``'s initial state."""
+    return progress_state(problem.init, Grounder(problem).ground_plan(plan_steps), agent_predicates)
+
+
+@dataclass(frozen=True)
+class Steps:
+    """The pipeline's steps as replaceable functions.
+
+    The library runs them directly; ``flows/`` passes versions wrapped as Prefect tasks
+    (caching, retries, persisted results) without repeating the control flow.
+    """
+
+    propose: Callable[[Decomposer, DecompositionRequest], list[SubgoalProposal]] = propose
+    plan: Callable[[Problem, PlannerSettings], PlanResult] = plan
+    progress: Callable[[Problem, Sequence[str], Collection[str]], frozenset[Fact]] = progress
+    score: Callable[[Problem, Sequence[Sequence[str]], Collection[str], str], ParallelExecution] = score
+
+
+DIRECT = Steps()
+
+
 # ----------------------------------------------------------------- methods
 
 
-def run_single_agent(task: BenchmarkTask, settings: PlannerSettings, seed: int = 0) -> RunResult:
+def run_single_agent(
+    task: BenchmarkTask, settings: PlannerSettings, seed: int = 0, steps: Steps = DIRECT
+) -> RunResult:
     """SA PDDL: the task solved as is by one agent."""
     start = time.perf_counter()
     problem = task.problem
-    result = plan(problem, settings)
+    result = steps.plan(problem, settings)
     run = RunResult(task.domain_name, task.task_id, "sa", 1, seed)
     run.planner_calls.append(AgentPlan("agent0", "single", problem.goal.to_pddl(), result))
     run.planning_time_s = result.planner_time_s
@@ -169,6 +195,7 @@ def run_single_agent(task: BenchmarkTask, settings: PlannerSettings, seed: int =
     if result.solved and result.plan is not None:
         run.success = True
         run.plans = {"agent0": list(result.plan)}
+        run.agent_order = ["agent0"]
         run.exec_length = run.sa_length = len(result.plan)
         run.schedule = [[("agent0", a)] for a in result.plan]
     else:
@@ -185,11 +212,12 @@ def run_multi_agent(
     mode: str = "exact",
     seed: int = 0,
     sa_length: int | None = None,
+    steps: Steps = DIRECT,
 ) -> RunResult:
     """MA PDDL: compile to N agents, solve sequentially, split per agent, score in parallel."""
     start = time.perf_counter()
     compiled, names = compile_multi_agent_problem(task.problem, agents, agent_predicates)
-    result = plan(compiled, settings)
+    result = steps.plan(compiled, settings)
     run = RunResult(task.domain_name, task.task_id, "ma", agents, seed, sa_length=sa_length)
     run.planner_calls.append(AgentPlan("all", "multi", compiled.goal.to_pddl(), result))
     run.planning_time_s = result.planner_time_s
@@ -199,11 +227,12 @@ def run_multi_agent(
         run.wall_time_s = time.perf_counter() - start
         return run
     per_agent = split_plan(result.plan, names)
-    run.plans = {f"agent{i}": p for i, p in enumerate(per_agent)}
+    run.agent_order = [f"agent{i}" for i in range(agents)]
+    run.plans = dict(zip(run.agent_order, per_agent, strict=True))
     score_start = time.perf_counter()
-    execution = score(task.problem, per_agent, agent_predicates, mode)
+    execution = steps.score(task.problem, per_agent, agent_predicates, mode)
     run.score_time_s = time.perf_counter() - score_start
-    run.schedule = _named_schedule(execution, [f"agent{i}" for i in range(agents)])
+    run.schedule = _named_schedule(execution, run.agent_order)
     run.exec_length = execution.length
     run.success = True
     run.extra["sequential_length"] = len(result.plan)
@@ -220,6 +249,7 @@ def run_twostep(
     mode: str = "exact",
     seed: int = 0,
     sa_length: int | None = None,
+    steps: Steps = DIRECT,
 ) -> RunResult:
     """TwoStep (the paper's Fig. 2): helpers on subgoals, then the main agent on the goal.
 
@@ -235,7 +265,7 @@ def run_twostep(
     per_agent_settings = settings.with_time_limit(settings.search_time_limit_s / max(agents, 1))
 
     # 1-2. generate + translate (the decomposer)
-    proposals = decomposer.propose(DecompositionRequest(task, agents, seed))[: max(agents - 1, 0)]
+    proposals = steps.propose(decomposer, DecompositionRequest(task, agents, seed))[: max(agents - 1, 0)]
     run.llm_time_s = sum(p.llm_time_s for p in proposals)
     run.scripted_llm = any(x.get("scripted") for p in proposals for x in p.exchanges)
 
@@ -244,7 +274,6 @@ def run_twostep(
     helper_plans: list[list[str]] = []
     planner_time = 0.0
     editing_time = 0.0
-    grounder = Grounder(problem)
     for proposal in proposals:
         goal = check_subgoal(proposal, problem, environment, agent_predicates)
         if goal is None:
@@ -252,7 +281,7 @@ def run_twostep(
         edit_start = time.perf_counter()
         helper_problem = handoff_problem(problem, environment, goal, agent_predicates)
         editing_time += time.perf_counter() - edit_start
-        result = plan(helper_problem, per_agent_settings)
+        result = steps.plan(helper_problem, per_agent_settings)
         planner_time += result.planner_time_s
         run.planner_calls.append(AgentPlan(f"agent{proposal.helper}", "helper", goal.to_pddl(), result))
         if not result.solved or result.plan is None:
@@ -263,7 +292,7 @@ def run_twostep(
             }.get(result.status, f"planner error: {result.message}")
             continue
         edit_start = time.perf_counter()
-        environment = progress_state(helper_problem.init, grounder.ground_plan(result.plan), agent_predicates)
+        environment = steps.progress(helper_problem, result.plan, agent_predicates)
         editing_time += time.perf_counter() - edit_start
         proposal.status = "accepted"
         helper_plans.append(list(result.plan))
@@ -274,7 +303,7 @@ def run_twostep(
         edit_start = time.perf_counter()
         main_problem = handoff_problem(problem, environment, problem.goal, agent_predicates)
         editing_time += time.perf_counter() - edit_start
-        result = plan(main_problem, per_agent_settings)
+        result = steps.plan(main_problem, per_agent_settings)
         planner_time += result.planner_time_s
         run.planner_calls.append(AgentPlan("agent0", "main", problem.goal.to_pddl(), result))
         if result.solved and result.plan is not None:
@@ -288,14 +317,14 @@ def run_twostep(
     if main_plan is not None:
         score_start = time.perf_counter()
         try:
-            execution = score(problem, [*helper_plans, main_plan], agent_predicates, mode)
+            execution = steps.score(problem, [*helper_plans, main_plan], agent_predicates, mode)
         except (ScheduleError, PlanError) as error:
             run.fallback = f"joint schedule invalid: {error}"
         run.score_time_s = time.perf_counter() - score_start
     if execution is not None:
         names = [f"agent{p.helper}" for p in accepted] + ["agent0"]
-        run.plans = {"agent0": main_plan or []}
-        run.plans.update({f"agent{p.helper}": hp for p, hp in zip(accepted, helper_plans, strict=True)})
+        run.agent_order = names
+        run.plans = dict(zip(names, [*helper_plans, main_plan or []], strict=True))
         run.schedule = _named_schedule(execution, names)
         run.exec_length = execution.length
         run.success = True
@@ -304,13 +333,14 @@ def run_twostep(
             run.fallback = "no helper subgoal accepted" if proposals else "no helper subgoal proposed"
         for proposal in accepted:  # their plans are not used
             proposal.status, proposal.reason = "unused", run.fallback
-        result = plan(problem, per_agent_settings.with_time_limit(settings.search_time_limit_s))
+        result = steps.plan(problem, settings)
         planner_time += result.planner_time_s
         run.planner_calls.append(AgentPlan("agent0", "single", problem.goal.to_pddl(), result))
         run.status = result.status.value
         if result.solved and result.plan is not None:
             run.success = True
             run.plans = {"agent0": list(result.plan)}
+            run.agent_order = ["agent0"]
             run.exec_length = len(result.plan)
             run.schedule = [[("agent0", a)] for a in result.plan]
             if run.sa_length is None:

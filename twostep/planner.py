@@ -179,14 +179,24 @@ def run_driver(domain_file: Path, problem_file: Path, settings: PlannerSettings,
     )
 
 
+def plan_pddl(domain_pddl: str, problem_pddl: str, settings: PlannerSettings) -> PlanResult:
+    """Solve a task given as PDDL text (deterministic inputs: a good cache key)."""
+    with tempfile.TemporaryDirectory(prefix="twostep-fd-") as tmp:
+        folder = Path(tmp)
+        (folder / "domain.pddl").write_text(domain_pddl)
+        (folder / "problem.pddl").write_text(problem_pddl)
+        return run_driver(folder / "domain.pddl", folder / "problem.pddl", settings, folder)
+
+
+def planner_input(problem: Problem) -> tuple[str, str]:
+    """The PDDL texts the planner receives for ``problem``."""
+    extra = (":negative-preconditions",) if problem.goal.negative else ()
+    return domain_to_pddl(problem.domain, extra), problem_to_pddl(problem)
+
+
 def plan(problem: Problem, settings: PlannerSettings | None = None) -> PlanResult:
     """Solve ``problem`` with Fast Downward. A goal that already holds gives an empty plan."""
     settings = settings or PlannerSettings()
     if problem.goal.holds(problem.init):
         return PlanResult(Status.SOLVED, (), 0.0, 0.0, "goal holds in the initial state", 0, 0)
-    extra = (":negative-preconditions",) if problem.goal.negative else ()
-    with tempfile.TemporaryDirectory(prefix="twostep-fd-") as tmp:
-        folder = Path(tmp)
-        (folder / "domain.pddl").write_text(domain_to_pddl(problem.domain, extra))
-        (folder / "problem.pddl").write_text(problem_to_pddl(problem))
-        return run_driver(folder / "domain.pddl", folder / "problem.pddl", settings, folder)
+    return plan_pddl(*planner_input(problem), settings)

@@ -1,0 +1,125 @@
+"""twostep.pipeline: SA, MA and TwoStep end to end on small tasks (real Fast Downward)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from tests.conftest import BLOCKS_DOMAIN, blocks_problem
+from tests.test_benchmark import make_root
+from twostep.benchmark import load_task
+from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
+from twostep.decomposers.goal_split import GoalSplitDecomposer
+from twostep.execution import check_schedule
+from twostep.pipeline import run_multi_agent, run_single_agent, run_twostep
+from twostep.planner import PlannerSettings
+from twostep.strips import Grounder
+from twostep.validation import validate_plan
+
+BW = ["arm-empty", "holding"]
+FAST = PlannerSettings("lama-first", 20)
+TWO_TOWERS = blocks_problem(
+    " ".join(f"(on-table {b}) (clear {b})" for b in "abcdef") + " (arm-empty)",
+    "(on a b) (on b c) (on d e) (on e f)",
+    "a b c d e f",
+)
+
+
+class Scripted:
+    """A decomposer that returns fixed PDDL subgoals (for tests)."""
+
+    name = "scripted"
+
+    def __init__(self, *goals: str | None):
+        self.goals = goals
+
+    def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]:
+        return [SubgoalProposal(helper=i, pddl=g) for i, g in enumerate(self.goals, start=1)]
+
+
+def _task(tmp_path: Path, problem: str = TWO_TOWERS):
+    root = make_root(tmp_path)
+    (root / "blocks" / "p05.pddl").write_text(problem)
+    return load_task("blocks", 5, root)
+
+
+def _check(task, result) -> None:
+    """The schedule re-validates and every agent's plan is valid in single-agent terms."""
+    order = result.agent_order
+    assert sorted(order) == sorted(result.plans)
+    grounder = Grounder(task.problem)
+    plans = [grounder.ground_plan(result.plans[a]) for a in order]
+    index = {a: i for i, a in enumerate(order)}
+    steps = [tuple((index[a], act) for a, act in step) for step in result.schedule]
+    check_schedule(steps, plans, task.problem.init, task.problem.goal, BW)
+    assert result.exec_length == len(result.schedule)
+
+
+def test_single_agent(tmp_path: Path) -> None:
+    task = _task(tmp_path)
+    result = run_single_agent(task, FAST)
+    assert result.success and result.exec_length == result.sa_length == len(result.plans["agent0"])
+    assert validate_plan(task.problem, result.plans["agent0"]).valid
+    assert result.to_dict()["schedule"][0][0][0] == "agent0"
+
+
+def test_multi_agent_is_split_and_scored(tmp_path: Path) -> None:
+    task = _task(tmp_path)
+    sa = run_single_agent(task, FAST)
+    result = run_multi_agent(task, 2, BW, FAST, sa_length=sa.sa_length)
+    assert result.success and result.exec_length is not None
+    assert result.exec_length <= result.extra["sequential_length"]
+    assert set(result.plans) <= {"agent0", "agent1"}
+    _check(task, result)
+
+
+def test_twostep_goal_split_runs_in_parallel(tmp_path: Path) -> None:
+    task = _task(tmp_path)
+    result = run_twostep(task, 2, GoalSplitDecomposer(BW), BW, FAST)
+    assert result.success and result.fallback is None
+    assert [s["status"] for s in result.subgoals] == ["accepted"]
+    assert set(result.plans) == {"agent0", "agent1"}
+    total = sum(len(p) for p in result.plans.values())
+    assert result.exec_length is not None and result.exec_length < total  # some steps in parallel
+    assert any(len(step) == 2 for step in result.schedule)
+    _check(task, result)
+    roles = [c.role for c in result.planner_calls]
+    assert roles == ["helper", "main"]
+    assert result.planning_time_s >= sum(c.result.planner_time_s for c in result.planner_calls)
+
+
+def test_bad_subgoals_are_discarded_with_reasons(tmp_path: Path) -> None:
+    task = _task(tmp_path)
+    decomposer = Scripted(
+        "(and (stacked a b))",  # unknown predicate
+        "(on-table a)",  # already true
+        "(and (on a b) (on b c) (on d e) (on e f))",  # the whole goal
+    )
+    result = run_twostep(task, 4, decomposer, BW, FAST)
+    reasons = [s["reason"] for s in result.subgoals]
+    assert [s["status"] for s in result.subgoals] == ["discarded"] * 3
+    assert "unknown predicate" in reasons[0]
+    assert "already true" in reasons[1]
+    assert "full goal" in reasons[2]
+    # nothing survived: the single-agent plan, success guaranteed
+    assert result.success and result.fallback == "no helper subgoal accepted"
+    assert list(result.plans) == ["agent0"]
+
+
+def test_unsolvable_subgoal_is_discarded(tmp_path: Path) -> None:
+    task = _task(tmp_path)
+    result = run_twostep(task, 3, Scripted("(and (on a a))", "(and (on d e) (arm-empty))"), BW, FAST)
+    assert result.subgoals[0]["status"] == "discarded"
+    assert "unsolvable" in result.subgoals[0]["reason"]
+    assert result.subgoals[1]["status"] == "accepted"
+    assert set(result.plans) == {"agent0", "agent2"}
+    _check(task, result)
+
+
+def test_goal_already_holds(tmp_path: Path) -> None:
+    task = _task(tmp_path, blocks_problem("(on-table a) (clear a) (arm-empty)", "(on-table a)", "a"))
+    for result in (
+        run_single_agent(task, FAST),
+        run_multi_agent(task, 3, BW, FAST),
+        run_twostep(task, 3, GoalSplitDecomposer(BW), BW, FAST),
+    ):
+        assert result.success and result.exec_length == 0 and result.schedule == []
