@@ -113,12 +113,17 @@ def score(
     return parallel_length(grounded, problem.init, problem.goal, agent_predicates, mode)
 
 
-def _named_schedule(execution: ParallelExecution, names: Sequence[str]) -> list[list[tuple[str, str]]]:
+def _named_schedule(
+    execution: ParallelExecution, names: Sequence[str]
+) -> list[list[tuple[str, str]]]:
     return [[(names[agent], action) for agent, action in step] for step in execution.steps]
 
 
 def check_subgoal(
-    proposal: SubgoalProposal, problem: Problem, environment: frozenset[Fact], agent_predicates: Collection[str]
+    proposal: SubgoalProposal,
+    problem: Problem,
+    environment: frozenset[Fact],
+    agent_predicates: Collection[str],
 ) -> Goal | None:
     """Parse a proposal against the task; on a problem set its status and reason, return None.
 
@@ -126,7 +131,7 @@ def check_subgoal(
     object, wrong arity), already holds for the helper, equals the whole goal, or asks for
     the opposite of a goal literal.
     """
-    if proposal.status == "discarded":
+    if proposal.status != "proposed":  # discarded or stopped by the decomposer itself
         return None
     if not proposal.pddl:
         proposal.status, proposal.reason = "discarded", proposal.reason or "no PDDL subgoal"
@@ -143,7 +148,9 @@ def check_subgoal(
     if goal.positive == problem.goal.positive and goal.negative == problem.goal.negative:
         proposal.status, proposal.reason = "discarded", "equals the full goal"
         return None
-    conflict = sorted((goal.positive & problem.goal.negative) | (goal.negative & problem.goal.positive))
+    conflict = sorted(
+        (goal.positive & problem.goal.negative) | (goal.negative & problem.goal.positive)
+    )
     if conflict:
         shown = " ".join("(" + " ".join(f) + ")" for f in conflict[:3])
         proposal.status, proposal.reason = "discarded", f"contradicts the goal on {shown}"
@@ -156,7 +163,9 @@ def propose(decomposer: Decomposer, request: DecompositionRequest) -> list[Subgo
     return decomposer.propose(request)
 
 
-def progress(problem: Problem, plan_steps: Sequence[str], agent_predicates: Collection[str]) -> frozenset[Fact]:
+def progress(
+    problem: Problem, plan_steps: Sequence[str], agent_predicates: Collection[str]
+) -> frozenset[Fact]:
     """The environment after an agent runs ``plan_steps`` from ``problem``'s initial state."""
     return progress_state(problem.init, Grounder(problem).ground_plan(plan_steps), agent_predicates)
 
@@ -172,7 +181,9 @@ class Steps:
     propose: Callable[[Decomposer, DecompositionRequest], list[SubgoalProposal]] = propose
     plan: Callable[[Problem, PlannerSettings], PlanResult] = plan
     progress: Callable[[Problem, Sequence[str], Collection[str]], frozenset[Fact]] = progress
-    score: Callable[[Problem, Sequence[Sequence[str]], Collection[str], str], ParallelExecution] = score
+    score: Callable[[Problem, Sequence[Sequence[str]], Collection[str], str], ParallelExecution] = (
+        score
+    )
 
 
 DIRECT = Steps()
@@ -265,7 +276,9 @@ def run_twostep(
     per_agent_settings = settings.with_time_limit(settings.search_time_limit_s / max(agents, 1))
 
     # 1-2. generate + translate (the decomposer)
-    proposals = steps.propose(decomposer, DecompositionRequest(task, agents, seed))[: max(agents - 1, 0)]
+    proposals = steps.propose(decomposer, DecompositionRequest(task, agents, seed))[
+        : max(agents - 1, 0)
+    ]
     run.llm_time_s = sum(p.llm_time_s for p in proposals)
     run.scripted_llm = any(x.get("scripted") for p in proposals for x in p.exchanges)
 
@@ -283,7 +296,9 @@ def run_twostep(
         editing_time += time.perf_counter() - edit_start
         result = steps.plan(helper_problem, per_agent_settings)
         planner_time += result.planner_time_s
-        run.planner_calls.append(AgentPlan(f"agent{proposal.helper}", "helper", goal.to_pddl(), result))
+        run.planner_calls.append(
+            AgentPlan(f"agent{proposal.helper}", "helper", goal.to_pddl(), result)
+        )
         if not result.solved or result.plan is None:
             proposal.status = "discarded"
             proposal.reason = {
@@ -330,7 +345,9 @@ def run_twostep(
         run.success = True
     else:
         if run.fallback is None:
-            run.fallback = "no helper subgoal accepted" if proposals else "no helper subgoal proposed"
+            run.fallback = (
+                "no helper subgoal accepted" if proposals else "no helper subgoal proposed"
+            )
         for proposal in accepted:  # their plans are not used
             proposal.status, proposal.reason = "unused", run.fallback
         result = steps.plan(problem, settings)

@@ -1,0 +1,280 @@
+"""The LLM client: cache, seeds, replay, scripted answers, retries and credentials.
+
+No network: answers come from litellm's ``mock_response``, a ``litellm.CustomLLM``
+provider registered by the test, or a patched ``litellm.completion``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from twostep.llm import client as client_module
+from twostep.llm.client import (
+    LLMCacheMiss,
+    LLMCallError,
+    LLMClient,
+    LLMCredentialsError,
+    LLMScriptError,
+    LLMSettings,
+)
+
+FAKE_KEY = "sk-test-DO-NOT-LEAK-0123456789"
+MESSAGES = [{"role": "system", "content": "Be brief."}, {"role": "user", "content": "Goal?"}]
+
+
+@pytest.fixture(scope="module")
+def litellm() -> Any:
+    return client_module._import_litellm()
+
+
+@pytest.fixture
+def settings(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> LLMSettings:
+    monkeypatch.setenv("OPENAI_API_KEY", FAKE_KEY)
+    return LLMSettings(
+        cache_dir=tmp_path / "cache", backoff_s=0.001, extra={"mock_response": "(on-table b)"}
+    )
+
+
+@pytest.fixture
+def no_network(litellm: Any, monkeypatch: pytest.MonkeyPatch) -> Iterator[list[dict[str, Any]]]:
+    calls: list[dict[str, Any]] = []
+
+    def refuse(**kwargs: Any) -> Any:
+        calls.append(kwargs)
+        raise AssertionError("litellm.completion must not be called")
+
+    monkeypatch.setattr(litellm, "completion", refuse)
+    yield calls
+
+
+def test_import_does_not_load_litellm_and_sets_cost_map_flag() -> None:
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, os; import twostep.llm, twostep.decomposers.llm; "
+        "assert 'litellm' not in sys.modules; print(os.environ['LITELLM_LOCAL_MODEL_COST_MAP'])"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "LITELLM_LOCAL_MODEL_COST_MAP"}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "True"
+
+
+def test_cache_hit_on_second_call(settings: LLMSettings, litellm: Any) -> None:
+    client = LLMClient(settings)
+    first = client.complete(MESSAGES, seed=0)
+    assert (first.text, first.cached, first.scripted, first.model) == (
+        "(on-table b)",
+        False,
+        False,
+        "openai/gpt-4o",
+    )
+    second = client.complete(MESSAGES, seed=0)
+    assert second.cached and second.text == first.text and second.key == first.key
+    assert second.recorded_seconds == pytest.approx(first.seconds, abs=1e-6)
+    entry = client.cache_path(first.key).read_text()
+    assert FAKE_KEY not in entry and '"seed": 0' in entry
+
+
+def test_seeds_are_distinct_cache_entries(settings: LLMSettings, litellm: Any) -> None:
+    client = LLMClient(settings)
+    keys = {client.complete(MESSAGES, seed=s).key for s in (0, 1, 2)}
+    assert len(keys) == 3
+    assert len(list(settings.cache_dir.rglob("*.json"))) == 3
+    assert all(client.complete(MESSAGES, seed=s).cached for s in (0, 1, 2))
+
+
+def test_key_covers_the_request_but_not_the_api_key(settings: LLMSettings) -> None:
+    client = LLMClient(settings)
+    base = client.cache_key(client.request(MESSAGES, 0))
+    other_model = LLMClient(LLMSettings(model="openai/gpt-4o-mini", extra=settings.extra))
+    assert other_model.cache_key(other_model.request(MESSAGES, 0)) != base
+    hotter = LLMClient(LLMSettings(temperature=0.7, extra=settings.extra))
+    assert hotter.cache_key(hotter.request(MESSAGES, 0)) != base
+    keyed = LLMClient(LLMSettings(extra={**settings.extra, "api_key": FAKE_KEY}))
+    request = keyed.request(MESSAGES, 0)
+    assert keyed.cache_key(request) == base and FAKE_KEY not in str(request)
+
+
+def test_replay_hit_needs_no_network(
+    settings: LLMSettings, litellm: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    recorded = LLMClient(settings).complete(MESSAGES, seed=1)  # live, mock_response
+    calls: list[Any] = []
+    monkeypatch.setattr(litellm, "completion", lambda **kw: calls.append(kw))
+    monkeypatch.delenv("OPENAI_API_KEY", raising=False)  # replay needs no key either
+    replay = LLMClient(
+        LLMSettings(mode="replay", cache_dir=settings.cache_dir, extra=settings.extra)
+    )
+    answer = replay.complete(MESSAGES, seed=1)
+    assert answer.cached and answer.text == recorded.text and not calls
+
+
+def test_replay_miss_is_a_clear_error(settings: LLMSettings, no_network: list[Any]) -> None:
+    replay = LLMClient(LLMSettings(mode="replay", cache_dir=settings.cache_dir))
+    with pytest.raises(LLMCacheMiss) as info:
+        replay.complete(MESSAGES, seed=2)
+    message = str(info.value)
+    assert "llm.mode=replay" in message and "seed 2" in message and "Goal?" in message
+    assert "openai/gpt-4o" in message and "llm.mode=live" in message
+    assert not no_network and not settings.cache_dir.exists()
+
+
+def test_scripted_answers_in_order(tmp_path: Path, no_network: list[Any]) -> None:
+    script = tmp_path / "answers.yaml"
+    script.write_text("answers:\n  - first\n  - |\n    (:goal (and (clear a)))\n")
+    client = LLMClient(LLMSettings(mode="scripted", script=script, cache_dir=tmp_path / "c"))
+    one, two = client.complete(MESSAGES, 0), client.complete(MESSAGES, 0)
+    assert (one.text, two.text.strip()) == ("first", "(:goal (and (clear a)))")
+    assert one.scripted and two.scripted and not one.cached
+    assert one.model == "scripted"
+    with pytest.raises(LLMScriptError, match="has 2 answer"):
+        client.complete(MESSAGES, 0)
+    assert not (tmp_path / "c").exists() and not no_network
+
+
+def test_scripted_needs_a_valid_script(tmp_path: Path) -> None:
+    with pytest.raises(LLMScriptError, match=r"needs llm\.script"):
+        LLMClient(LLMSettings(mode="scripted"))
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("answer: oops\n")
+    with pytest.raises(LLMScriptError, match="needs a list 'answers:'"):
+        LLMClient(LLMSettings(mode="scripted", script=bad))
+    assert LLMClient(LLMSettings(mode="scripted"), answers=["x"]).complete(MESSAGES, 0).text == "x"
+
+
+def test_unknown_mode() -> None:
+    with pytest.raises(Exception, match=r"llm\.mode must be one of live, replay, scripted"):
+        LLMSettings(mode="offline")
+
+
+def test_retries_rate_limit_then_succeeds(
+    settings: LLMSettings, litellm: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    real = litellm.completion
+    calls: list[dict[str, Any]] = []
+
+    def flaky(**kwargs: Any) -> Any:
+        calls.append(kwargs)
+        if len(calls) == 1:
+            raise litellm.RateLimitError("slow down", llm_provider="openai", model="gpt-4o")
+        if len(calls) == 2:
+            raise litellm.Timeout("timed out", model="gpt-4o", llm_provider="openai")
+        return real(**kwargs)
+
+    monkeypatch.setattr(litellm, "completion", flaky)
+    answer = LLMClient(settings).complete(MESSAGES, seed=0)
+    assert answer.text == "(on-table b)" and len(calls) == 3
+    assert calls[0]["seed"] == 0 and calls[0]["temperature"] == 0.0 and calls[0]["top_p"] == 1.0
+    assert calls[0]["api_key"] == FAKE_KEY and calls[0]["max_retries"] == 0
+
+
+def test_gives_up_after_max_retries(
+    settings: LLMSettings, litellm: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    calls: list[int] = []
+
+    def down(**kwargs: Any) -> Any:
+        calls.append(1)
+        raise litellm.InternalServerError(f"boom {FAKE_KEY}", llm_provider="openai", model="x")
+
+    monkeypatch.setattr(litellm, "completion", down)
+    settings.max_retries = 2
+    with pytest.raises(LLMCallError, match="after 3 attempts") as info:
+        LLMClient(settings).complete(MESSAGES, seed=0)
+    assert len(calls) == 3 and FAKE_KEY not in str(info.value)
+
+
+def test_no_retry_on_bad_request(
+    settings: LLMSettings, litellm: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    calls: list[int] = []
+
+    def bad(**kwargs: Any) -> Any:
+        calls.append(1)
+        raise litellm.BadRequestError("max_tokens too large", model="gpt-4o", llm_provider="openai")
+
+    monkeypatch.setattr(litellm, "completion", bad)
+    with pytest.raises(LLMCallError, match="BadRequestError"):
+        LLMClient(settings).complete(MESSAGES, seed=0)
+    assert len(calls) == 1
+
+
+def test_auth_error_is_one_line_naming_the_variable(
+    settings: LLMSettings, litellm: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    calls: list[int] = []
+
+    def denied(**kwargs: Any) -> Any:
+        calls.append(1)
+        raise litellm.AuthenticationError(
+            f"Incorrect API key provided: {FAKE_KEY}", llm_provider="openai", model="gpt-4o"
+        )
+
+    monkeypatch.setattr(litellm, "completion", denied)
+    with pytest.raises(LLMCredentialsError) as info:
+        LLMClient(settings).complete(MESSAGES, seed=0)
+    message = str(info.value)
+    assert len(calls) == 1 and "\n" not in message and FAKE_KEY not in message
+    assert "OPENAI_API_KEY" in message
+    assert "decomposer=goal-split" in message and "llm.mode=replay" in message
+    assert info.value.__cause__ is None and info.value.__suppress_context__
+
+
+@pytest.mark.parametrize(
+    "model, variable",
+    [
+        ("openai/gpt-4o", "OPENAI_API_KEY"),
+        ("anthropic/claude-3-5-sonnet-latest", "ANTHROPIC_API_KEY"),
+    ],
+)
+def test_missing_key_fails_before_any_call(
+    model: str,
+    variable: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    no_network: list[Any],
+) -> None:
+    monkeypatch.delenv(variable, raising=False)
+    client = LLMClient(LLMSettings(model=model, cache_dir=tmp_path))
+    with pytest.raises(LLMCredentialsError, match=variable):
+        client.complete(MESSAGES, seed=0)
+    assert not no_network
+
+
+def test_self_hosted_servers_need_no_key(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("OPENAI_API_KEY", raising=False)
+    assert LLMSettings(model="openai/qwen", api_base="http://127.0.0.1:8000/v1").key_env is None
+    assert LLMSettings(model="ollama/llama3.1", api_base="http://127.0.0.1:11434").key_env is None
+    assert LLMSettings(api_key_env="MY_GATEWAY_KEY").key_env == "MY_GATEWAY_KEY"
+
+
+def test_custom_provider_through_the_real_litellm_path(
+    tmp_path: Path, litellm: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A litellm.CustomLLM provider: the request goes through litellm's routing."""
+    seen: list[dict[str, Any]] = []
+
+    class Echo(litellm.CustomLLM):  # type: ignore[misc]
+        def completion(self, *args: Any, **kwargs: Any) -> Any:
+            seen.append(kwargs)
+            if len(seen) == 1:
+                raise litellm.RateLimitError("busy", llm_provider="echo", model="echo")
+            last = kwargs["messages"][-1]["content"]
+            return litellm.completion(
+                model="openai/gpt-4o", messages=kwargs["messages"], mock_response=f"echo: {last}"
+            )
+
+    monkeypatch.setattr(
+        litellm, "custom_provider_map", [{"provider": "echo", "custom_handler": Echo()}]
+    )
+    settings = LLMSettings(model="echo/v1", cache_dir=tmp_path, backoff_s=0.001)
+    answer = LLMClient(settings).complete(MESSAGES, seed=3)
+    assert answer.text == "echo: Goal?" and not answer.cached and len(seen) == 2
+    assert LLMClient(settings).complete(MESSAGES, seed=3).cached

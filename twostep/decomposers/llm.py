@@ -1,0 +1,216 @@
+"""The paper's decomposer: an LLM proposes and translates one subgoal per helper.
+
+For helpers 1..N-1: :func:`generate_subgoal` asks for the helper's English subgoal (the
+answer "none" ends the loop), :func:`translate_subgoal` turns it into a PDDL goal and
+checks it against the task. Every prompt and raw answer is kept in the proposal's
+``exchanges``; an answer that gives no usable subgoal becomes a ``discarded`` proposal
+with the reason. The two steps are plain functions so a workflow engine can run each
+one as its own task; :class:`LLMDecomposer` chains them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from twostep.benchmark import BenchmarkTask
+from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
+from twostep.llm.client import LLMCallError, LLMClient, LLMResponse
+from twostep.llm.parsing import (
+    SubgoalError,
+    check_subgoal,
+    parse_english_subgoal,
+    parse_pddl_subgoal,
+)
+from twostep.llm.prompts import Message, generator_messages, translator_messages
+from twostep.pddl import parse_goal
+
+Exchange = dict[str, Any]
+
+
+def _exchange(
+    step: str, helper: int, seed: int, messages: Sequence[Message], response: LLMResponse
+) -> Exchange:
+    """One prompt and its raw answer, as recorded in result.json."""
+    return {
+        "step": step,
+        "helper": helper,
+        "seed": seed,
+        "model": response.model,
+        "cached": response.cached,
+        "scripted": response.scripted,
+        "seconds": round(response.seconds, 6),
+        "recorded_seconds": round(response.recorded_seconds, 6),
+        "messages": [{"role": m["role"], "text": m["content"]} for m in messages]
+        + [{"role": "assistant", "text": response.text}],
+        "status": "ok",
+        "reason": None,
+        "parsed": None,
+        "note": None,
+    }
+
+
+def generate_subgoal(
+    client: LLMClient,
+    task: BenchmarkTask,
+    agents: int,
+    helper: int,
+    earlier: Sequence[str],
+    seed: int,
+    *,
+    fixed_example: bool = True,
+) -> tuple[str | None, Exchange]:
+    """Ask for helper ``helper``'s English subgoal.
+
+    Returns the final goal condition, or None; then ``exchange["status"]`` is ``"none"``
+    (the LLM says no further helper helps: stop) or ``"discarded"`` (``"reason"`` says why).
+    """
+    messages = generator_messages(task, agents, helper, earlier, fixed_example=fixed_example)
+    response = client.complete(messages, seed)
+    exchange = _exchange("generate", helper, seed, messages, response)
+    try:
+        parsed = parse_english_subgoal(response.text, helper, task.problem)
+    except SubgoalError as exc:
+        exchange.update(status="discarded", reason=str(exc))
+        return None, exchange
+    if parsed.kind == "none":
+        exchange.update(status="none", reason="the LLM answered that no further helper helps")
+        return None, exchange
+    exchange.update(parsed=parsed.text, note=parsed.note)
+    return parsed.text, exchange
+
+
+def translate_subgoal(
+    client: LLMClient,
+    task: BenchmarkTask,
+    english: str,
+    seed: int,
+    *,
+    helper: int = 1,
+    earlier: Mapping[int, str] | None = None,
+) -> tuple[str | None, Exchange]:
+    """Translate ``english`` into a PDDL goal checked against the task.
+
+    Returns the goal as canonical PDDL text (``(and ...)``), or None with
+    ``exchange["status"] == "discarded"`` and the reason. ``earlier`` maps earlier
+    helpers to their PDDL subgoals, to reject repeats.
+    """
+    messages = translator_messages(task, english)
+    response = client.complete(messages, seed)
+    exchange = _exchange("translate", helper, seed, messages, response)
+    problem = task.problem
+    try:
+        goal = parse_pddl_subgoal(response.text, problem)
+    except SubgoalError as exc:
+        exchange.update(status="discarded", reason=str(exc))
+        return None, exchange
+    others = {h: parse_goal(text, problem) for h, text in (earlier or {}).items()}
+    reason = check_subgoal(goal, problem.goal, others)
+    exchange["parsed"] = goal.to_pddl()
+    if reason is not None:
+        exchange.update(status="discarded", reason=reason)
+        return None, exchange
+    return goal.to_pddl(), exchange
+
+
+@dataclass
+class LLMDecomposition:
+    """Everything one decomposition produced, including a stopping "none" answer."""
+
+    proposals: list[SubgoalProposal]
+    stopped_at: int | None = None  # the helper for which the LLM answered "none"
+    stop_exchange: Exchange | None = None
+    error: str | None = None  # an LLM call that failed after retries: the loop stopped
+    exchanges: list[Exchange] = field(default_factory=list)
+
+
+def _seconds(*exchanges: Exchange) -> float:
+    return float(sum(e["seconds"] for e in exchanges))
+
+
+NONE_REASON = "the LLM answered none: no further helper"
+
+
+class LLMDecomposer:
+    """TwoStep's LLM decomposer (``decomposer=llm``): generate, translate, check."""
+
+    name = "llm"
+
+    def __init__(self, client: LLMClient, *, fixed_example: bool = True) -> None:
+        self.client = client
+        self.fixed_example = fixed_example
+
+    def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]:
+        return self.decompose(request).proposals
+
+    def decompose(self, request: DecompositionRequest) -> LLMDecomposition:
+        task, seed = request.task, request.seed
+        result = LLMDecomposition(proposals=[])
+        english_so_far: list[str] = []
+        accepted: dict[int, str] = {}
+        for helper in range(1, request.agents):
+            step = "generate"
+            try:
+                english, gen = generate_subgoal(
+                    self.client,
+                    task,
+                    request.agents,
+                    helper,
+                    english_so_far,
+                    seed,
+                    fixed_example=self.fixed_example,
+                )
+                result.exchanges.append(gen)
+                if gen["status"] == "none":
+                    result.stopped_at, result.stop_exchange = helper, gen
+                    # kept as a proposal so that result.json records the answer
+                    result.proposals.append(
+                        SubgoalProposal(
+                            helper, None, None, "stopped", NONE_REASON, _seconds(gen), [gen]
+                        )
+                    )
+                    break
+                if english is None:
+                    result.proposals.append(
+                        SubgoalProposal(
+                            helper, None, None, "discarded", gen["reason"], _seconds(gen), [gen]
+                        )
+                    )
+                    continue
+                english_so_far.append(english)
+                step = "translate"
+                pddl, tr = translate_subgoal(
+                    self.client, task, english, seed, helper=helper, earlier=accepted
+                )
+            except LLMCallError as exc:
+                result.error = f"{step} for agent{helper}: {exc}"
+                result.proposals.append(
+                    SubgoalProposal(helper, None, None, "discarded", f"LLM call failed: {exc}")
+                )
+                break
+            result.exchanges.append(tr)
+            status, reason = ("proposed", None) if pddl is not None else ("discarded", tr["reason"])
+            if pddl is not None:
+                accepted[helper] = pddl
+            result.proposals.append(
+                SubgoalProposal(
+                    helper,
+                    pddl if pddl is not None else tr["parsed"],
+                    english,
+                    status,
+                    reason,
+                    _seconds(gen, tr),
+                    [gen, tr],
+                )
+            )
+        return result
+
+
+__all__ = [
+    "Exchange",
+    "LLMDecomposer",
+    "LLMDecomposition",
+    "generate_subgoal",
+    "translate_subgoal",
+]

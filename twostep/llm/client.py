@@ -1,0 +1,338 @@
+"""The one LLM client of the project: every call goes through ``litellm.completion``.
+
+:class:`LLMClient` adds what a reproducible experiment needs on top of litellm:
+
+* a disk cache keyed by a hash of the whole request (model, messages, temperature, top_p,
+  max_tokens, seed, api_base, extra parameters; never the API key), one JSON file per
+  request under ``cache_dir``, so a re-run needs no network; the run's seed is part of
+  the request, so seeds 0, 1, 2 are three distinct calls;
+* ``mode="replay"``: answers only from the cache and raises :class:`LLMCacheMiss` on a miss;
+* ``mode="scripted"``: answers from a YAML script (``answers:`` list, in call order),
+  marked ``scripted`` and never written to the cache;
+* retries with exponential backoff on rate limits, timeouts, connection errors and 5xx,
+  none on authentication or bad requests;
+* missing credentials become a one-line :class:`LLMCredentialsError` naming the variable
+  to set and the offline alternatives. No key is ever printed, logged or stored.
+
+litellm is imported lazily on the first live call (it takes seconds to import).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import re
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
+
+MODES = ("live", "replay", "scripted")
+CACHE_FORMAT = 1
+OFFLINE_HINT = "or run offline with decomposer=goal-split or llm.mode=replay (cached answers)"
+
+# Environment variable that litellm reads for each provider prefix.
+PROVIDER_KEY_ENV = {
+    "openai": "OPENAI_API_KEY",
+    "anthropic": "ANTHROPIC_API_KEY",
+    "gemini": "GEMINI_API_KEY",
+    "mistral": "MISTRAL_API_KEY",
+    "groq": "GROQ_API_KEY",
+    "deepseek": "DEEPSEEK_API_KEY",
+    "openrouter": "OPENROUTER_API_KEY",
+    "together_ai": "TOGETHERAI_API_KEY",
+    "cohere": "COHERE_API_KEY",
+}
+_SECRET_PARAM = re.compile(r"key|secret|password|authorization|headers", re.IGNORECASE)
+
+Message = Mapping[str, str]
+
+_litellm: Any = None  # the lazily imported litellm module
+
+
+def _import_litellm() -> Any:
+    global _litellm
+    if _litellm is None:
+        os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
+        import litellm
+
+        litellm.suppress_debug_info = True
+        _litellm = litellm
+    return _litellm
+
+
+class LLMError(Exception):
+    """An LLM call that could not produce an answer."""
+
+
+class LLMCredentialsError(LLMError):
+    """No usable API key: the message names the variable to set (never the key)."""
+
+
+class LLMCacheMiss(LLMError):
+    """``mode="replay"`` and the request is not in the cache."""
+
+
+class LLMScriptError(LLMError):
+    """The scripted answers are missing, malformed or used up."""
+
+
+class LLMCallError(LLMError):
+    """The provider failed (after retries, or with an error that is not worth retrying)."""
+
+
+@dataclass
+class LLMSettings:
+    """How to reach the model and how to cache, replay or script its answers."""
+
+    model: str = "openai/gpt-4o"
+    temperature: float = 0.0
+    top_p: float | None = 1.0
+    max_tokens: int = 512
+    api_base: str | None = None
+    api_key_env: str | None = None  # env var holding the key (default: the provider's)
+    mode: str = "live"  # live | replay | scripted
+    cache_dir: Path = Path("outputs/llm-cache")
+    script: Path | None = None  # YAML file with `answers:` (mode=scripted)
+    max_retries: int = 4
+    backoff_s: float = 1.0
+    timeout_s: float = 60.0
+    use_cache: bool = True
+    local: bool = False  # serve `model` from the in-process llama.cpp server (llm=local)
+    extra: dict[str, Any] = field(default_factory=dict)  # more litellm.completion kwargs
+
+    def __post_init__(self) -> None:
+        if self.mode not in MODES:
+            raise LLMError(f"llm.mode must be one of {', '.join(MODES)}, got '{self.mode}'")
+        self.cache_dir = Path(self.cache_dir)
+        if self.script is not None:
+            self.script = Path(self.script)
+
+    @property
+    def provider(self) -> str:
+        if "/" in self.model:
+            return self.model.split("/", 1)[0]
+        if self.model.startswith("claude"):
+            return "anthropic"
+        return "openai" if self.model.startswith(("gpt-", "o1", "o3", "o4")) else ""
+
+    @property
+    def key_env(self) -> str | None:
+        """The environment variable that must hold the API key, if one is needed."""
+        if self.api_key_env:
+            return self.api_key_env
+        if self.api_base or self.local:
+            return None  # a self-hosted OpenAI-compatible server or Ollama: no key
+        return PROVIDER_KEY_ENV.get(self.provider)
+
+
+@dataclass(frozen=True)
+class LLMResponse:
+    """One answer; ``seconds`` is this call's wall time, ``recorded_seconds`` the live call's."""
+
+    text: str
+    cached: bool
+    scripted: bool
+    model: str
+    seconds: float
+    recorded_seconds: float = 0.0
+    key: str = ""
+
+
+def credentials_message(settings: LLMSettings) -> str:
+    var = settings.key_env or f"the API key variable of provider '{settings.provider}'"
+    return (
+        f"LLM credentials missing for model {settings.model}: set the environment variable "
+        f"{var}, {OFFLINE_HINT}."
+    )
+
+
+def load_script(path: Path) -> list[str]:
+    """Read the ``answers:`` list of a script file."""
+    import yaml
+
+    try:
+        data = yaml.safe_load(Path(path).read_text())
+    except (OSError, yaml.YAMLError) as exc:
+        raise LLMScriptError(f"cannot read LLM script {path}: {exc}") from None
+    answers = data.get("answers") if isinstance(data, dict) else None
+    if not isinstance(answers, list):
+        raise LLMScriptError(f"LLM script {path} needs a list 'answers:'")
+    return ["" if a is None else str(a) for a in answers]
+
+
+class LLMClient:
+    """Completes chat messages through litellm, with cache, replay, script and retries."""
+
+    def __init__(self, settings: LLMSettings, answers: Sequence[str] | None = None) -> None:
+        self.settings = settings
+        self._answers: list[str] | None = None
+        self._next_answer = 0
+        if settings.mode == "scripted":
+            if answers is None:
+                if settings.script is None:
+                    raise LLMScriptError("llm.mode=scripted needs llm.script=<file.yaml>")
+                answers = load_script(settings.script)
+            self._answers = list(answers)
+
+    # ------------------------------------------------------------------ keys
+
+    def request(self, messages: Sequence[Message], seed: int) -> dict[str, Any]:
+        """The request as it is cached: everything that decides the answer, no secret."""
+        s = self.settings
+        return {
+            "format": CACHE_FORMAT,
+            "model": s.model,
+            "messages": [{"role": m["role"], "content": m["content"]} for m in messages],
+            "temperature": s.temperature,
+            "top_p": s.top_p,
+            "max_tokens": s.max_tokens,
+            "seed": seed,
+            "api_base": "local" if s.local else s.api_base,
+            "extra": {k: v for k, v in sorted(s.extra.items()) if not _SECRET_PARAM.search(k)},
+        }
+
+    @staticmethod
+    def cache_key(request: Mapping[str, Any]) -> str:
+        blob = json.dumps(request, sort_keys=True, ensure_ascii=False, default=str)
+        return hashlib.sha256(blob.encode()).hexdigest()
+
+    def cache_path(self, key: str) -> Path:
+        return self.settings.cache_dir / key[:2] / f"{key}.json"
+
+    # ------------------------------------------------------------------ calls
+
+    def complete(self, messages: Sequence[Message], seed: int) -> LLMResponse:
+        """Answer ``messages``; ``seed`` goes to the provider and into the cache key."""
+        start = time.perf_counter()
+        s = self.settings
+        if s.mode == "scripted":
+            return self._scripted(start)
+        request = self.request(messages, seed)
+        key = self.cache_key(request)
+        if s.use_cache or s.mode == "replay":
+            hit = self._read_cache(key)
+            if hit is not None:
+                seconds = time.perf_counter() - start
+                recorded = float(hit.get("seconds", 0.0))
+                return LLMResponse(hit["text"], True, False, s.model, seconds, recorded, key)
+        if s.mode == "replay":
+            last = str(request["messages"][-1]["content"]) if request["messages"] else ""
+            snippet = " ".join(last.split())[-80:]
+            raise LLMCacheMiss(
+                f"llm.mode=replay: no cached answer in {s.cache_dir} for model {s.model}, "
+                f"seed {seed} (request {key[:12]}, prompt ending '...{snippet}'); "
+                "record it once with llm.mode=live"
+            )
+        text = self._call_live(request)
+        seconds = time.perf_counter() - start
+        if s.use_cache:
+            self._write_cache(key, request, text, seconds)
+        return LLMResponse(text, False, False, s.model, seconds, seconds, key)
+
+    def _scripted(self, start: float) -> LLMResponse:
+        assert self._answers is not None
+        if self._next_answer >= len(self._answers):
+            raise LLMScriptError(
+                f"scripted LLM answers used up: the script "
+                f"{self.settings.script or '(in memory)'} has {len(self._answers)} answer(s), "
+                f"call {self._next_answer + 1} needs another"
+            )
+        text = self._answers[self._next_answer]
+        self._next_answer += 1
+        return LLMResponse(text, False, True, "scripted", time.perf_counter() - start)
+
+    def _call_live(self, request: Mapping[str, Any]) -> str:
+        s = self.settings
+        kwargs: dict[str, Any] = {
+            "model": s.model,
+            "messages": request["messages"],
+            "temperature": s.temperature,
+            "max_tokens": s.max_tokens,
+            "seed": request["seed"],
+            "timeout": s.timeout_s,
+            "max_retries": 0,  # retries are ours
+            "drop_params": True,  # e.g. Anthropic has no `seed`: it stays in our cache key
+            **s.extra,
+        }
+        if s.top_p is not None:
+            kwargs["top_p"] = s.top_p
+        if s.api_base:
+            kwargs["api_base"] = s.api_base
+        secret: str | None = None
+        env = s.key_env
+        if env:
+            secret = os.environ.get(env) or None
+            if secret is None:
+                raise LLMCredentialsError(credentials_message(s))
+            kwargs["api_key"] = secret
+        elif (s.api_base or s.local) and s.provider == "openai":
+            kwargs["api_key"] = "not-needed"  # OpenAI-compatible servers ignore it
+        litellm = _import_litellm()
+        attempt = 0
+        while True:
+            try:
+                response = litellm.completion(**kwargs)
+                content = response.choices[0].message.content
+                return content if isinstance(content, str) else ""
+            except litellm.AuthenticationError:
+                raise LLMCredentialsError(credentials_message(s)) from None
+            except Exception as exc:
+                if not _retryable(litellm, exc) or attempt >= s.max_retries:
+                    what = _scrub(f"{type(exc).__name__}: {exc}", secret)
+                    tries = f" after {attempt + 1} attempts" if attempt else ""
+                    raise LLMCallError(f"LLM call to {s.model} failed{tries}: {what}") from None
+                time.sleep(min(s.backoff_s * 2**attempt, 60.0))
+                attempt += 1
+
+    # ------------------------------------------------------------------ cache
+
+    def _read_cache(self, key: str) -> dict[str, Any] | None:
+        try:
+            data = json.loads(self.cache_path(key).read_text())
+        except (OSError, ValueError):
+            return None
+        return data if isinstance(data, dict) and isinstance(data.get("text"), str) else None
+
+    def _write_cache(self, key: str, request: Mapping[str, Any], text: str, seconds: float) -> None:
+        path = self.cache_path(key)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        entry = {
+            "key": key,
+            "request": request,
+            "text": text,
+            "seconds": seconds,
+            "model": self.settings.model,
+            "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        }
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(json.dumps(entry, indent=1, ensure_ascii=False, default=str))
+        os.replace(tmp, path)  # atomic: parallel jobs never read half a file
+
+
+def _retryable(litellm: Any, exc: Exception) -> bool:
+    if isinstance(exc, litellm.BadRequestError | litellm.NotFoundError):
+        return False
+    transient = (
+        litellm.RateLimitError,
+        litellm.Timeout,
+        litellm.APIConnectionError,
+        litellm.InternalServerError,
+        litellm.ServiceUnavailableError,
+        litellm.BadGatewayError,
+    )
+    if isinstance(exc, transient):
+        return True
+    status = getattr(exc, "status_code", None)
+    return isinstance(status, int) and status >= 500
+
+
+def _scrub(text: str, secret: str | None) -> str:
+    text = " ".join(text.split())
+    if secret:
+        text = text.replace(secret, "***")
+    return re.sub(r"\b(sk-[A-Za-z0-9_\-]{4})[A-Za-z0-9_\-*]+", r"\1***", text)[:400]

@@ -1,0 +1,198 @@
+"""Reading the LLM's answers: the English subgoal condition and the PDDL subgoal.
+
+* :func:`parse_english_subgoal` takes the final condition out of the generator's answer
+  (the text after "final goal condition is:" or a similar phrase; without one, the last
+  sentence if it names something of the task) and recognises the answer "none".
+* :func:`extract_pddl_goal` finds the goal in the translator's answer, tolerating code
+  fences, prose around it, a missing ``(:goal`` wrapper and unbalanced trailing parens.
+* :func:`parse_pddl_subgoal` checks it against the task with :func:`twostep.pddl.parse_goal`
+  (unknown predicate, wrong arity, unknown object), and :func:`check_subgoal` against the
+  main goal (equal to it, contradicting it, or a repeat of an earlier helper's subgoal).
+
+Every failure is a :class:`SubgoalError` whose message is the reason recorded for a discard.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from twostep.pddl import Goal, PDDLError, Problem, fact_to_pddl, parse_goal
+
+
+class SubgoalError(ValueError):
+    """An answer that gives no usable subgoal; the message says why."""
+
+
+@dataclass(frozen=True)
+class EnglishSubgoal:
+    """The generator's answer: ``kind`` is ``"subgoal"`` (``text`` set) or ``"none"``."""
+
+    kind: str
+    text: str | None = None
+    note: str | None = None  # how the condition was found when it was not plainly marked
+
+
+_NONE = re.compile(r"^[\s\"'`*_.:>-]*none[\s\"'`*_.!]*$", re.IGNORECASE)
+_NONE_LEAD = re.compile(r"^[\s\"'`*_>-]*none[\"'`*_]*\s*[.!:;,\u2013\u2014-]", re.IGNORECASE)
+_MARKER = re.compile(
+    r"(?:final\s+(?:sub)?goal\s+condition|(?:sub)?goal\s+condition|final\s+condition)"
+    r"[^:\n]{0,60}?(?:\bis\b\s*:?|:)",
+    re.IGNORECASE,
+)
+_AGENT_LABEL = re.compile(r"^\s*\**agent\s*\d+\**\s*:\s*", re.IGNORECASE)
+_SENTENCE_END = re.compile(r"(?<=[.!?])\s+")
+
+
+def _clean_condition(text: str) -> str:
+    text = text.strip().strip("*_`\"' ")
+    text = re.sub(r"\s+", " ", text)
+    return text.rstrip(" .;,").strip("*_`\"' ")
+
+
+def parse_english_subgoal(
+    answer: str, helper: int = 1, problem: Problem | None = None
+) -> EnglishSubgoal:
+    """Find the final goal condition in ``answer`` (for helper ``helper``).
+
+    Raises :class:`SubgoalError` for an empty answer or prose without a condition.
+    """
+    text = answer.strip()
+    if not text:
+        raise SubgoalError("empty answer from the subgoal generator")
+    if _NONE.match(text) or _NONE.match(_AGENT_LABEL.sub("", text.splitlines()[0])):
+        return EnglishSubgoal("none")
+    matches = list(_MARKER.finditer(text))
+    if matches:
+        # Prefer the condition stated for this helper; else the first one given.
+        own = [m for m in matches if re.search(rf"agent\s*{helper}\b", _lead_in(text, m), re.I)]
+        match = (own or matches)[0]
+        rest = text[match.end() :].lstrip(" \t:")
+        lines = [line for line in rest.splitlines() if line.strip()]
+        condition = _clean_condition(lines[0]) if lines else ""
+        if _NONE.match(condition or "x"):
+            return EnglishSubgoal("none")
+        if condition:
+            return EnglishSubgoal("subgoal", condition)
+        raise SubgoalError("the generator's answer announces a goal condition but states none")
+    if _NONE_LEAD.match(_AGENT_LABEL.sub("", text)):
+        return EnglishSubgoal("none")  # "None. No further helper would ..."
+    sentences = [s for s in _SENTENCE_END.split(" ".join(text.split())) if s.strip()]
+    last = _clean_condition(_AGENT_LABEL.sub("", sentences[-1]))
+    if last and (problem is None or _mentions_task(last, problem)):
+        return EnglishSubgoal(
+            "subgoal", last, note="no 'final goal condition' phrase: used the last sentence"
+        )
+    raise SubgoalError("no final goal condition in the generator's answer")
+
+
+def _lead_in(text: str, match: re.Match[str]) -> str:
+    """The marker with the words before it in its sentence ("Therefore, agent1's ...")."""
+    prefix = text[: match.start()]
+    cut = max(prefix.rfind("."), prefix.rfind("\n"))
+    return text[cut + 1 : match.end()]
+
+
+def _mentions_task(text: str, problem: Problem) -> bool:
+    """Whether ``text`` names an object or a predicate of the task."""
+    lowered = text.lower()
+    words = set(re.findall(r"[a-z0-9][a-z0-9_\-]*", lowered))
+    if words & set(problem.all_objects):
+        return True
+    spaced = " ".join(re.findall(r"[a-z0-9]+", lowered))
+    return any(
+        re.search(rf"\b{' '.join(re.findall(r'[a-z0-9]+', pred))}\b", spaced)
+        for pred in problem.domain.predicates
+    )
+
+
+# ----------------------------------------------------------------------- PDDL
+
+_FENCE = re.compile(r"```[a-zA-Z]*\s*\n?(.*?)```", re.DOTALL)
+_GOAL_START = re.compile(r"\(\s*:goal\b", re.IGNORECASE)
+_AND_START = re.compile(r"\(\s*and\b", re.IGNORECASE)
+_LITERAL_START = re.compile(r"\(\s*[A-Za-z(]")
+
+
+def _balanced_span(text: str, start: int) -> str:
+    """The s-expression(s) from ``start``: stops at the matching ')' or at prose after it.
+
+    A missing closing paren at the end is added; a stray one ends the span.
+    """
+    depth = 0
+    i = start
+    end = start
+    while i < len(text):
+        ch = text[i]
+        if ch == ";":  # PDDL comment
+            newline = text.find("\n", i)
+            i = len(text) if newline < 0 else newline
+            continue
+        if ch == "(":
+            depth += 1
+        elif ch == ")":
+            if depth == 0:
+                break
+            depth -= 1
+            end = i + 1
+            if depth == 0:
+                rest = text[i + 1 :]
+                nxt = len(rest) - len(rest.lstrip())
+                if not rest.lstrip().startswith("("):  # prose or the end follows
+                    break
+                i += 1 + nxt
+                continue
+        elif depth == 0 and not ch.isspace():
+            break
+        i += 1
+    if depth > 0:
+        return text[start:].rstrip().rstrip("`").rstrip() + ")" * depth
+    return text[start:end]
+
+
+def extract_pddl_goal(answer: str) -> str | None:
+    """The PDDL goal in ``answer`` as text (``(:goal ...)``, ``(and ...)`` or literals)."""
+    text = answer
+    fences = [f for f in _FENCE.findall(answer) if "(" in f]
+    if fences:
+        text = next((f for f in fences if _GOAL_START.search(f)), fences[0])
+    elif "```" in answer:  # an unclosed fence
+        text = answer.split("```", 1)[1]
+    for pattern in (_GOAL_START, _AND_START, _LITERAL_START):
+        match = pattern.search(text)
+        if match:
+            span = _balanced_span(text, match.start())
+            return span.strip() or None
+    return None
+
+
+def parse_pddl_subgoal(answer: str, problem: Problem) -> Goal:
+    """The goal in the translator's ``answer``, checked against ``problem``."""
+    if not answer.strip():
+        raise SubgoalError("empty answer from the translator")
+    goal_text = extract_pddl_goal(answer)
+    if goal_text is None:
+        raise SubgoalError("no PDDL goal in the translator's answer")
+    try:
+        return parse_goal(goal_text, problem, source="subgoal")
+    except PDDLError as exc:
+        raise SubgoalError(f"invalid PDDL subgoal: {exc.message}") from None
+
+
+def check_subgoal(
+    goal: Goal, full_goal: Goal, earlier: Mapping[int, Goal] | None = None
+) -> str | None:
+    """Why ``goal`` is no use as a helper subgoal of ``full_goal``, or None if it may be."""
+    if goal.positive == full_goal.positive and goal.negative == full_goal.negative:
+        return "equals the full goal"
+    if full_goal.positive <= goal.positive and full_goal.negative <= goal.negative:
+        return "includes the full goal: nothing would be left for the main agent"
+    for fact in sorted(goal.negative & full_goal.positive):
+        return f"contradicts the main goal: (not {fact_to_pddl(fact)}) undoes a goal fact"
+    for fact in sorted(goal.positive & full_goal.negative):
+        return f"contradicts the main goal: {fact_to_pddl(fact)} is negated in the goal"
+    for helper, other in sorted((earlier or {}).items()):
+        if goal.positive == other.positive and goal.negative == other.negative:
+            return f"repeats the subgoal of agent{helper}"
+    return None
