@@ -3,7 +3,12 @@
 from __future__ import annotations
 
 from tests.conftest import BLOCKS_DOMAIN, blocks_problem
-from twostep.decomposers.goal_split import open_goal_components, positional_predicates, release_literals, split_goal
+from twostep.decomposers.goal_split import (
+    open_goal_components,
+    positional_predicates,
+    release_literals,
+    split_goal,
+)
 from twostep.pddl import parse_problem
 
 BW = ["arm-empty", "holding"]
@@ -37,5 +42,7 @@ def test_helpers_get_balanced_buckets_with_release_conditions() -> None:
 
 def test_positional_predicates_are_not_release_conditions() -> None:
     p = _problem("(on a b)")
-    assert positional_predicates(p.domain) & set(BW) == set()  # clear is positional, not an agent fact
+    assert (
+        positional_predicates(p.domain) & set(BW) == set()
+    )  # clear is positional, not an agent fact
     assert release_literals(p, BW).positive == {("arm-empty",)}

@@ -12,14 +12,25 @@ AGENT_PREDICATES = ["arm-empty", "holding"]
 
 
 def test_compilation_adds_agents_everywhere() -> None:
-    p = parse_problem(BLOCKS_DOMAIN, blocks_problem("(on-table a) (clear a) (on-table b) (clear b) (arm-empty)", "(on a b) (arm-empty)", "a b"))
+    p = parse_problem(
+        BLOCKS_DOMAIN,
+        blocks_problem(
+            "(on-table a) (clear a) (on-table b) (clear b) (arm-empty)",
+            "(on a b) (arm-empty)",
+            "a b",
+        ),
+    )
     ma, names = compile_multi_agent_problem(p, 3, AGENT_PREDICATES)
     assert names == ["agent0", "agent1", "agent2"]
     assert ma.domain.predicates["holding"] == ("agent", "object")
     assert ma.domain.predicates["on"] == ("object", "object")
     pickup = ma.domain.actions["pickup"]
     assert pickup.parameters[0] == ("?agent", "agent")
-    assert {str(a) for a in pickup.pre_positive} == {"(clear ?b)", "(on-table ?b)", "(arm-empty ?agent)"}
+    assert {str(a) for a in pickup.pre_positive} == {
+        "(clear ?b)",
+        "(on-table ?b)",
+        "(arm-empty ?agent)",
+    }
     assert {("arm-empty", n) for n in names} <= ma.init
     assert ("arm-empty",) not in ma.init
     assert ma.goal.positive == {("on", "a", "b")} | {("arm-empty", n) for n in names}
@@ -29,7 +40,14 @@ def test_compilation_adds_agents_everywhere() -> None:
 
 
 def test_compiled_plan_splits_into_single_agent_terms() -> None:
-    p = parse_problem(BLOCKS_DOMAIN, blocks_problem("(on-table a) (clear a) (on-table b) (clear b) (on-table c) (clear c) (arm-empty)", "(on a b) (on c a)", "a b c"))
+    p = parse_problem(
+        BLOCKS_DOMAIN,
+        blocks_problem(
+            "(on-table a) (clear a) (on-table b) (clear b) (on-table c) (clear c) (arm-empty)",
+            "(on a b) (on c a)",
+            "a b c",
+        ),
+    )
     ma, names = compile_multi_agent_problem(p, 2, AGENT_PREDICATES)
     result = plan(ma, PlannerSettings("lama-first", 10))
     assert result.plan is not None

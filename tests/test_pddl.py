@@ -7,11 +7,21 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import BLOCKS_DOMAIN, blocks_problem
-from twostep.pddl import PDDLError, load_problem, parse_goal, parse_problem, problem_to_pddl, domain_to_pddl
+from twostep.pddl import (
+    PDDLError,
+    domain_to_pddl,
+    load_problem,
+    parse_goal,
+    parse_problem,
+    problem_to_pddl,
+)
 
 
 def test_blocks_model() -> None:
-    p = parse_problem(BLOCKS_DOMAIN, blocks_problem("(on-table a) (on b a) (clear b) (arm-empty)", "(on a b)", "a b"))
+    p = parse_problem(
+        BLOCKS_DOMAIN,
+        blocks_problem("(on-table a) (on b a) (clear b) (arm-empty)", "(on a b)", "a b"),
+    )
     assert set(p.domain.actions) == {"pickup", "putdown", "stack", "unstack"}
     assert p.domain.predicates["on"] == ("object", "object")
     assert ("on", "b", "a") in p.init and ("arm-empty",) in p.init
@@ -41,12 +51,22 @@ def test_written_pddl_reads_back_identically(quirks_root: Path) -> None:
 @pytest.mark.parametrize(
     ("problem_text", "line", "fragment"),
     [
-        ("(define (problem p) (:domain blocks)\n(:objects a b)\n(:init (on-table a)\n(:goal (on a b)))", 1, "never closed"),
-        ("(define (problem p) (:domain blocks)\n(:objects a b)\n(:init (on-table z))\n(:goal (on a b)))", 3, "z"),
+        (
+            "(define (problem p) (:domain blocks)\n(:objects a b)\n(:init (on-table a)\n(:goal (on a b)))",
+            1,
+            "never closed",
+        ),
+        (
+            "(define (problem p) (:domain blocks)\n(:objects a b)\n(:init (on-table z))\n(:goal (on a b)))",
+            3,
+            "z",
+        ),
         ("(define (problem p) (:domain blocks)\n(:objects a b))\n(:init)", 3, "a ')' too many"),
     ],
 )
-def test_malformed_problem_names_file_and_line(tmp_path: Path, problem_text: str, line: int, fragment: str) -> None:
+def test_malformed_problem_names_file_and_line(
+    tmp_path: Path, problem_text: str, line: int, fragment: str
+) -> None:
     (tmp_path / "d.pddl").write_text(BLOCKS_DOMAIN)
     (tmp_path / "p.pddl").write_text(problem_text)
     with pytest.raises(PDDLError) as info:
@@ -57,7 +77,9 @@ def test_malformed_problem_names_file_and_line(tmp_path: Path, problem_text: str
 
 
 def test_malformed_domain_is_blamed_on_the_domain(tmp_path: Path) -> None:
-    (tmp_path / "d.pddl").write_text(BLOCKS_DOMAIN.replace(":precondition (holding ?b)", ":precondition (holdin ?b)"))
+    (tmp_path / "d.pddl").write_text(
+        BLOCKS_DOMAIN.replace(":precondition (holding ?b)", ":precondition (holdin ?b)")
+    )
     (tmp_path / "p.pddl").write_text(blocks_problem("(arm-empty)", "(arm-empty)"))
     with pytest.raises(PDDLError) as info:
         load_problem(tmp_path / "d.pddl", tmp_path / "p.pddl")
@@ -82,6 +104,8 @@ def test_parse_goal_checks_predicates_arity_objects() -> None:
 
 
 def test_goal_holds_and_unmet() -> None:
-    p = parse_problem(BLOCKS_DOMAIN, blocks_problem("(arm-empty) (on a b)", "(on a b) (not (holding a))", "a b"))
+    p = parse_problem(
+        BLOCKS_DOMAIN, blocks_problem("(arm-empty) (on a b)", "(on a b) (not (holding a))", "a b")
+    )
     assert p.goal.holds(p.init)
     assert p.goal.unmet(frozenset({("holding", "a")})) == ["(on a b)", "(not (holding a))"]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tests.conftest import BLOCKS_DOMAIN, blocks_problem
+from tests.conftest import blocks_problem
 from tests.test_benchmark import make_root
 from twostep.benchmark import load_task
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
@@ -107,7 +107,9 @@ def test_bad_subgoals_are_discarded_with_reasons(tmp_path: Path) -> None:
 
 def test_unsolvable_subgoal_is_discarded(tmp_path: Path) -> None:
     task = _task(tmp_path)
-    result = run_twostep(task, 3, Scripted("(and (on a a))", "(and (on d e) (arm-empty))"), BW, FAST)
+    result = run_twostep(
+        task, 3, Scripted("(and (on a a))", "(and (on d e) (arm-empty))"), BW, FAST
+    )
     assert result.subgoals[0]["status"] == "discarded"
     assert "unsolvable" in result.subgoals[0]["reason"]
     assert result.subgoals[1]["status"] == "accepted"
@@ -116,7 +118,9 @@ def test_unsolvable_subgoal_is_discarded(tmp_path: Path) -> None:
 
 
 def test_goal_already_holds(tmp_path: Path) -> None:
-    task = _task(tmp_path, blocks_problem("(on-table a) (clear a) (arm-empty)", "(on-table a)", "a"))
+    task = _task(
+        tmp_path, blocks_problem("(on-table a) (clear a) (arm-empty)", "(on-table a)", "a")
+    )
     for result in (
         run_single_agent(task, FAST),
         run_multi_agent(task, 3, BW, FAST),

@@ -38,13 +38,17 @@ def test_anytime_lama_keeps_the_best_plan() -> None:
 
 
 def test_goal_already_true_gives_empty_plan() -> None:
-    problem = parse_problem(BLOCKS_DOMAIN, blocks_problem("(on-table a) (clear a) (arm-empty)", "(on-table a)"))
+    problem = parse_problem(
+        BLOCKS_DOMAIN, blocks_problem("(on-table a) (clear a) (arm-empty)", "(on-table a)")
+    )
     result = plan(problem)
     assert result.status is Status.SOLVED and result.plan == () and result.cost == 0
 
 
 def test_unsolvable_is_a_status() -> None:
-    problem = parse_problem(BLOCKS_DOMAIN, blocks_problem("(on-table a) (clear a)", "(on-table b)", "a b"))
+    problem = parse_problem(
+        BLOCKS_DOMAIN, blocks_problem("(on-table a) (clear a)", "(on-table b)", "a b")
+    )
     result = plan(problem, PlannerSettings("lama-first", 10))
     assert result.status is Status.UNSOLVABLE and result.plan is None
     assert result.exit_code in (10, 11, 12)

@@ -11,7 +11,12 @@ BW = ["arm-empty", "holding"]
 
 
 def test_handoff_keeps_environment_and_resets_agent_state() -> None:
-    p = parse_problem(BLOCKS_DOMAIN, blocks_problem("(on-table a) (clear a) (on-table b) (clear b) (arm-empty)", "(on a b)", "a b"))
+    p = parse_problem(
+        BLOCKS_DOMAIN,
+        blocks_problem(
+            "(on-table a) (clear a) (on-table b) (clear b) (arm-empty)", "(on a b)", "a b"
+        ),
+    )
     helper_plan = Grounder(p).ground_plan(["(pickup a)"])  # the helper ends holding a
     env = progress_state(p.init, helper_plan, BW)
     assert ("holding", "a") not in env and ("arm-empty",) not in env

@@ -37,7 +37,9 @@ def compile_multi_agent_domain(domain: Domain, agent_predicates: Collection[str]
     """The N-agent version of ``domain`` (independent of N: agents are objects)."""
     unknown = set(agent_predicates) - set(domain.predicates)
     if unknown:
-        raise ValueError(f"agent predicates not in domain {domain.name}: {', '.join(sorted(unknown))}")
+        raise ValueError(
+            f"agent predicates not in domain {domain.name}: {', '.join(sorted(unknown))}"
+        )
     if AGENT_TYPE in domain.types:
         raise ValueError(f"domain {domain.name} already has a type named '{AGENT_TYPE}'")
     types = dict(domain.types)
@@ -66,7 +68,9 @@ def compile_multi_agent_domain(domain: Domain, agent_predicates: Collection[str]
     )
 
 
-def _per_agent(facts: frozenset[Fact], agents: list[str], agent_predicates: Collection[str]) -> set[Fact]:
+def _per_agent(
+    facts: frozenset[Fact], agents: list[str], agent_predicates: Collection[str]
+) -> set[Fact]:
     out: set[Fact] = set()
     for fact in facts:
         if fact[0] in agent_predicates:

@@ -229,7 +229,9 @@ def _typed_names(items: list[SExp]) -> list[tuple[str, str]]:
 
 def _undeclared_constants(domain_body: list[SExp]) -> set[str]:
     """Names that domain actions use as objects without declaring them as constants."""
-    predicates = {p[0] for p in (_section(domain_body, ":predicates") or [])[1:] if isinstance(p, list) and p}
+    predicates = {
+        p[0] for p in (_section(domain_body, ":predicates") or [])[1:] if isinstance(p, list) and p
+    }
     constants = {n for n, _ in _typed_names((_section(domain_body, ":constants") or [":c"])[1:])}
     found: set[str] = set()
 
@@ -405,8 +407,14 @@ def _schema_from_up(action: Any) -> ActionSchema:
         atom = Atom(effect.fluent.fluent().name, _terms(effect.fluent))
         (add if effect.value.is_true() else delete).append(atom)
     return ActionSchema(
-        action.name, params, tuple(pre_pos), tuple(pre_neg), tuple(add), tuple(delete),
-        tuple(equal), tuple(not_equal),
+        action.name,
+        params,
+        tuple(pre_pos),
+        tuple(pre_neg),
+        tuple(add),
+        tuple(delete),
+        tuple(equal),
+        tuple(not_equal),
     )
 
 
@@ -433,12 +441,16 @@ def parse_problem(
     domain_body = _define_body(domain_text, "domain", domain_source)
     domain_name_expr = domain_body[1]
     domain_name = (
-        domain_name_expr[1] if isinstance(domain_name_expr, list) and len(domain_name_expr) > 1 else "domain"
+        str(domain_name_expr[1])
+        if isinstance(domain_name_expr, list) and len(domain_name_expr) > 1
+        else "domain"
     )
     requirements = tuple(
         r for r in (_section(domain_body, ":requirements") or [":r"])[1:] if isinstance(r, str)
     )
-    constant_names = {n for n, _ in _typed_names((_section(domain_body, ":constants") or [":c"])[1:])}
+    constant_names = {
+        n for n, _ in _typed_names((_section(domain_body, ":constants") or [":c"])[1:])
+    }
     types: dict[str, str | None] = {}
     for user_type in up_problem.user_types:
         types[user_type.name] = user_type.father.name if user_type.father is not None else None
@@ -450,9 +462,7 @@ def parse_problem(
     predicates = {f.name: tuple(p.type.name for p in f.signature) for f in up_problem.fluents}
     actions = {a.name: _schema_from_up(a) for a in up_problem.actions}
     domain = Domain(domain_name, requirements, types, constants, predicates, actions, domain_source)
-    init = frozenset(
-        _fact(k) for k, v in up_problem.explicit_initial_values.items() if v.is_true()
-    )
+    init = frozenset(_fact(k) for k, v in up_problem.explicit_initial_values.items() if v.is_true())
     positive: set[Fact] = set()
     negative: set[Fact] = set()
     for goal in up_problem.goals:
@@ -461,7 +471,11 @@ def parse_problem(
                 raise PDDLError("equality in the goal is not supported", problem_source)
             (positive if is_positive else negative).add((pred, *terms))
     return Problem(
-        up_problem.name, domain, objects, init, Goal(frozenset(positive), frozenset(negative)),
+        up_problem.name,
+        domain,
+        objects,
+        init,
+        Goal(frozenset(positive), frozenset(negative)),
         problem_source,
     )
 

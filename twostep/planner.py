@@ -126,7 +126,9 @@ def _plan_files(folder: Path) -> list[Path]:
 
 def _status_for(code: int | None, have_plan: bool) -> tuple[Status, str]:
     if code is None:
-        return (Status.SOLVED if have_plan else Status.TIMEOUT), "wall-clock guard stopped the planner"
+        return (
+            Status.SOLVED if have_plan else Status.TIMEOUT
+        ), "wall-clock guard stopped the planner"
     if code in PLAN_FOUND and have_plan:
         return Status.SOLVED, PLAN_FOUND[code]
     if code in UNSOLVABLE:
@@ -138,19 +140,35 @@ def _status_for(code: int | None, have_plan: bool) -> tuple[Status, str]:
     return Status.ERROR, f"unexpected exit code {code}"
 
 
-def run_driver(domain_file: Path, problem_file: Path, settings: PlannerSettings, workdir: Path) -> PlanResult:
+def run_driver(
+    domain_file: Path, problem_file: Path, settings: PlannerSettings, workdir: Path
+) -> PlanResult:
     """Run the driver on PDDL files in ``workdir`` (which receives plan and SAS files)."""
     if settings.alias not in ALIASES:
         known = ", ".join(sorted(ALIASES))
-        return PlanResult(Status.ERROR, None, 0.0, 0.0, f"unknown planner alias '{settings.alias}' (known: {known})")
+        return PlanResult(
+            Status.ERROR,
+            None,
+            0.0,
+            0.0,
+            f"unknown planner alias '{settings.alias}' (known: {known})",
+        )
     command = [sys.executable, str(driver_path())]
     if settings.memory_limit_mb is not None:
         command += ["--overall-memory-limit", f"{settings.memory_limit_mb}M"]
-    command += [*ALIASES[settings.alias], "--search-time-limit", f"{max(1, round(settings.search_time_limit_s))}s"]
+    command += [
+        *ALIASES[settings.alias],
+        "--search-time-limit",
+        f"{max(1, round(settings.search_time_limit_s))}s",
+    ]
     command += ["--plan-file", "plan", str(domain_file), str(problem_file)]
     start = time.perf_counter()
     process = subprocess.Popen(
-        command, cwd=workdir, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        command,
+        cwd=workdir,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
         start_new_session=True,  # so the guard can stop translator and search together
     )
     try:

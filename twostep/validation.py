@@ -38,8 +38,8 @@ def to_up_problem(problem: Problem) -> Any:
 def validate_plan(problem: Problem, plan: Sequence[str], up_problem: Any = None) -> Validation:
     """Check with unified-planning that ``plan`` is applicable and reaches the goal."""
     from unified_planning.engines import ValidationResultStatus
-    from unified_planning.shortcuts import PlanValidator
     from unified_planning.plans import ActionInstance, SequentialPlan
+    from unified_planning.shortcuts import PlanValidator
 
     up_problem = up_problem if up_problem is not None else to_up_problem(problem)
     instances = []

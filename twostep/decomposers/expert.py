@@ -37,5 +37,6 @@ class ExpertDecomposer:
         table = load_expert_subgoals(request.task.domain_path.parent / "expert.yaml")
         goals = table.get(f"p{request.task.task_id:02d}", {}).get(request.agents, [])
         return [
-            SubgoalProposal(helper=i, pddl=g) for i, g in enumerate(goals[: request.agents - 1], start=1)
+            SubgoalProposal(helper=i, pddl=g)
+            for i, g in enumerate(goals[: request.agents - 1], start=1)
         ]

@@ -42,9 +42,13 @@ def positional_predicates(domain: Domain) -> set[str]:
     return found
 
 
-def open_goal_components(problem: Problem, agent_predicates: Collection[str], link_degree: int = 2) -> list[list[Fact]]:
+def open_goal_components(
+    problem: Problem, agent_predicates: Collection[str], link_degree: int = 2
+) -> list[list[Fact]]:
     """Connected groups of the open environment goal literals (see the module docstring)."""
-    open_literals = sorted(f for f in problem.goal.positive - problem.init if f[0] not in agent_predicates)
+    open_literals = sorted(
+        f for f in problem.goal.positive - problem.init if f[0] not in agent_predicates
+    )
     degree: dict[str, int] = defaultdict(int)
     for fact in open_literals:
         for obj in set(fact[1:]):
@@ -81,7 +85,9 @@ def release_literals(problem: Problem, agent_predicates: Collection[str]) -> Goa
     return Goal(frozenset(positive), frozenset(negative - positive))
 
 
-def split_goal(problem: Problem, agents: int, agent_predicates: Collection[str], link_degree: int = 2) -> list[Goal]:
+def split_goal(
+    problem: Problem, agents: int, agent_predicates: Collection[str], link_degree: int = 2
+) -> list[Goal]:
     """Helper subgoals (at most ``agents - 1``) for ``problem``."""
     if agents < 2:
         return []
@@ -110,5 +116,9 @@ class GoalSplitDecomposer:
         self.link_degree = link_degree
 
     def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]:
-        goals = split_goal(request.task.problem, request.agents, self.agent_predicates, self.link_degree)
-        return [SubgoalProposal(helper=i, pddl=goal.to_pddl()) for i, goal in enumerate(goals, start=1)]
+        goals = split_goal(
+            request.task.problem, request.agents, self.agent_predicates, self.link_degree
+        )
+        return [
+            SubgoalProposal(helper=i, pddl=goal.to_pddl()) for i, goal in enumerate(goals, start=1)
+        ]

@@ -1,0 +1,97 @@
+"""Planner benchmark: per task, parse time, plan time, and our wrapper's overhead.
+
+For every task: the time to parse it (unified-planning + our model), the time of
+``twostep.planner.plan`` (writes PDDL, runs the driver, reads the plan), and the time of
+the Fast Downward driver called directly on the original files with the same alias and
+limit. The overhead ratio is wrapper wall time / direct wall time; the script prints the
+median ratio (goal: at most 1.10) and validates every plan with unified-planning.
+
+    .venv/bin/python bench/bench_planner.py                  # all 100 tasks, lama-first
+    .venv/bin/python bench/bench_planner.py --domains blocksworld --tasks 1-5 --repeats 3
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from twostep.benchmark import DEFAULT_DATA_ROOT, list_domains, list_tasks, load_task
+from twostep.planner import ALIASES, PlannerSettings, Status, driver_path, plan
+from twostep.validation import validate_plan
+
+
+def direct_driver(domain: Path, problem: Path, alias: str, limit: float) -> float:
+    """Wall time of the bare driver on the original files (what a user would run by hand)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        start = time.perf_counter()
+        subprocess.run(
+            [sys.executable, str(driver_path()), *ALIASES[alias], "--search-time-limit", f"{int(limit)}s",
+             "--plan-file", "plan", str(domain), str(problem)],
+            cwd=tmp, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False,
+        )  # fmt: skip
+        return time.perf_counter() - start
+
+
+def parse_range(text: str | None, available: list[int]) -> list[int]:
+    if not text:
+        return available
+    lo, _, hi = text.partition("-")
+    return [t for t in available if int(lo) <= t <= int(hi or lo)]
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--data", type=Path, default=DEFAULT_DATA_ROOT)
+    parser.add_argument("--domains", nargs="*")
+    parser.add_argument("--tasks", help="range like 1-20")
+    parser.add_argument("--alias", default="lama-first")
+    parser.add_argument("--time-limit", type=float, default=60.0)
+    parser.add_argument("--repeats", type=int, default=1, help="timing repeats per task (median)")
+    args = parser.parse_args()
+    settings = PlannerSettings(args.alias, args.time_limit)
+    print(f"# {' '.join(sys.argv)}")
+    print(
+        f"{'task':<18}{'parse s':>9}{'plan s':>9}{'direct s':>10}{'ratio':>7}{'length':>8}  status"
+    )
+    ratios: list[float] = []
+    failures = 0
+    for domain in args.domains or list_domains(args.data):
+        for task_id in parse_range(args.tasks, list_tasks(domain, args.data)):
+            start = time.perf_counter()
+            task = load_task(domain, task_id, args.data)
+            parse_s = time.perf_counter() - start
+            ours, direct = [], []
+            result = None
+            for _ in range(args.repeats):
+                result = plan(task.problem, settings)
+                ours.append(result.wall_time_s)
+                direct.append(
+                    direct_driver(task.domain_path, task.problem_path, args.alias, args.time_limit)
+                )
+            assert result is not None
+            ok = result.status is Status.SOLVED and result.plan is not None
+            valid = ok and validate_plan(task.problem, result.plan or ()).valid
+            failures += not valid
+            ratio = statistics.median(ours) / statistics.median(direct)
+            if result.plan:  # tasks whose goal already holds never reach the driver
+                ratios.append(ratio)
+            length = len(result.plan) if result.plan is not None else "-"
+            status = "valid" if valid else f"{result.status.value} {result.message}"
+            print(f"{task.name:<18}{parse_s:>9.3f}{statistics.median(ours):>9.3f}"
+                  f"{statistics.median(direct):>10.3f}{ratio:>7.3f}{length!s:>8}  {status}")  # fmt: skip
+    if ratios:
+        print(f"\nmedian wrapper/direct wall-time ratio over {len(ratios)} tasks: "
+              f"{statistics.median(ratios):.3f} (goal <= 1.10)")  # fmt: skip
+    print(f"tasks not solved+validated: {failures}")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
