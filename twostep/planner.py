@@ -50,6 +50,7 @@ ALIASES: dict[str, tuple[str, ...]] = {
     "lama": ("--alias", "seq-sat-lama-2011"),  # the paper's setting: anytime LAMA
     "lama-first": ("--alias", "lama-first"),  # first plan of LAMA's first iteration
     "seq-sat-lama-2011": ("--alias", "seq-sat-lama-2011"),
+    "seq-opt-lmcut": ("--alias", "seq-opt-lmcut"),  # optimal; used for the example plans
 }
 ANYTIME_ALIASES = frozenset({"lama", "seq-sat-lama-2011"})
 

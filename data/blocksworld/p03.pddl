@@ -1,0 +1,20 @@
+(define (problem blocksworld-p03)
+  (:domain blocksworld)
+  (:objects
+    b1 b2 b3 b4 - block
+  )
+  (:init
+    (on-table b3)
+    (on-table b1)
+    (on-table b2)
+    (on b4 b2)
+    (clear b3)
+    (clear b1)
+    (clear b4)
+    (arm-empty)
+  )
+  (:goal (and
+    (on b1 b2)
+    (on b2 b3)
+  ))
+)

@@ -1,0 +1,28 @@
+(define (problem blocksworld-p09)
+  (:domain blocksworld)
+  (:objects
+    b1 b2 b3 b4 b5 b6 b7 - block
+  )
+  (:init
+    (on-table b7)
+    (on-table b3)
+    (on-table b2)
+    (on-table b4)
+    (on b1 b7)
+    (on b6 b4)
+    (on b5 b6)
+    (clear b1)
+    (clear b3)
+    (clear b2)
+    (clear b5)
+    (arm-empty)
+  )
+  (:goal (and
+    (on b1 b6)
+    (on b2 b3)
+    (on b3 b4)
+    (on b4 b5)
+    (on b6 b7)
+    (on b7 b2)
+  ))
+)

@@ -1,0 +1,27 @@
+(define (problem blocksworld-p10)
+  (:domain blocksworld)
+  (:objects
+    b1 b2 b3 b4 b5 b6 b7 - block
+  )
+  (:init
+    (on-table b7)
+    (on-table b2)
+    (on-table b3)
+    (on b6 b2)
+    (on b4 b6)
+    (on b5 b4)
+    (on b1 b3)
+    (clear b7)
+    (clear b5)
+    (clear b1)
+    (arm-empty)
+  )
+  (:goal (and
+    (on b1 b3)
+    (on b2 b7)
+    (on b3 b4)
+    (on b4 b6)
+    (on b5 b1)
+    (on b6 b2)
+  ))
+)

@@ -1,0 +1,28 @@
+(define (problem blocksworld-p12)
+  (:domain blocksworld)
+  (:objects
+    b1 b2 b3 b4 b5 b6 b7 b8 - block
+  )
+  (:init
+    (on-table b2)
+    (on-table b6)
+    (on b8 b2)
+    (on b5 b8)
+    (on b3 b5)
+    (on b4 b3)
+    (on b7 b6)
+    (on b1 b7)
+    (clear b4)
+    (clear b1)
+    (arm-empty)
+  )
+  (:goal (and
+    (on b1 b8)
+    (on b2 b6)
+    (on b3 b2)
+    (on b4 b5)
+    (on b5 b1)
+    (on b7 b4)
+    (on b8 b3)
+  ))
+)

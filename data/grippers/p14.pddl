@@ -1,0 +1,26 @@
+(define (problem grippers-p14)
+  (:domain grippers)
+  (:objects
+    robot1 - robot
+    room1 room2 room3 room4 - room
+    lgripper1 rgripper1 - gripper
+    ball1 ball2 ball3 ball4 ball5 - object
+  )
+  (:init
+    (at-robby robot1 room4)
+    (free robot1 lgripper1)
+    (free robot1 rgripper1)
+    (at ball1 room2)
+    (at ball2 room2)
+    (at ball3 room1)
+    (at ball4 room1)
+    (at ball5 room1)
+  )
+  (:goal (and
+    (at ball1 room3)
+    (at ball2 room1)
+    (at ball3 room3)
+    (at ball4 room4)
+    (at ball5 room4)
+  ))
+)

@@ -1,0 +1,155 @@
+"""``twostep-data``: build, check and scale the benchmark tasks in ``data/``.
+
+``generate`` rewrites the committed set (p01..p20 and the example of each domain) from
+the seeded generators; ``check`` verifies that a data folder is exactly what
+``generate`` would write; ``scale`` writes larger tasks for scaling benchmarks into a
+folder of the same layout; ``example-plan`` re-plans an in-context example (whose plan
+is a static file of the package). Hand-written files (``expert.yaml``) are never touched.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from twostep.generators import (
+    DOMAINS,
+    GENERATORS,
+    benchmark_files,
+    example_task,
+    scale_files,
+    static_file,
+)
+from twostep.pddl import parse_problem
+
+EXAMPLE_ALIAS = "seq-opt-lmcut"  # shortest plans make the clearest in-context examples
+
+
+def write_files(folder: Path, files: dict[str, str]) -> int:
+    """Write ``files`` into ``folder``; return how many changed."""
+    folder.mkdir(parents=True, exist_ok=True)
+    changed = 0
+    for name, text in files.items():
+        path = folder / name
+        if not path.is_file() or path.read_text() != text:
+            path.write_text(text)
+            changed += 1
+    return changed
+
+
+def compare_files(folder: Path, files: dict[str, str]) -> list[str]:
+    """One line per file of ``files`` that is missing from ``folder`` or differs."""
+    problems = []
+    for name, text in files.items():
+        path = folder / name
+        if not path.is_file():
+            problems.append(f"{path}: missing")
+            continue
+        found = path.read_text()
+        if found == text:
+            continue
+        want, have = text.splitlines(), found.splitlines()
+        line = next(
+            (i for i, (a, b) in enumerate(zip(want, have, strict=False)) if a != b),
+            min(len(want), len(have)),
+        )
+        expected = want[line] if line < len(want) else "<end of file>"
+        actual = have[line] if line < len(have) else "<end of file>"
+        problems.append(f"{path}:{line + 1}: expected {expected!r}, found {actual!r}")
+    return problems
+
+
+def _generate(args: argparse.Namespace) -> int:
+    for domain in args.domain or DOMAINS:
+        files = benchmark_files(domain, args.seed)
+        changed = write_files(Path(args.out) / domain, files)
+        print(f"{domain}: {len(files)} files, {changed} written")
+    return 0
+
+
+def _check(args: argparse.Namespace) -> int:
+    problems: list[str] = []
+    for domain in args.domain or DOMAINS:
+        problems += compare_files(Path(args.data) / domain, benchmark_files(domain, args.seed))
+    if problems:
+        print(f"{len(problems)} file(s) do not match the generators:", file=sys.stderr)
+        for line in problems:
+            print(f"  {line}", file=sys.stderr)
+        print("run 'twostep-data generate' to rebuild them", file=sys.stderr)
+        return 1
+    print(f"{args.data}: every generated file matches")
+    return 0
+
+
+def _scale(args: argparse.Namespace) -> int:
+    if args.size < 2 or args.count < 1:
+        print("error: --size must be at least 2 and --count at least 1", file=sys.stderr)
+        return 2
+    files = scale_files(args.domain, args.size, args.count, args.seed)
+    write_files(Path(args.out), files)
+    unit = GENERATORS[args.domain].scale_unit
+    print(f"{args.out}: {args.count} {args.domain} task(s) with {args.size} {unit}")
+    return 0
+
+
+def _example_plan(args: argparse.Namespace) -> int:
+    from twostep.planner import PlannerSettings, plan
+
+    problem = parse_problem(static_file(args.domain, ".pddl"), example_task(args.domain).to_pddl())
+    result = plan(problem, PlannerSettings(alias=args.alias, search_time_limit_s=args.time_limit))
+    if result.plan is None:
+        print(f"error: {args.domain} example not solved: {result.message}", file=sys.stderr)
+        return 1
+    print("\n".join(result.plan))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="twostep-data", description="Build, check and scale the benchmark tasks (data/)."
+    )
+    commands = parser.add_subparsers(dest="command", required=True)
+    generate = commands.add_parser("generate", help="rebuild the benchmark tasks")
+    generate.add_argument("--out", default="data", help="data folder (default: data)")
+    check = commands.add_parser("check", help="verify a data folder rebuilds identically")
+    check.add_argument("--data", default="data", help="data folder (default: data)")
+    for sub in (generate, check):
+        sub.add_argument(
+            "--domain",
+            action="append",
+            choices=DOMAINS,
+            help="only this domain (repeatable; default: all)",
+        )
+        sub.add_argument("--seed", type=int, default=0, help="base seed (default: 0)")
+    units = ", ".join(f"{name}: {g.scale_unit}" for name, g in GENERATORS.items())
+    scale = commands.add_parser("scale", help="write larger tasks for scaling benchmarks")
+    scale.add_argument("--domain", required=True, choices=DOMAINS)
+    scale.add_argument("--size", type=int, required=True, help=f"size ({units})")
+    scale.add_argument("--out", required=True, help="folder to write (LLM+P layout)")
+    scale.add_argument("--count", type=int, default=1, help="number of tasks (default: 1)")
+    scale.add_argument("--seed", type=int, default=0, help="base seed (default: 0)")
+    example = commands.add_parser(
+        "example-plan",
+        help="plan p_example with Fast Downward and print the plan (the stored "
+        "domains/<domain>.example.sol files were made with the optimal seq-opt-lmcut)",
+    )
+    example.add_argument("--domain", required=True, choices=DOMAINS)
+    example.add_argument("--alias", default=EXAMPLE_ALIAS, help=f"default: {EXAMPLE_ALIAS}")
+    example.add_argument("--time-limit", type=float, default=300.0, help="seconds (default 300)")
+    example.set_defaults(run=_example_plan)
+    generate.set_defaults(run=_generate)
+    check.set_defaults(run=_check)
+    scale.set_defaults(run=_scale)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    code: int = args.run(args)
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(main())
