@@ -334,14 +334,15 @@ def _parse_with_up(
     _up_environment()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
-        try:  # the domain alone first, so an error names the right file
-            PDDLReader().parse_problem_string(domain_text)
-        except Exception as exc:
-            raise _as_pddl_error(exc, domain_source) from None
         try:
             return PDDLReader().parse_problem_string(domain_text, problem_text)
         except Exception as exc:
-            raise _as_pddl_error(exc, problem_source) from None
+            problem_error = exc
+        try:  # which file is wrong? the domain alone tells (only on failure: parsing is slow)
+            PDDLReader().parse_problem_string(domain_text)
+        except Exception as exc:
+            raise _as_pddl_error(exc, domain_source) from None
+        raise _as_pddl_error(problem_error, problem_source) from None
 
 
 def _as_pddl_error(exc: Exception, source: str | None) -> PDDLError:

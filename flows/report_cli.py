@@ -1,0 +1,344 @@
+"""The ``twostep-report`` command: the paper's figures and tables from a sweep's runs.
+
+Reads the job runs of one MLflow experiment (the contract is ``docs/tracking.md``) or
+the ``result.json`` files of a Hydra multirun directory, builds the report with
+:mod:`twostep.report` (pure analysis), writes PNG / CSV / Markdown files, and logs them
+back to MLflow as the artifacts of a report run (tag ``twostep.kind=report``) in the
+same experiment.
+
+    twostep-report --experiment NAME [--tracking-uri URI] [--out DIR] [--no-log]
+    twostep-report --sweep-dir outputs/multiruns/2026-01-01/12-00-00 [--out DIR]
+
+Exit codes: 0 report written; 1 nothing could be reported (unknown experiment, no runs,
+no successful run); 2 bad command line.
+
+For a test or a notebook, the building blocks are::
+
+    runs = load_runs_from_mlflow("sqlite:///outputs/mlflow.db", "my-sweep")
+    report = twostep.report.build_report(runs)
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import re
+import shlex
+import sys
+import urllib.error
+import urllib.request
+from collections.abc import Sequence
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+from urllib.parse import urlparse
+
+import pandas as pd
+
+from twostep.report import (
+    METRICS,
+    Report,
+    ReportInputError,
+    build_report,
+    format_console,
+    load_runs_from_sweep_dir,
+    normalise_runs,
+    write_report,
+)
+from twostep.report.runs import params_to_columns
+
+DEFAULT_TRACKING_URI = "sqlite:///outputs/mlflow.db"
+KIND_TAG = "twostep.kind"
+STATUS_TAG = "twostep.status"
+ERROR_TAG = "twostep.error"
+JOB_KEY_TAG = "twostep.job_key"
+
+
+def _quiet_mlflow() -> None:
+    """Environment MLflow and litellm read at import: no telemetry, no network lookups."""
+    os.environ.setdefault("MLFLOW_DISABLE_TELEMETRY", "true")
+    os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
+    for name in ("mlflow", "alembic"):
+        logging.getLogger(name).setLevel(logging.WARNING)
+
+
+def _check_store(tracking_uri: str, timeout_s: float = 10.0) -> None:
+    """Fail with one line before MLflow creates an empty store or retries for minutes."""
+    hint = "run a sweep first, or pass --tracking-uri or --sweep-dir"
+    parsed = urlparse(tracking_uri)
+    if parsed.scheme == "sqlite":
+        path = Path(tracking_uri[len("sqlite:///") :])
+        if not path.is_file():
+            raise ReportInputError(f"no MLflow store at {path} ({hint})")
+    elif parsed.scheme in ("", "file"):
+        path = Path(parsed.path or tracking_uri)
+        if not path.is_dir():
+            raise ReportInputError(f"no MLflow store at {path} ({hint})")
+    elif parsed.scheme in ("http", "https"):
+        url = tracking_uri.rstrip("/") + "/health"
+        try:
+            with urllib.request.urlopen(url, timeout=timeout_s):
+                pass
+        except (urllib.error.URLError, OSError) as error:
+            reason = getattr(error, "reason", error)
+            raise ReportInputError(
+                f"MLflow tracking server {tracking_uri} cannot be reached: {reason}"
+            ) from None
+
+
+def _one_line(error: BaseException) -> str:
+    text = str(error).strip().splitlines()
+    return f"{type(error).__name__}: {text[0] if text else ''}".rstrip(": ")
+
+
+@dataclass(frozen=True)
+class MlflowRuns:
+    """The job runs of one experiment as a canonical run table, and what was skipped."""
+
+    runs: pd.DataFrame
+    experiment_id: str
+    ignored: int  # runs of the experiment that are not jobs (sweep/report parents, others)
+
+
+def _run_row(run: Any) -> dict[str, Any] | None:
+    tags: dict[str, str] = dict(run.data.tags)
+    params: dict[str, str] = dict(run.data.params)
+    kind = tags.get(KIND_TAG)
+    if kind is not None and kind != "job":
+        return None
+    if kind is None and "domain.name" not in params:
+        return None
+    metrics: dict[str, float] = dict(run.data.metrics)
+    row: dict[str, Any] = params_to_columns(params)
+    row["run_id"] = run.info.run_id
+    row["job_key"] = tags.get(JOB_KEY_TAG, "")
+    row["start_time"] = run.info.start_time
+    for metric in METRICS:
+        if metric in metrics:
+            row[metric] = metrics[metric]
+    status = tags.get(STATUS_TAG)
+    lifecycle = str(run.info.status).upper()
+    if status is None and lifecycle in ("RUNNING", "SCHEDULED"):
+        status = "running"
+    elif status is None and lifecycle in ("FAILED", "KILLED"):
+        status = "failed"
+    row["status"] = status
+    row["success"] = metrics.get("success")
+    error = tags.get(ERROR_TAG, "")
+    if not error and status is None and "success" not in metrics:
+        error = f"no status tag and no success metric (MLflow run {lifecycle.lower()})"
+    row["error"] = error
+    return row
+
+
+def read_mlflow_runs(tracking_uri: str, experiment: str) -> MlflowRuns:
+    """Every job run of ``experiment`` (tag ``twostep.kind=job``) as a run table.
+
+    Raises :class:`ReportInputError` with a one-line message for a missing store, an
+    unknown experiment, a store that cannot be read, or an experiment without job runs.
+    """
+    _check_store(tracking_uri)
+    _quiet_mlflow()
+    from mlflow.entities import ViewType
+    from mlflow.tracking import MlflowClient
+
+    try:
+        client = MlflowClient(tracking_uri=tracking_uri)
+        found = client.get_experiment_by_name(experiment)
+        if found is None:
+            known = sorted(e.name for e in client.search_experiments())
+            listed = ", ".join(known) if known else "none"
+            raise ReportInputError(
+                f"unknown experiment '{experiment}' in {tracking_uri} (known: {listed})"
+            )
+        runs: list[Any] = []
+        token: str | None = None
+        while True:
+            page = client.search_runs(
+                [found.experiment_id],
+                run_view_type=ViewType.ACTIVE_ONLY,
+                max_results=1000,
+                page_token=token,
+            )
+            runs.extend(page)
+            token = page.token
+            if not token:
+                break
+    except ReportInputError:
+        raise
+    except Exception as error:  # any store failure: one line, no traceback
+        raise ReportInputError(
+            f"cannot read MLflow at {tracking_uri}: {_one_line(error)}"
+        ) from error
+    rows = [row for row in (_run_row(run) for run in runs) if row is not None]
+    if not rows:
+        raise ReportInputError(
+            f"experiment '{experiment}' has no job runs (tag {KIND_TAG}=job) in {tracking_uri}"
+        )
+    frame = normalise_runs(pd.DataFrame.from_records(rows))
+    return MlflowRuns(frame, str(found.experiment_id), len(runs) - len(rows))
+
+
+def load_runs_from_mlflow(tracking_uri: str, experiment: str) -> pd.DataFrame:
+    """The canonical run table of an experiment's job runs (see :func:`read_mlflow_runs`)."""
+    return read_mlflow_runs(tracking_uri, experiment).runs
+
+
+def _metric_key(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.\-]+", "_", text).strip("_")
+
+
+def report_metrics(report: Report) -> dict[str, float]:
+    """Counts and changes of a report as MLflow metric names and values."""
+    values: dict[str, float] = {f"report.runs.{k}": float(v) for k, v in report.counts.items()}
+    for row in report.changes.to_dict("records"):
+        if pd.isna(row["change_pct"]):
+            continue
+        key = (
+            f"change_pct.{_metric_key(str(row['series']))}.vs_{_metric_key(str(row['baseline']))}"
+            f".{row['metric']}.n{row['agents']}"
+        )
+        values[key] = float(row["change_pct"])
+    return values
+
+
+def log_report_run(
+    tracking_uri: str, experiment_id: str, out_dir: Path, report: Report, command: str
+) -> str:
+    """Log ``out_dir`` as the artifacts of a new report run; return its run id."""
+    _quiet_mlflow()
+    from mlflow.entities import Metric, Param
+    from mlflow.tracking import MlflowClient
+
+    client = MlflowClient(tracking_uri=tracking_uri)
+    stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
+    run = client.create_run(
+        experiment_id,
+        run_name=f"report {stamp}",
+        tags={KIND_TAG: "report", "twostep.report.command": command[:5000]},
+    )
+    run_id: str = run.info.run_id
+    try:
+        now = int(datetime.now(UTC).timestamp() * 1000)
+        metrics = [Metric(k, v, now, 0) for k, v in report_metrics(report).items()]
+        params = [
+            Param("report.series", ", ".join(report.series)[:6000]),
+            Param("report.variant_params", ", ".join(report.variant_params) or "none"),
+        ]
+        client.log_batch(run_id, metrics=metrics, params=params)
+        client.log_artifacts(run_id, str(out_dir))
+    except Exception:
+        client.set_terminated(run_id, status="FAILED")
+        raise
+    client.set_terminated(run_id)
+    return run_id
+
+
+# ------------------------------------------------------------------ command line
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="twostep-report",
+        description="Fig. 3, Table I and the percent changes of the TwoStep paper from a "
+        "sweep's runs: PNG, CSV and Markdown files, logged back to MLflow as a report run.",
+    )
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("--experiment", metavar="NAME", help="MLflow experiment of the sweep")
+    source.add_argument(
+        "--sweep-dir",
+        metavar="DIR",
+        type=Path,
+        help="Hydra multirun directory: read every result.json below it (no MLflow needed)",
+    )
+    parser.add_argument(
+        "--tracking-uri",
+        default=DEFAULT_TRACKING_URI,
+        metavar="URI",
+        help=f"MLflow tracking URI (default: {DEFAULT_TRACKING_URI})",
+    )
+    parser.add_argument(
+        "--out",
+        type=Path,
+        metavar="DIR",
+        help="output directory (default: outputs/reports/<experiment or sweep dir>)",
+    )
+    parser.add_argument("--no-log", action="store_true", help="do not log the report run to MLflow")
+    return parser
+
+
+def _sweep_name(path: Path) -> str:
+    resolved = path.resolve()
+    return f"{resolved.parent.name}_{resolved.name}" if resolved.parent.name else resolved.name
+
+
+def _safe_dir_name(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.\-]+", "_", name).strip("_") or "report"
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command; returns the exit code (0 ok, 1 nothing to report)."""
+    args = _parser().parse_args(argv)
+    arguments = list(sys.argv[1:] if argv is None else argv)
+    command = shlex.join(["twostep-report", *arguments])
+    experiment_id: str | None = None
+    try:
+        if args.sweep_dir is not None:
+            runs = load_runs_from_sweep_dir(args.sweep_dir)
+            name = _sweep_name(args.sweep_dir)
+            source = f"Hydra multirun directory `{args.sweep_dir}`"
+            read_line = f"read {len(runs)} job(s) from {args.sweep_dir}"
+        else:
+            loaded = read_mlflow_runs(args.tracking_uri, args.experiment)
+            runs, experiment_id, name = loaded.runs, loaded.experiment_id, args.experiment
+            source = f"MLflow experiment `{name}` (id {experiment_id}) at `{args.tracking_uri}`"
+            read_line = f"read {len(runs)} job run(s) from MLflow experiment '{name}'"
+            if loaded.ignored:
+                read_line += f" (skipped {loaded.ignored} sweep/report run(s))"
+        report = build_report(runs)
+    except ReportInputError as error:
+        print(f"twostep-report: {error}", file=sys.stderr)
+        return 1
+
+    out_dir: Path = args.out or Path("outputs") / "reports" / _safe_dir_name(name)
+    stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
+    source_md = f"Source: {source}. Generated {stamp} by `{command}`."
+    try:
+        paths = write_report(report, out_dir, f"TwoStep report: {name}", source_md, name)
+    except OSError as error:
+        print(f"twostep-report: cannot write to {out_dir}: {_one_line(error)}", file=sys.stderr)
+        return 1
+
+    print(read_line)
+    print(format_console(report))
+    figures = sum(1 for p in paths if p.suffix == ".png")
+    tables = sum(1 for p in paths if p.suffix == ".csv")
+    print(f"report: {out_dir / 'report.md'} ({figures} figures, {tables} CSV tables)")
+
+    if experiment_id is not None and not args.no_log:
+        try:
+            run_id = log_report_run(args.tracking_uri, experiment_id, out_dir, report, command)
+        except Exception as error:  # the files are written; say why logging failed
+            print(
+                f"twostep-report: warning: report not logged to MLflow: {_one_line(error)}",
+                file=sys.stderr,
+            )
+        else:
+            print(f"logged to MLflow: run {run_id} ({KIND_TAG}=report) in experiment '{name}'")
+    elif args.sweep_dir is not None and not args.no_log:
+        print("not logged to MLflow (source is a sweep dir)")
+
+    if not report.has_results:
+        print(
+            "twostep-report: no successful run with metrics: nothing to average or plot; "
+            "the failures are listed in report.md",
+            file=sys.stderr,
+        )
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

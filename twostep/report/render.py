@@ -1,0 +1,353 @@
+"""Writing a :class:`~twostep.report.aggregate.Report`: CSV files, Markdown, console text.
+
+:func:`write_report` puts everything in one directory::
+
+    report.md          the whole report (figures linked, every table, notes, failed runs)
+    summary.csv        per domain, series, N: mean/std over seeds, success rate, counts
+    changes.csv        TwoStep vs SA / MA per N (normalised, as the paper), paper's figures
+    table1.csv         expert vs decomposers on the annotated tasks (+ the paper's rows)
+    per_seed.csv       per domain, series, N, seed: the task averages the stds come from
+    per_task.csv       per domain, series, N, task: mean/std over seeds
+    normalised.csv     per domain cell: min-max normalised mean
+    cross_domain.csv   per series, N: normalised mean across domains
+    runs.csv           every run read, failed ones included
+    fig3_*.png         the figures (:mod:`twostep.report.plots`)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import pandas as pd
+
+from twostep.report.aggregate import METRIC_NAMES, Report
+from twostep.report.paper import ANNOTATED_TASKS, TABLE1_AGENTS, TABLE1_DOMAINS
+from twostep.report.plots import plot_report
+
+FAILED_ROWS_SHOWN = 200
+
+
+def _is_nan(value: object) -> bool:
+    try:
+        return value is None or bool(pd.isna(value))
+    except (TypeError, ValueError):
+        return False
+
+
+def _digits(metric: str, value: float) -> int:
+    if metric == "exec_length":
+        return 1
+    return 2 if abs(value) < 100 else 1
+
+
+def format_mean_std(mean: object, std: object, n_seeds: object, metric: str) -> str:
+    """``12.3 ± 0.4``; ``12.3 (1 seed)`` with one seed; ``n/a`` without a value."""
+    if _is_nan(mean):
+        return "n/a"
+    value = float(str(mean))
+    digits = _digits(metric, value)
+    if not _is_nan(n_seeds) and int(float(str(n_seeds))) == 1:
+        return f"{value:.{digits}f} (1 seed)"
+    if _is_nan(std):
+        return f"{value:.{digits}f}"
+    return f"{value:.{digits}f} ± {float(str(std)):.{digits}f}"
+
+
+def format_pct(value: object) -> str:
+    if _is_nan(value):
+        return "n/a"
+    return f"{float(str(value)):+.1f} %"
+
+
+def markdown_table(headers: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
+    """A GitHub Markdown table; ``|`` in cells is escaped."""
+
+    def cell(value: object) -> str:
+        return str(value).replace("|", "\\|").replace("\n", " ")
+
+    lines = [
+        "| " + " | ".join(cell(h) for h in headers) + " |",
+        "|" + "|".join("---" for _ in headers) + "|",
+    ]
+    lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+# ------------------------------------------------------------------ sections
+
+
+def _counts_section(report: Report) -> str:
+    c = report.counts
+    rows = [
+        ["successful", c["success"]],
+        ["failed", c["failed"]],
+        ["timed out", c["timeout"]],
+        ["unfinished (running or interrupted)", c["running"]],
+        ["total", c["runs"]],
+    ]
+    if c["superseded"]:
+        rows.append(["superseded by a re-run (not in total)", c["superseded"]])
+    text = markdown_table(["runs", "count"], rows)
+    not_ok = c["failed"] + c["timeout"]
+    if not_ok:
+        text += (
+            f"\n\n{not_ok} run(s) failed or timed out: they are counted in every table "
+            "(columns 'failed' / 'timeout', success rate) and listed at the end, and left "
+            "out of the means."
+        )
+    return text
+
+
+def counts_line(report: Report) -> str:
+    c = report.counts
+    return (
+        f"{c['runs']} runs: {c['success']} successful, {c['failed']} failed, "
+        f"{c['timeout']} timed out" + (f", {c['running']} unfinished" if c["running"] else "")
+    )
+
+
+def _summary_section(report: Report) -> str:
+    parts: list[str] = []
+    headers = [
+        "series",
+        "N",
+        "exec length (steps)",
+        "planning time (s)",
+        "success",
+        "ok / failed / timeout",
+        "tasks",
+        "tasks/seed",
+        "seeds",
+    ]
+    for domain in report.domains:
+        cells = report.summary[report.summary["domain"] == domain]
+        rows = []
+        for row in cells.to_dict("records"):
+            rate = row["success_rate"]
+            rows.append(
+                [
+                    row["series"],
+                    row["agents"],
+                    format_mean_std(
+                        row["exec_length_mean"],
+                        row["exec_length_std"],
+                        row["exec_length_n_seeds"],
+                        "exec_length",
+                    ),
+                    format_mean_std(
+                        row["planning_time_s_mean"],
+                        row["planning_time_s_std"],
+                        row["planning_time_s_n_seeds"],
+                        "planning_time_s",
+                    ),
+                    "n/a" if _is_nan(rate) else f"{float(rate) * 100:.0f} %",
+                    f"{row['n_success']} / {row['n_failed']} / {row['n_timeout']}",
+                    row["n_tasks"],
+                    row["tasks_per_seed"] or "-",
+                    row["exec_length_n_seeds"],
+                ]
+            )
+        parts.append(f"### {domain}\n\n" + markdown_table(headers, rows))
+    return "\n\n".join(parts)
+
+
+def _changes_section(report: Report) -> str:
+    changes = report.changes
+    if changes.empty:
+        return (
+            "No change can be computed: it needs TwoStep runs with N >= 2 and SA or MA runs "
+            "in the same domains."
+        )
+    rows = [
+        [
+            row["series"],
+            row["baseline"],
+            METRIC_NAMES.get(str(row["metric"]), str(row["metric"])),
+            row["agents"],
+            format_pct(row["change_pct"]),
+            format_pct(row["change_pct_raw"]),
+            format_pct(row["paper_change_pct"]),
+            f"{row['n_domains']} ({row['domains'] or '-'})",
+        ]
+        for row in changes.to_dict("records")
+    ]
+    headers = [
+        "TwoStep series",
+        "against",
+        "metric",
+        "N",
+        "change (normalised, as the paper)",
+        "mean per-domain change (raw)",
+        "paper",
+        "domains",
+    ]
+    explanation = (
+        "Change of TwoStep against SA (N = 1) and MA (same N), negative = TwoStep lower. "
+        "As in the paper, each domain's averages (all series, all N) are min-max "
+        "normalised to [0, 1] and averaged across domains; the change is "
+        "(TwoStep - baseline) / baseline of those normalised averages. The paper "
+        "reports -50.1 / -60.3 / -64.7 % planning time and -7.7 / -7.1 / -13.2 % "
+        "execution length for N = 2 / 3 / 4 without saying which baseline; both are shown. "
+        "Normalised changes depend on which series are scaled together and are unstable "
+        "when the baseline's normalised value is near 0; the raw column (mean over domains "
+        "of the per-domain change of the averages) is a cross-check."
+    )
+    return explanation + "\n\n" + markdown_table(headers, rows)
+
+
+def _table1_cell(row: dict[str, object], domain: str) -> str:
+    text = format_mean_std(
+        row.get(f"{domain}_mean"),
+        row.get(f"{domain}_std"),
+        row.get(f"{domain}_n_seeds"),
+        "exec_length",
+    )
+    tasks = row.get(f"{domain}_n_tasks")
+    if (
+        row.get("source") != "paper"
+        and not _is_nan(tasks)
+        and 0 < int(float(str(tasks))) < len(ANNOTATED_TASKS)
+    ):
+        text += f" ({int(float(str(tasks)))}/{len(ANNOTATED_TASKS)} tasks)"
+    return text
+
+
+def _table1_section(report: Report) -> str:
+    ours = report.table1[report.table1["source"] != "paper"]
+    intro = (
+        f"Execution length (steps) on the annotated tasks {', '.join(map(str, ANNOTATED_TASKS))} "
+        f"of each domain, N = {TABLE1_AGENTS}, averaged over those tasks; mean ± std over "
+        "seeds. Macro = mean over the domains. The paper's rows are its reported figures "
+        "(GPT-4o, 3 runs; the expert is a single run)."
+    )
+    if ours.empty:
+        intro += (
+            "\n\nThis report has no successful TwoStep run on those tasks with "
+            f"N = {TABLE1_AGENTS} in {', '.join(TABLE1_DOMAINS)}: only the paper's rows "
+            "are shown."
+        )
+    rows = []
+    for row in report.table1.to_dict("records"):
+        macro = format_mean_std(
+            row["macro_mean"], row["macro_std"], row["macro_n_seeds"], "exec_length"
+        )
+        n_domains = row["macro_n_domains"]
+        partial = not _is_nan(n_domains) and int(n_domains) < len(TABLE1_DOMAINS)
+        if row["source"] != "paper" and partial:
+            macro += f" ({int(n_domains)}/{len(TABLE1_DOMAINS)} domains)"
+        failed = "" if _is_nan(row["n_failed"]) else str(int(row["n_failed"]))
+        rows.append(
+            [
+                row["series"],
+                *(_table1_cell(row, d) for d in TABLE1_DOMAINS),
+                macro,
+                failed if row["source"] != "paper" else "",
+            ]
+        )
+    headers = ["series", *TABLE1_DOMAINS, "macro avg", "failed / timeout"]
+    return intro + "\n\n" + markdown_table(headers, rows)
+
+
+def _failed_section(report: Report) -> str:
+    runs = report.runs
+    bad = runs[((runs["status"] != "success") | ~runs["placed"]) & ~runs["superseded"]]
+    if bad.empty:
+        return "None."
+    rows = []
+    for row in bad.head(FAILED_ROWS_SHOWN).to_dict("records"):
+        rows.append(
+            [
+                row["run_id"],
+                row["domain"] or "?",
+                "?" if _is_nan(row["task"]) else row["task"],
+                row["series"] or row["method"] or "?",
+                "?" if _is_nan(row["agents"]) else row["agents"],
+                "?" if _is_nan(row["seed"]) else row["seed"],
+                row["status"] if row["placed"] else f"{row['status']} (unplaced)",
+                row["error"] or "-",
+            ]
+        )
+    text = markdown_table(["run", "domain", "task", "series", "N", "seed", "status", "error"], rows)
+    if len(bad) > FAILED_ROWS_SHOWN:
+        text += f"\n\n... and {len(bad) - FAILED_ROWS_SHOWN} more: see runs.csv."
+    return text
+
+
+def render_markdown(report: Report, title: str, source: str, figures: Sequence[Path] = ()) -> str:
+    """The whole report as Markdown; figure paths are linked by file name."""
+    sections = [f"# {title}", source, "## Runs", _counts_section(report)]
+    if report.notes:
+        sections += ["## Notes", "\n".join(f"- {note}" for note in report.notes)]
+    if figures:
+        sections.append("## Figures")
+        sections.append(
+            "Mean over seeds of each seed's average over tasks (successful runs only); "
+            "shaded band / error bar = ±1 sample std over seeds. SA runs at N = 1 only: "
+            "its dashed line is a reference. Labels under points count failed / "
+            "timed-out runs."
+        )
+        sections += [f"![{path.stem}]({path.name})" for path in figures]
+    sections += [
+        "## Results per domain",
+        "Mean ± sample std (ddof = 1) over seeds of each seed's average over tasks; "
+        "successful runs only. 'tasks/seed': tasks in each seed's average.",
+        _summary_section(report) if len(report.summary) else "No run could be placed.",
+        "## Change against SA and MA",
+        _changes_section(report),
+        "## Expert subgoals versus decomposers (paper's Table I)",
+        _table1_section(report),
+        "## Failed, timed-out and unplaced runs",
+        _failed_section(report),
+    ]
+    return "\n\n".join(sections) + "\n"
+
+
+def format_console(report: Report) -> str:
+    """A few lines for the terminal: counts, notes, and the changes beside the paper."""
+    lines = [counts_line(report)]
+    lines += [f"note: {note}" for note in report.notes]
+    changes = report.changes
+    if not changes.empty:
+        lines.append("change of TwoStep (normalised as in the paper) | paper:")
+        for row in changes.to_dict("records"):
+            lines.append(
+                f"  {row['series']} vs {row['baseline']}, "
+                f"{METRIC_NAMES.get(str(row['metric']), row['metric'])}, N={row['agents']}: "
+                f"{format_pct(row['change_pct'])} | paper {format_pct(row['paper_change_pct'])}"
+            )
+    return "\n".join(lines)
+
+
+# ------------------------------------------------------------------ files
+
+
+def _write_csv(frame: pd.DataFrame, path: Path) -> Path:
+    frame.to_csv(path, index=False)
+    return path
+
+
+def write_report(
+    report: Report, out_dir: Path, title: str, source: str, figure_label: str = ""
+) -> list[Path]:
+    """Write every CSV, figure and ``report.md`` into ``out_dir``; return the paths.
+
+    ``title`` heads report.md, ``source`` (Markdown) says where the runs came from,
+    ``figure_label`` prefixes every figure title (e.g. the experiment name).
+    """
+    out_dir.mkdir(parents=True, exist_ok=True)
+    runs = report.runs.drop(columns=["placed", "counted"])
+    paths = [
+        _write_csv(report.summary, out_dir / "summary.csv"),
+        _write_csv(report.changes, out_dir / "changes.csv"),
+        _write_csv(report.table1, out_dir / "table1.csv"),
+        _write_csv(report.per_seed, out_dir / "per_seed.csv"),
+        _write_csv(report.per_task, out_dir / "per_task.csv"),
+        _write_csv(report.normalised, out_dir / "normalised.csv"),
+        _write_csv(report.cross_domain, out_dir / "cross_domain.csv"),
+        _write_csv(runs, out_dir / "runs.csv"),
+    ]
+    figures = plot_report(report, out_dir, figure_label)
+    markdown = out_dir / "report.md"
+    markdown.write_text(render_markdown(report, title, source, figures))
+    return [markdown, *paths, *figures]

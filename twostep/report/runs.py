@@ -1,0 +1,337 @@
+"""The run table every report starts from: one row per job, whatever its source.
+
+A report reads jobs either from MLflow (``flows/report_cli.py``, following
+``docs/tracking.md``) or from a Hydra multirun directory (:func:`load_runs_from_sweep_dir`,
+no MLflow needed). Both end up in the same *canonical run table*,
+checked and typed by :func:`normalise_runs`:
+
+=================  ===================================================================
+column             meaning
+=================  ===================================================================
+``run_id``         MLflow run id, or the job directory relative to the sweep dir
+``domain``         domain name
+``task``           task number (Int64)
+``method``         ``sa`` | ``ma`` | ``twostep``
+``decomposer``     decomposer name for TwoStep, ``""`` for SA and MA
+``agents``         N (Int64); always 1 for SA, which ignores N
+``agents_param``   N as launched (SA jobs of a grid may have been launched with N > 1)
+``seed``           seed (Int64)
+``status``         ``success`` | ``failed`` | ``timeout`` | ``running``
+``error``          one line for failed jobs, else ``""``
+``job_key``        ``twostep.job_key`` tag (``""`` if unknown): a re-run job's older runs
+                   are superseded by its latest
+``start_time``     run start, ms since the epoch (NaN if unknown)
+metric columns     :data:`METRICS` (float, NaN when not recorded)
+``param.<key>``    every other config value, as a string (the flattened resolved config)
+=================  ===================================================================
+
+Rows whose domain, task, method, agents or seed cannot be read are kept (with NA keys):
+:func:`twostep.report.aggregate.build_report` counts and lists them, never drops them.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+import yaml
+
+
+class ReportInputError(Exception):
+    """Input a report cannot be built from; the message is one line for the terminal."""
+
+
+#: Metrics a job logs (docs/tracking.md) that the report reads.
+METRICS: tuple[str, ...] = (
+    "exec_length",
+    "planning_time_s",
+    "llm_time_s",
+    "state_editing_time_s",
+    "wall_time_s",
+    "sa_length",
+    "speedup_exec",
+    "subgoals_proposed",
+    "subgoals_accepted",
+    "subgoals_discarded",
+)
+
+#: Columns that identify a job: one (domain, task, method, decomposer, N, seed) cell.
+KEY_COLUMNS: tuple[str, ...] = ("domain", "task", "method", "decomposer", "agents", "seed")
+
+#: Config keys that are the key columns themselves (not kept as ``param.*`` columns).
+KEY_PARAMS: dict[str, str] = {
+    "domain.name": "domain",
+    "task": "task",
+    "method.name": "method",
+    "decomposer.name": "decomposer",
+    "agents": "agents",
+    "seed": "seed",
+}
+
+PARAM_PREFIX = "param."
+STATUSES: tuple[str, ...] = ("success", "failed", "timeout", "running")
+METHODS: tuple[str, ...] = ("sa", "ma", "twostep")
+
+_STATUS_SYNONYMS: dict[str, str] = {
+    "success": "success",
+    "succeeded": "success",
+    "solved": "success",
+    "ok": "success",
+    "finished": "success",
+    "failed": "failed",
+    "failure": "failed",
+    "error": "failed",
+    "unsolvable": "failed",
+    "killed": "failed",
+    "crashed": "failed",
+    "timeout": "timeout",
+    "timed_out": "timeout",
+    "timed-out": "timeout",
+    "running": "running",
+    "scheduled": "running",
+}
+
+
+def is_missing(value: object) -> bool:
+    """True for None, NaN, pandas NA and the empty string."""
+    if value is None:
+        return True
+    if isinstance(value, str):
+        return value.strip() == ""
+    if isinstance(value, float):
+        return math.isnan(value)
+    try:
+        return bool(pd.isna(value))
+    except (TypeError, ValueError):
+        return False
+
+
+def normalise_status(status: object, success: object = None) -> str:
+    """One of :data:`STATUSES` from a status word and/or a success flag.
+
+    ``status`` wins when it is a known word; otherwise a truthy ``success`` means
+    ``success`` and anything else ``failed`` (a job that recorded neither did not finish
+    cleanly, so it is counted as failed rather than dropped).
+    """
+    if not is_missing(status):
+        word = str(status).strip().lower()
+        if word in _STATUS_SYNONYMS:
+            return _STATUS_SYNONYMS[word]
+    if not is_missing(success):
+        text = str(success).strip().lower()
+        if text in ("1", "1.0", "true", "yes"):
+            return "success"
+    return "failed"
+
+
+def _to_int(value: object) -> int | None:
+    if is_missing(value):
+        return None
+    try:
+        number = float(str(value))
+    except ValueError:
+        return None
+    if math.isnan(number) or number != int(number):
+        return None
+    return int(number)
+
+
+def _to_float(value: object) -> float:
+    if is_missing(value) or isinstance(value, bool):
+        return float("nan")
+    try:
+        return float(str(value))
+    except ValueError:
+        return float("nan")
+
+
+def _to_text(value: object) -> str:
+    return "" if is_missing(value) else str(value).strip()
+
+
+def normalise_runs(frame: pd.DataFrame) -> pd.DataFrame:
+    """Check and type a run table (see the module docstring); returns a new frame.
+
+    Accepts the canonical columns, or ``success`` instead of ``status``. Idempotent.
+    Raises :class:`ReportInputError` when a required column is missing altogether.
+    """
+    required = ("domain", "task", "method", "agents", "seed")
+    missing = [c for c in required if c not in frame.columns]
+    if missing:
+        raise ReportInputError(f"run table lacks column(s) {', '.join(missing)}")
+    if "status" not in frame.columns and "success" not in frame.columns:
+        raise ReportInputError("run table has neither a 'status' nor a 'success' column")
+
+    records: list[dict[str, Any]] = []
+    param_columns = sorted(c for c in frame.columns if str(c).startswith(PARAM_PREFIX))
+    for position, row in enumerate(frame.to_dict("records")):
+        method = _to_text(row.get("method")).lower()
+        decomposer = _to_text(row.get("decomposer")) if method == "twostep" else ""
+        agents_param = _to_int(row.get("agents_param", row.get("agents")))
+        agents = 1 if method == "sa" else _to_int(row.get("agents"))
+        run_id = _to_text(row.get("run_id")) or f"row{position}"
+        record: dict[str, Any] = {
+            "run_id": run_id,
+            "domain": _to_text(row.get("domain")) or None,
+            "task": _to_int(row.get("task")),
+            "method": method or None,
+            "decomposer": decomposer,
+            "agents": agents,
+            "agents_param": agents_param,
+            "seed": _to_int(row.get("seed")),
+            "status": normalise_status(row.get("status"), row.get("success")),
+            "error": _to_text(row.get("error")).splitlines()[0]
+            if _to_text(row.get("error"))
+            else "",
+            "job_key": _to_text(row.get("job_key")),
+            "start_time": _to_float(row.get("start_time")),
+        }
+        for metric in METRICS:
+            record[metric] = _to_float(row.get(metric))
+        for column in param_columns:
+            record[column] = _to_text(row.get(column))
+        records.append(record)
+
+    columns = [
+        "run_id",
+        "domain",
+        "task",
+        "method",
+        "decomposer",
+        "agents",
+        "agents_param",
+        "seed",
+        "status",
+        "error",
+        "job_key",
+        "start_time",
+        *METRICS,
+        *param_columns,
+    ]
+    out = pd.DataFrame.from_records(records, columns=columns)
+    for column in ("task", "agents", "agents_param", "seed"):
+        out[column] = out[column].astype("Int64")
+    for column in (*METRICS, "start_time"):
+        out[column] = out[column].astype("float64")
+    for column in ("domain", "method"):
+        out[column] = out[column].astype("object")
+    return out
+
+
+def flatten_config(config: Mapping[str, Any], prefix: str = "") -> dict[str, str]:
+    """A nested config as ``{"a.b.c": "value"}`` with every leaf as a string."""
+    flat: dict[str, str] = {}
+    for key, value in config.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, Mapping):
+            flat.update(flatten_config(value, f"{name}."))
+        else:
+            flat[name] = "None" if value is None else str(value)
+    return flat
+
+
+def params_to_columns(params: Mapping[str, str]) -> dict[str, Any]:
+    """Split flattened params into key columns and ``param.*`` columns."""
+    row: dict[str, Any] = {}
+    for key, value in params.items():
+        if key in KEY_PARAMS:
+            row[KEY_PARAMS[key]] = value
+        elif not key.startswith("hydra."):
+            row[PARAM_PREFIX + key] = value
+    return row
+
+
+def _subgoal_counts(subgoals: object) -> dict[str, float]:
+    if not isinstance(subgoals, list):
+        return {}
+    statuses = [s.get("status") for s in subgoals if isinstance(s, Mapping)]
+    return {
+        "subgoals_proposed": float(len(statuses)),
+        "subgoals_accepted": float(sum(1 for s in statuses if s == "accepted")),
+        "subgoals_discarded": float(sum(1 for s in statuses if s == "discarded")),
+    }
+
+
+def result_to_row(result: Mapping[str, Any]) -> dict[str, Any]:
+    """The run-table row of one result.json (the :class:`twostep.pipeline.RunResult` shape)."""
+    row: dict[str, Any] = {
+        key: result.get(key) for key in ("domain", "task", "method", "agents", "seed")
+    }
+    row["decomposer"] = result.get("decomposer")
+    raw_status = _to_text(result.get("status")).lower()
+    success = result.get("success")
+    if success is True:
+        row["status"] = "success"
+    elif raw_status == "timeout":
+        row["status"] = "timeout"
+    else:
+        row["status"] = "failed"
+    if row["status"] != "success":
+        row["error"] = _to_text(result.get("message")) or raw_status or "not successful"
+    for metric in METRICS:
+        if metric in result:
+            row[metric] = result[metric]
+    row.update(_subgoal_counts(result.get("subgoals")))
+    exec_length = _to_float(result.get("exec_length"))
+    sa_length = _to_float(result.get("sa_length"))
+    if "speedup_exec" not in result and exec_length > 0 and not math.isnan(sa_length):
+        row["speedup_exec"] = sa_length / exec_length
+    return row
+
+
+def _read_hydra_config(job_dir: Path) -> dict[str, str]:
+    path = job_dir / ".hydra" / "config.yaml"
+    if not path.is_file():
+        return {}
+    try:
+        loaded = yaml.safe_load(path.read_text())
+    except yaml.YAMLError:
+        return {}
+    return flatten_config(loaded) if isinstance(loaded, Mapping) else {}
+
+
+def _job_dirs(root: Path) -> Iterable[Path]:
+    seen: set[Path] = set()
+    for path in sorted(root.rglob("result.json")):
+        seen.add(path.parent)
+    for path in sorted(root.rglob(".hydra/config.yaml")):
+        seen.add(path.parent.parent)
+    return sorted(seen)
+
+
+def load_runs_from_sweep_dir(root: Path) -> pd.DataFrame:
+    """The canonical run table of a Hydra multirun directory, without MLflow.
+
+    Every job directory below ``root`` counts: one with a ``result.json`` gives its
+    metrics; one with only ``.hydra/config.yaml`` (the job started but wrote no result)
+    is a failed run. Params come from the job's ``.hydra/config.yaml`` when present.
+    """
+    if not root.is_dir():
+        raise ReportInputError(f"sweep dir not found: {root}")
+    rows: list[dict[str, Any]] = []
+    for job_dir in _job_dirs(root):
+        params = _read_hydra_config(job_dir)
+        row = params_to_columns(params)
+        row["agents_param"] = params.get("agents")  # as launched (SA ignores it)
+        result_path = job_dir / "result.json"
+        if result_path.is_file():
+            try:
+                result = json.loads(result_path.read_text())
+            except (OSError, json.JSONDecodeError) as error:
+                row.update(status="failed", error=f"unreadable result.json: {error}")
+            else:
+                if isinstance(result, Mapping):
+                    row.update({k: v for k, v in result_to_row(result).items() if v is not None})
+                else:
+                    row.update(status="failed", error="result.json is not a JSON object")
+        else:
+            row.update(status="failed", error="job wrote no result.json")
+        row["run_id"] = str(job_dir.relative_to(root)) if job_dir != root else "."
+        rows.append(row)
+    if not rows:
+        raise ReportInputError(f"no job directories (result.json or .hydra/) under {root}")
+    return normalise_runs(pd.DataFrame.from_records(rows))
