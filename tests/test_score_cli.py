@@ -1,0 +1,164 @@
+"""Tests for the twostep-score command line (twostep.cli.score)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from twostep.cli.score import EXIT_BAD_INPUT, EXIT_INVALID_PLANS, EXIT_VALID, main
+
+DOMAIN = """
+(define (domain blocksworld)
+ (:requirements :strips)
+ (:predicates (clear ?x) (ontable ?x) (on ?x ?y) (arm-empty) (holding ?x))
+ (:action pickup :parameters (?x)
+  :precondition (and (clear ?x) (ontable ?x) (arm-empty))
+  :effect (and (not (ontable ?x)) (not (clear ?x)) (not (arm-empty)) (holding ?x)))
+ (:action putdown :parameters (?x)
+  :precondition (holding ?x)
+  :effect (and (not (holding ?x)) (clear ?x) (arm-empty) (ontable ?x)))
+ (:action stack :parameters (?x ?y)
+  :precondition (and (holding ?x) (clear ?y))
+  :effect (and (not (holding ?x)) (not (clear ?y)) (clear ?x) (arm-empty) (on ?x ?y)))
+ (:action unstack :parameters (?x ?y)
+  :precondition (and (on ?x ?y) (clear ?x) (arm-empty))
+  :effect (and (holding ?x) (clear ?y) (not (clear ?x)) (not (arm-empty)) (not (on ?x ?y)))))
+"""
+
+PROBLEM = """
+(define (problem three) (:domain blocksworld)
+ (:objects b1 b2 b3)
+ (:init (clear b1) (clear b2) (clear b3) (ontable b1) (ontable b2) (ontable b3) (arm-empty))
+ (:goal (and (on b1 b2) (on b3 b1))))
+"""
+
+HELPER = "(pickup b1)\n(stack b1 b2)\n; cost = 2 (unit cost)\n"
+MAIN = "(pickup b3)\n(stack b3 b1)\n; cost = 2 (unit cost)\n"
+
+
+@pytest.fixture
+def files(tmp_path: Path) -> dict[str, str]:
+    contents = {
+        "domain": DOMAIN,
+        "problem": PROBLEM,
+        "helper": HELPER,
+        "main": MAIN,
+        "bad_main": "(pickup b3)\n(stack b3 b2)\n",
+        "unknown_action": "(fly b1)\n",
+    }
+    paths = {}
+    for name, text in contents.items():
+        path = tmp_path / f"{name}.txt"
+        path.write_text(text)
+        paths[name] = str(path)
+    return paths
+
+
+def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    code = main(argv)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_valid_plans_print_length_and_schedule(
+    files: dict[str, str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = [files["domain"], files["problem"], files["helper"], files["main"]]
+    code, out, err = run([*argv, "--agent-predicates", "arm-empty,holding"], capsys)
+    assert code == EXIT_VALID
+    assert err == ""
+    assert json.loads(out) == {
+        "exec_length": 3,
+        "schedule": [
+            [["agent0", "(pickup b1)"], ["agent1", "(pickup b3)"]],
+            [["agent0", "(stack b1 b2)"]],
+            [["agent1", "(stack b3 b1)"]],
+        ],
+        "valid": True,
+    }
+    # Without agent predicates the arm is shared and nothing runs in parallel.
+    code, out, _ = run(argv, capsys)
+    assert (code, json.loads(out)["exec_length"]) == (EXIT_VALID, 4)
+
+
+def test_paper_mode(files: dict[str, str], capsys: pytest.CaptureFixture[str]) -> None:
+    argv = [files["domain"], files["problem"], files["helper"], files["main"], "--mode", "paper"]
+    code, out, _ = run([*argv, "--agent-predicates", "arm-empty, holding"], capsys)
+    assert (code, json.loads(out)["exec_length"]) == (EXIT_VALID, 3)
+
+
+def test_inapplicable_plan_names_agent_step_and_precondition(
+    files: dict[str, str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = [files["domain"], files["problem"], files["helper"], files["bad_main"]]
+    code, out, err = run([*argv, "--agent-predicates", "arm-empty,holding"], capsys)
+    assert code == EXIT_INVALID_PLANS
+    result = json.loads(out)
+    assert (result["valid"], result["exec_length"], result["schedule"]) == (False, None, [])
+    assert err.count("\n") == 1
+    assert "agent1" in err
+    assert "step 2 (stack b3 b2)" in err
+    assert "precondition (clear b2) does not hold" in err
+
+
+def test_malformed_pddl_exits_2_without_traceback(
+    files: dict[str, str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    broken = tmp_path / "broken.pddl"
+    broken.write_text(PROBLEM.replace("(ontable b3)", "(ontable b3"))
+    code, out, err = run([files["domain"], str(broken), files["helper"]], capsys)
+    assert code == EXIT_BAD_INPUT
+    assert out == ""
+    assert err.count("\n") == 1
+    assert "broken.pddl" in err
+    assert "Traceback" not in err
+
+
+def test_bad_plan_line_exits_2(files: dict[str, str], capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, err = run(
+        [files["domain"], files["problem"], files["helper"], files["unknown_action"]], capsys
+    )
+    assert code == EXIT_BAD_INPUT
+    assert out == ""
+    assert "unknown_action.txt" in err
+    assert "unknown action 'fly'" in err
+
+
+def test_missing_plan_file_and_unknown_predicate_exit_2(
+    files: dict[str, str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    missing = str(tmp_path / "nowhere.plan")
+    code, _, err = run([files["domain"], files["problem"], missing], capsys)
+    assert code == EXIT_BAD_INPUT
+    assert "nowhere.plan" in err
+    code, _, err = run(
+        [files["domain"], files["problem"], files["helper"], "--agent-predicates", "arm-empy"],
+        capsys,
+    )
+    assert code == EXIT_BAD_INPUT
+    assert "unknown agent predicate(s) arm-empy" in err
+
+
+def test_runs_as_a_module(files: dict[str, str]) -> None:
+    completed = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "twostep.cli.score",
+            files["domain"],
+            files["problem"],
+            files["helper"],
+            files["main"],
+            "--agent-predicates",
+            "arm-empty,holding",
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert completed.returncode == EXIT_VALID, completed.stderr
+    assert json.loads(completed.stdout)["exec_length"] == 3
