@@ -1,0 +1,409 @@
+"""Benchmark: parallel execution length for N = 4 agents with 60-step plans.
+
+    .venv/bin/python bench/bench_execution.py [--repeats 5] [--budget 30]
+
+Measures :func:`twostep.execution.parallel_length` (bit-set states, A* with the pair-
+projection bound and dominance pruning) against a straightforward implementation: A*
+with the longest-remaining-plan bound over every compatible set of agents, in which each
+joint step is checked with unified-planning's ``SequentialSimulator`` (applicability and
+successor per action on a UP state; two actions are compatible when each stays
+applicable after the other and both orders reach the same state). The column ``plain``
+runs that same straightforward search on our bit-set states (same nodes as the UP
+baseline), so ``UP / plain`` is the gain of the representation alone and
+``plain / twostep`` the gain of the bound and the pruning.
+
+The plans come from a generated toy domain: each agent drives its own cart along a private
+track of 60 cells. ``independent``: tracks never meet. ``shared``: all four tracks cross
+one hub cell, and two pairs of tracks also share a crossing cell further on, so carts must
+queue at the shared cells and the search has to choose who goes first. Agents plan with
+the agent-specific predicate ``ready``; the UP baseline uses the equivalent multi-agent
+encoding (``ready`` and ``move`` get an agent parameter) so one UP state holds every copy.
+
+The baseline is slow: it runs on 8, 15, 30 and 60 steps per agent in turn and stops
+before the size that would exceed ``--budget`` seconds (or at the one that did); the
+comparison row uses the largest size it finished, with ours timed on the same plans.
+"""
+
+from __future__ import annotations
+
+import argparse
+import heapq
+import itertools
+import os
+import platform
+import statistics
+import sys
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from twostep import execution
+from twostep.execution import parallel_length
+from twostep.pddl import parse_problem
+from twostep.strips import Grounder
+
+AGENTS = 4
+PLAN_LENGTH = 60
+
+SINGLE_AGENT_DOMAIN = """
+(define (domain tracks)
+ (:requirements :strips :typing)
+ (:types cart cell)
+ (:predicates (at ?c - cart ?p - cell) (next ?p - cell ?q - cell) (free ?p - cell) (ready))
+ (:action move :parameters (?c - cart ?p - cell ?q - cell)
+  :precondition (and (ready) (at ?c ?p) (next ?p ?q) (free ?q))
+  :effect (and (not (at ?c ?p)) (not (free ?q)) (at ?c ?q) (free ?p))))
+"""
+
+MULTI_AGENT_DOMAIN = """
+(define (domain tracks-ma)
+ (:requirements :strips :typing)
+ (:types agent cart cell)
+ (:predicates (at ?c - cart ?p - cell) (next ?p - cell ?q - cell) (free ?p - cell)
+              (ready ?a - agent))
+ (:action move :parameters (?a - agent ?c - cart ?p - cell ?q - cell)
+  :precondition (and (ready ?a) (at ?c ?p) (next ?p ?q) (free ?q))
+  :effect (and (not (at ?c ?p)) (not (free ?q)) (at ?c ?q) (free ?p))))
+"""
+
+AGENT_PREDICATES = ("ready",)
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    shared_cells: dict[str, dict[int, float]]
+    """Shared cell -> {cart: position as a fraction of the track}."""
+
+
+CASES = (
+    Case("independent", {}),
+    Case(
+        "shared",
+        {
+            "hub": {0: 1 / 3, 1: 1 / 3, 2: 1 / 3, 3: 1 / 3},
+            "x01": {0: 2 / 3, 1: 2 / 3},
+            "x23": {2: 3 / 4, 3: 3 / 4},
+        },
+    ),
+)
+
+
+@dataclass(frozen=True)
+class Instance:
+    single_agent_problem: str
+    multi_agent_problem: str
+    plans: list[list[str]]
+
+
+def build(case: Case, length: int) -> Instance:
+    """Tracks of ``length`` moves per cart; each agent's plan drives its cart to the end."""
+    cells: list[str] = []
+    facts: list[str] = []
+    goal: list[str] = []
+    plans: list[list[str]] = []
+    for cart in range(AGENTS):
+        track = [f"k{cart}-{i}" for i in range(length + 1)]
+        for cell, positions in case.shared_cells.items():
+            if cart in positions:
+                track[max(1, min(length - 1, round(positions[cart] * length)))] = cell
+        cells += [c for c in track if c not in cells]
+        facts.append(f"(at c{cart} {track[0]})")
+        facts += [f"(next {p} {q})" for p, q in itertools.pairwise(track)]
+        goal.append(f"(at c{cart} {track[-1]})")
+        plans.append([f"(move c{cart} {p} {q})" for p, q in itertools.pairwise(track)])
+    facts += [f"(free {c})" for c in cells if not c.endswith("-0")]
+    carts = " ".join(f"c{i}" for i in range(AGENTS))
+    agents = " ".join(f"a{i}" for i in range(AGENTS))
+    body = " ".join(sorted(set(facts)))
+    goal_text = f"(:goal (and {' '.join(goal)}))"
+    single = (
+        f"(define (problem tracks-{case.name}) (:domain tracks)\n"
+        f" (:objects {carts} - cart {' '.join(cells)} - cell)\n"
+        f" (:init (ready) {body})\n {goal_text})"
+    )
+    ready = " ".join(f"(ready a{i})" for i in range(AGENTS))
+    multi = (
+        f"(define (problem tracks-{case.name}-ma) (:domain tracks-ma)\n"
+        f" (:objects {agents} - agent {carts} - cart {' '.join(cells)} - cell)\n"
+        f" (:init {ready} {body})\n {goal_text})"
+    )
+    return Instance(single, multi, plans)
+
+
+# ------------------------------------------------------------ unified-planning baseline
+
+
+class BudgetExceeded(Exception):
+    pass
+
+
+def up_parallel_length(instance: Instance, mode: str, budget: float) -> tuple[int, int]:
+    """Straightforward A*, every check done by UP's SequentialSimulator.
+
+    Returns (length, nodes expanded); raises BudgetExceeded after ``budget`` seconds.
+    """
+    from unified_planning.io import PDDLReader
+    from unified_planning.plans import ActionInstance
+    from unified_planning.shortcuts import SequentialSimulator
+
+    problem = PDDLReader().parse_problem_string(MULTI_AGENT_DOMAIN, instance.multi_agent_problem)
+    simulator = SequentialSimulator(problem)
+    move = problem.action("move")
+    plans = [
+        [
+            ActionInstance(
+                move,
+                [problem.object(f"a{agent}")]
+                + [problem.object(o) for o in text.strip("()").split()[1:]],
+            )
+            for text in plan
+        ]
+        for agent, plan in enumerate(instance.plans)
+    ]
+    lengths = [len(plan) for plan in plans]
+    deadline = time.perf_counter() + budget
+
+    def compatible(state: Any, first: Any, second: Any) -> bool:
+        after_first = simulator.apply(state, first)
+        after_second = simulator.apply(state, second)
+        if after_first is None or after_second is None:
+            return False
+        both = simulator.apply(after_first, second)
+        other_order = simulator.apply(after_second, first)
+        return both is not None and other_order is not None and both == other_order
+
+    def successor_sets(indices: tuple[int, ...], state: Any) -> list[tuple[int, ...]]:
+        active = [i for i in range(AGENTS) if indices[i] < lengths[i]]
+        movable = [i for i in active if simulator.is_applicable(state, plans[i][indices[i]])]
+        sets: list[tuple[int, ...]]
+        if mode == "paper":
+            sets = [(i,) for i in movable]
+            if (
+                len(active) > 1
+                and len(movable) == len(active)
+                and all(
+                    compatible(state, plans[a][indices[a]], plans[b][indices[b]])
+                    for a, b in itertools.combinations(active, 2)
+                )
+            ):
+                sets.append(tuple(active))
+            return sets
+        ok = {
+            (a, b): compatible(state, plans[a][indices[a]], plans[b][indices[b]])
+            for a, b in itertools.combinations(movable, 2)
+        }
+        sets = [()]
+        for agent in movable:
+            sets += [(*s, agent) for s in sets if all(ok[(o, agent)] for o in s)]
+        return [s for s in sets if s]
+
+    start = (tuple(0 for _ in lengths), simulator.get_initial_state())
+    closed: set[Any] = set()
+    best = {start: 0}
+    counter = itertools.count()
+    frontier = [(max(lengths), 0, sum(lengths), next(counter), start)]
+    expanded = 0
+    while frontier:
+        if time.perf_counter() > deadline:
+            raise BudgetExceeded
+        _, minus_g, left, _, node = heapq.heappop(frontier)
+        if node in closed:
+            continue
+        closed.add(node)
+        expanded += 1
+        g = -minus_g
+        indices, state = node
+        if left == 0:
+            if simulator.is_goal(state):
+                return g, expanded
+            continue
+        for chosen in successor_sets(indices, state):
+            child_state = state
+            advanced = list(indices)
+            for agent in chosen:
+                child_state = simulator.apply(child_state, plans[agent][indices[agent]])
+                advanced[agent] += 1
+            child = (tuple(advanced), child_state)
+            if child in closed or best.get(child, g + 2) <= g + 1:
+                continue
+            best[child] = g + 1
+            h = max(n - i for n, i in zip(lengths, advanced, strict=True))
+            entry = (g + 1 + h, -g - 1, left - len(chosen), next(counter), child)
+            heapq.heappush(frontier, entry)
+    raise RuntimeError("the baseline found no schedule")
+
+
+# ------------------------------------------------------------------------ timing
+
+UP_SIZES = (8, 15, 30, PLAN_LENGTH)
+"""Plan lengths tried for the UP baseline, smallest first; the largest that fits is kept."""
+
+
+def median_seconds(run: Callable[[], object], repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        run()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+@dataclass
+class Row:
+    case: str
+    steps_per_agent: int
+    mode: str
+    exec_length: int
+    ours_ms: float
+    ours_nodes: int
+    plain_ms: float
+    plain_nodes: int
+    up_ms: float | None = None
+    up_nodes: int | None = None
+    note: str = ""
+
+
+def measure_ours(case: Case, length: int, mode: str, repeats: int) -> Row:
+    """Median times of parallel_length and of the plain search, from grounded plans."""
+    instance = build(case, length)
+    problem = parse_problem(SINGLE_AGENT_DOMAIN, instance.single_agent_problem)
+    grounder = Grounder(problem)
+    plans = [grounder.ground_plan(plan) for plan in instance.plans]
+
+    def run() -> execution.ParallelExecution:
+        return parallel_length(plans, problem.init, problem.goal, AGENT_PREDICATES, mode)
+
+    def run_plain() -> execution.ParallelExecution:
+        # Bench only: the private entry point switches the bound and the pruning off.
+        return execution._parallel_length(
+            plans, problem.init, problem.goal, AGENT_PREDICATES, mode, plain=True
+        )
+
+    ours, plain = run(), run_plain()
+    assert ours.length == plain.length, (ours, plain)
+    return Row(
+        case.name,
+        length,
+        mode,
+        ours.length,
+        1000 * median_seconds(run, repeats),
+        ours.nodes_expanded,
+        1000 * median_seconds(run_plain, repeats),
+        plain.nodes_expanded,
+    )
+
+
+def measure(case: Case, mode: str, repeats: int, budget: float) -> list[Row]:
+    """Ours at full size; the UP baseline at the largest size that fits the budget."""
+    full = measure_ours(case, PLAN_LENGTH, mode, repeats)
+    compared: Row | None = None
+    for length in UP_SIZES:
+        start = time.perf_counter()
+        try:
+            up_length, up_nodes = up_parallel_length(build(case, length), mode, budget)
+        except BudgetExceeded:
+            break
+        seconds = time.perf_counter() - start
+        compared = full if length == PLAN_LENGTH else measure_ours(case, length, mode, repeats)
+        assert up_length == compared.exec_length, (up_length, compared)
+        compared.up_ms, compared.up_nodes = 1000 * seconds, up_nodes
+        if seconds * 3 > budget:  # sizes double and nodes grow faster: the next won't fit
+            break
+    if compared is None:
+        full.note = f"UP baseline over budget even at {UP_SIZES[0]} steps/agent"
+        return [full]
+    if compared is full:
+        return [full]
+    compared.note = f"UP baseline: largest size within {budget:.0f} s"
+    return [full, compared]
+
+
+def up_call_costs() -> str:
+    """Per-call cost of the UP simulator on the 60-step instance, to explain the ratio."""
+    from unified_planning.io import PDDLReader
+    from unified_planning.plans import ActionInstance
+    from unified_planning.shortcuts import SequentialSimulator
+
+    instance = build(CASES[0], PLAN_LENGTH)
+    problem = PDDLReader().parse_problem_string(MULTI_AGENT_DOMAIN, instance.multi_agent_problem)
+    simulator = SequentialSimulator(problem)
+    state = simulator.get_initial_state()
+    args = [problem.object(o) for o in instance.plans[0][0].strip("()").split()[1:]]
+    action = ActionInstance(problem.action("move"), [problem.object("a0"), *args])
+    runs = 200
+    applicable = median_seconds(lambda: simulator.is_applicable(state, action), runs)
+    apply = median_seconds(lambda: simulator.apply(state, action), runs)
+    apply_hash = median_seconds(lambda: hash(simulator.apply(state, action)), runs)
+    return (
+        f"UP simulator per call on the {PLAN_LENGTH}-step instance: is_applicable "
+        f"{1000 * applicable:.2f} ms, apply {1000 * apply:.2f} ms, hashing the new state "
+        f"(duplicate detection) {1000 * (apply_hash - apply):.2f} ms"
+    )
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
+    parser.add_argument("--repeats", type=int, default=5, help="timed runs per measurement")
+    parser.add_argument("--budget", type=float, default=30.0, help="seconds per UP baseline run")
+    args = parser.parse_args(argv)
+    from unified_planning.shortcuts import get_environment
+
+    get_environment().credits_stream = None
+    command = " ".join(argv if argv is not None else sys.argv[1:])
+    print(f"$ python bench/bench_execution.py {command}".rstrip())
+    print(
+        f"python {platform.python_version()}, {platform.machine()}, {os.cpu_count()} CPUs; "
+        f"N = {AGENTS} agents; median of {args.repeats} runs (UP: one run, "
+        f"budget {args.budget:.0f} s)"
+    )
+    rows = [
+        row
+        for case in CASES
+        for mode in ("exact", "paper")
+        for row in measure(case, mode, args.repeats, args.budget)
+    ]
+    columns = (
+        "case",
+        "steps/agent",
+        "mode",
+        "exec length",
+        "twostep ms (nodes)",
+        "plain ms (nodes)",
+        "UP simulator ms (nodes)",
+        "UP / twostep",
+        "UP / plain",
+        "note",
+    )
+    print()
+    print("| " + " | ".join(columns) + " |")
+    print("|" + "---|" * len(columns))
+    for row in rows:
+        up = row.up_ms is not None
+        cells = [
+            row.case,
+            str(row.steps_per_agent),
+            row.mode,
+            str(row.exec_length),
+            f"{row.ours_ms:.1f} ({row.ours_nodes})",
+            f"{row.plain_ms:.1f} ({row.plain_nodes})",
+            f"{row.up_ms:.0f} ({row.up_nodes})" if up else "-",
+            f"{row.up_ms / row.ours_ms:.0f}x" if row.up_ms is not None else "-",
+            f"{row.up_ms / row.plain_ms:.0f}x" if row.up_ms is not None else "-",
+            row.note,
+        ]
+        print("| " + " | ".join(cells) + " |")
+    print()
+    print(up_call_costs())
+    worst = max(r.ours_ms for r in rows if r.steps_per_agent == PLAN_LENGTH and r.mode == "exact")
+    verdict = "met" if worst < 1000 else "NOT met"
+    print(
+        f"exact mode, N = {AGENTS}, {PLAN_LENGTH}-step plans: worst median {worst:.1f} ms "
+        f"(goal < 1000 ms: {verdict})"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
