@@ -1,39 +1,92 @@
-"""The ``twostep`` command: a Hydra app that runs one job, or a sweep with ``-m``."""
+"""The ``twostep`` command: a Hydra app that runs one job, or a sweep with ``-m``.
+
+Single run: prints a one-line summary (and the joint schedule), writes result.json in
+the Hydra run directory; bad input (unknown task, malformed PDDL) or an unusable MLflow
+store prints one line and exits 2, a job that crashed prints one line and exits 1.
+Sweep: one progress line per finished job; failures are recorded and the sweep goes on
+(:mod:`flows.sweep` prints the summary and sets the exit code).
+"""
 
 from __future__ import annotations
 
-import json
 import sys
+import time
 from pathlib import Path
 
 import hydra
 from hydra.core.hydra_config import HydraConfig
+from hydra.types import RunMode
 from omegaconf import DictConfig
 
 from flows.config import register
-from flows.job import JobError, format_schedule, format_summary, run_job
-from twostep.benchmark import BenchmarkError
-from twostep.pddl import PDDLError
+from flows.environment import quiet_defaults
+from flows.job import format_schedule, format_summary
 
 CONF_DIR = str(Path(__file__).resolve().parent.parent / "conf")
 
+quiet_defaults()
 register()
 
 
 @hydra.main(config_path=CONF_DIR, config_name="config", version_base="1.3")
 def app(cfg: DictConfig) -> None:
+    from flows.runner import execute_job
+    from flows.sweep import SweepState, progress_line, record_job
+    from flows.tracking import TrackingError
+
+    hydra_cfg = HydraConfig.get()
+    job_dir = Path(hydra_cfg.runtime.output_dir)
+    multirun = hydra_cfg.mode == RunMode.MULTIRUN
+    sweep = SweepState.load(Path(hydra_cfg.sweep.dir)) if multirun else None
     try:
-        result = run_job(cfg)
-    except (BenchmarkError, PDDLError, JobError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        sys.exit(2)
-    out_dir = Path(HydraConfig.get().runtime.output_dir)
-    (out_dir / "result.json").write_text(json.dumps(result.to_dict(), indent=2) + "\n")
-    print(format_summary(result))
-    table = format_schedule(result)
-    if table:
-        print(table)
-    print(f"result: {out_dir / 'result.json'}")
+        outcome = execute_job(cfg, job_dir, sweep)
+    except TrackingError as error:
+        print(f"error: {error}", file=sys.stderr, flush=True)
+        if not multirun:
+            sys.exit(2)
+        record = {
+            "num": hydra_cfg.job.num,
+            "name": job_dir.name,
+            "status": "failed",
+            "error": str(error),
+        }
+        record_job(Path(hydra_cfg.sweep.dir), hydra_cfg.job.num, record)
+        return
+    line = format_summary(outcome.result)
+    if outcome.reused:
+        line += " | reused (job store)"
+    elif outcome.stats.plan_cache_hits:
+        hits, runs = outcome.stats.plan_cache_hits, outcome.stats.plan_calls
+        line += f" | planner cache: {hits} hit(s), {runs} run"
+    if not multirun:
+        if "error" in outcome.result:  # the job raised: one line, no traceback
+            print(f"error: {outcome.error}", file=sys.stderr, flush=True)
+            sys.exit(2 if outcome.input_error else 1)
+        print(line)
+        table = format_schedule(outcome.result)
+        if table:
+            print(table)
+        print(f"result: {job_dir / 'result.json'}")
+        if outcome.status != "success":  # no plan (unsolvable, timeout): scripts see it
+            sys.exit(1)
+        return
+    record = {
+        "num": hydra_cfg.job.num,
+        "name": outcome.name,
+        "job_key": outcome.key,
+        "status": outcome.status,
+        "error": outcome.error,
+        "reused": outcome.reused,
+        "finished_at": time.time(),
+        "mlflow_run_id": outcome.mlflow_run_id,
+        "tracking_error": outcome.tracking_error,
+        **outcome.stats.to_dict(),
+        **outcome.timings,
+    }
+    record_job(Path(hydra_cfg.sweep.dir), hydra_cfg.job.num, record)
+    if cfg.orchestration.progress and sweep is not None:
+        line = f"{progress_line(sweep)} {line}"
+    print(line, flush=True)
 
 
 def main() -> None:

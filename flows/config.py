@@ -1,12 +1,16 @@
 """The structured config schema: every key the Hydra app accepts, with its type.
 
 Registered with Hydra's ConfigStore as ``twostep_schema`` and used as the first entry
-of ``conf/config.yaml``'s defaults list, so a typo in an override (``tsak=3``) or a value
-of the wrong type fails at once with Hydra's message naming the key.
+of ``conf/config.yaml``'s defaults list, so a typo in an override (``tsak=3``,
+``orchestration.task_runer=dask``) or a value of the wrong type (``agents=two``,
+``orchestration.task_runner=spark``) fails at once with Hydra's message naming the key.
+
+Values live in ``conf/``; the defaults here only give each key its type.
 """
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -34,17 +38,18 @@ class DecomposerConfig:
 class LLMConfig:
     model: str = "openai/gpt-4o"
     temperature: float = 0.0
-    top_p: float = 1.0
+    top_p: float | None = 1.0  # null: not sent (models that refuse temperature and top_p)
     max_tokens: int = 512
     api_base: str | None = None
-    api_key_env: str | None = None
+    api_key_env: str | None = None  # the variable's NAME; the key itself is never in config
     mode: str = "live"  # live | replay | scripted
     cache_dir: str = "outputs/llm-cache"
     script: str | None = None
     max_retries: int = 4
     backoff_s: float = 1.0
     timeout_s: float = 60.0
-    local_model: str | None = None  # llm=local: path of a GGUF file (default: SmolLM2)
+    use_cache: bool = True
+    local: bool = False  # llm=local: serve the model from an in-process llama.cpp server
 
 
 @dataclass
@@ -65,6 +70,43 @@ class OutputConfig:
 
 
 @dataclass
+class MLflowConfig:
+    """Where a job's params, metrics and artifacts go (the contract: docs/tracking.md)."""
+
+    enabled: bool = True
+    tracking_uri: str = "sqlite:///outputs/mlflow.db"
+    artifact_location: str | None = None  # for experiments created here; null: the store's
+    experiment: str | None = None  # null: derived from the sweep's overrides ("twostep" for runs)
+    connect_timeout_s: float = 10.0  # a remote store that does not answer in time is an error
+
+
+class TaskRunner(enum.StrEnum):
+    default = "default"  # Prefect's thread pool in the job's own process
+    dask = "dask"  # a Dask cluster: orchestration.dask_address, or one LocalCluster per sweep
+
+
+@dataclass
+class OrchestrationConfig:
+    """How jobs run: Prefect on or off, which server, task runner, caches, progress."""
+
+    prefect: bool = True  # false: call the library directly (no server, no task cache)
+    prefect_api_url: str | None = None  # an existing server; null: one per sweep (or run)
+    prefect_home: str = "outputs/prefect"  # the started server's database and settings
+    result_storage: str = "outputs/prefect/results"  # persisted task results (the task cache)
+    server_host: str = "127.0.0.1"
+    server_startup_timeout_s: float = 180.0  # a fresh database migrates first: be generous
+    prefect_log_level: str = "WARNING"
+    task_runner: TaskRunner = TaskRunner.default
+    dask_address: str | None = None  # tcp://host:8786 of an existing cluster
+    dask_workers: int = 2  # LocalCluster size when task_runner=dask and no address
+    job_store: str = "outputs/jobs"  # finished jobs by job key: never recomputed
+    reuse_results: bool = True
+    llm_task_retries: int = 2  # on top of the LLM client's own retries
+    llm_task_retry_delay_s: float = 5.0  # first delay; doubles per retry
+    progress: bool = True  # one line per finished job of a sweep
+
+
+@dataclass
 class TwostepConfig:
     domain: DomainConfig = field(default_factory=DomainConfig)
     method: MethodConfig = field(default_factory=MethodConfig)
@@ -73,6 +115,8 @@ class TwostepConfig:
     planner: PlannerConfig = field(default_factory=PlannerConfig)
     data: DataConfig = field(default_factory=DataConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
+    mlflow: MLflowConfig = field(default_factory=MLflowConfig)
+    orchestration: OrchestrationConfig = field(default_factory=OrchestrationConfig)
     experiment: Any = None
     task: int = 5
     agents: int = 2

@@ -1,22 +1,42 @@
 """One job of a sweep, from its resolved config to a result: wiring only, no planning logic.
 
 ``run_job`` reads the task, builds the planner settings and the decomposer the config
-names, and calls the library's method (:mod:`twostep.pipeline`).
+names, and calls the library's method (:mod:`twostep.pipeline`) with a set of
+:class:`~twostep.pipeline.Steps`: the library's own functions, or the Prefect-task
+versions of :mod:`flows.tasks` when the job runs as a flow. The control flow of the
+paper's pipeline stays in the library either way.
 """
 
 from __future__ import annotations
 
+import threading
+import time
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
 from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.base import Decomposer
-from twostep.pipeline import RunResult, run_multi_agent, run_single_agent, run_twostep
-from twostep.planner import PlannerSettings
+from twostep.pddl import Problem
+from twostep.pipeline import (
+    DIRECT,
+    RunResult,
+    Steps,
+    run_multi_agent,
+    run_single_agent,
+    run_twostep,
+)
+from twostep.planner import PlannerSettings, PlanResult, plan
 
 
 class JobError(Exception):
     """A config that names something that does not exist or does not fit together."""
+
+
+METHODS = ("sa", "ma", "twostep")
+DECOMPOSERS = ("goal-split", "expert", "llm")
 
 
 def planner_settings(cfg: Any) -> PlannerSettings:
@@ -27,81 +47,187 @@ def planner_settings(cfg: Any) -> PlannerSettings:
     )
 
 
-def build_decomposer(cfg: Any) -> Decomposer:
+@contextmanager
+def open_decomposer(cfg: Any) -> Iterator[Decomposer]:
+    """The decomposer the config names, for the duration of one job.
+
+    A context manager because the LLM decomposer owns a client (``llm=local`` runs a
+    model server for the job's lifetime: :func:`flows.llm.llm_decomposer`).
+    """
     name = cfg.decomposer.name
     agent_predicates = list(cfg.domain.agent_predicates)
     if name == "goal-split":
         from twostep.decomposers.goal_split import GoalSplitDecomposer
 
-        return GoalSplitDecomposer(agent_predicates, cfg.decomposer.link_degree)
-    if name == "expert":
+        yield GoalSplitDecomposer(agent_predicates, cfg.decomposer.link_degree)
+    elif name == "expert":
         from twostep.decomposers.expert import ExpertDecomposer
 
-        return ExpertDecomposer()
-    if name == "llm":
-        from flows.llm import build_llm_decomposer
+        yield ExpertDecomposer()
+    elif name == "llm":
+        from flows.llm import llm_decomposer
 
-        return build_llm_decomposer(cfg)
-    raise JobError(f"unknown decomposer '{name}' (known: goal-split, expert, llm)")
+        with llm_decomposer(cfg) as decomposer:
+            yield decomposer
+    else:
+        raise JobError(f"unknown decomposer '{name}' (known: {', '.join(DECOMPOSERS)})")
 
 
 def load_job_task(cfg: Any) -> BenchmarkTask:
     return load_task(cfg.domain.name, int(cfg.task), Path(cfg.data.root))
 
 
-def run_job(cfg: Any, task: BenchmarkTask | None = None) -> RunResult:
-    """Run the method the config names on its task and return the result."""
-    task = task or load_job_task(cfg)
+def check_job(cfg: Any) -> None:
+    """Reject a config that cannot run, before any work (and before any server starts)."""
+    if cfg.method.name not in METHODS:
+        raise JobError(f"unknown method '{cfg.method.name}' (known: {', '.join(METHODS)})")
+    if int(cfg.agents) < 1:
+        raise JobError(f"agents must be at least 1, got {cfg.agents}")
+    if cfg.method.name == "twostep" and cfg.decomposer.name not in DECOMPOSERS:
+        known = ", ".join(DECOMPOSERS)
+        raise JobError(f"unknown decomposer '{cfg.decomposer.name}' (known: {known})")
+
+
+def run_job(
+    cfg: Any,
+    task: BenchmarkTask | None = None,
+    steps: Steps = DIRECT,
+    prepare_decomposer: Callable[[Decomposer], object] | None = None,
+    stats: StepStats | None = None,
+) -> RunResult:
+    """Run the method the config names on its task and return the result.
+
+    ``prepare_decomposer`` sees the decomposer before it runs (the flow routes the LLM
+    decomposer's calls through Prefect tasks there).
+    """
+    check_job(cfg)
+    if task is None:
+        start = time.perf_counter()
+        task = load_job_task(cfg)
+        if stats is not None:
+            stats.add(task_load_s=time.perf_counter() - start)
     settings = planner_settings(cfg)
     method = cfg.method.name
     agents = int(cfg.agents)
     seed = int(cfg.seed)
     agent_predicates = list(cfg.domain.agent_predicates)
-    if agents < 1:
-        raise JobError(f"agents must be at least 1, got {agents}")
     if method == "sa":
-        return run_single_agent(task, settings, seed)
-    sa_length = None
+        return run_single_agent(task, settings, seed, steps=steps)
+    sa: RunResult | None = None
     if cfg.compare_sa:
-        sa = run_single_agent(task, settings, seed)
-        sa_length = sa.sa_length
+        sa = run_single_agent(task, settings, seed, steps=steps)
+    sa_length = sa.sa_length if sa is not None else None
     if method == "ma":
-        result = run_multi_agent(task, agents, agent_predicates, settings, cfg.score_mode, seed, sa_length)
-    elif method == "twostep":
-        decomposer = build_decomposer(cfg)
-        result = run_twostep(task, agents, decomposer, agent_predicates, settings, cfg.score_mode, seed, sa_length)
+        result = run_multi_agent(
+            task, agents, agent_predicates, settings, cfg.score_mode, seed, sa_length, steps=steps
+        )
     else:
-        raise JobError(f"unknown method '{method}' (known: sa, ma, twostep)")
+        with open_decomposer(cfg) as decomposer:
+            if prepare_decomposer is not None:
+                prepare_decomposer(decomposer)
+            result = run_twostep(
+                task,
+                agents,
+                decomposer,
+                agent_predicates,
+                settings,
+                cfg.score_mode,
+                seed,
+                sa_length,
+                steps=steps,
+            )
+    if sa is not None:
+        # The SA comparison is solved in the same job; its planner time is reported apart.
+        result.extra["sa_planning_time_s"] = round(sa.planning_time_s, 4)
     return result
 
 
-def format_summary(result: RunResult) -> str:
-    """One line for the terminal."""
+@dataclass
+class StepStats:
+    """What a job's step calls did: fresh planner calls vs cache hits, and their time.
+
+    The job's orchestration overhead is its wall time minus ``planner_wall_s`` and
+    ``llm_wall_s`` (time spent in fresh calls only: a cache hit costs no planning).
+    """
+
+    plan_calls: int = 0
+    plan_cache_hits: int = 0
+    planner_wall_s: float = 0.0
+    llm_calls: int = 0
+    llm_cache_hits: int = 0
+    llm_wall_s: float = 0.0
+    task_load_s: float = 0.0  # reading and parsing the task's PDDL (library work)
+    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False, compare=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {f.name: getattr(self, f.name) for f in fields(self) if not f.name.startswith("_")}
+
+    def add(self, **deltas: float) -> None:
+        with self._lock:
+            for name, delta in deltas.items():
+                setattr(self, name, getattr(self, name) + delta)
+
+
+def counting_steps(stats: StepStats) -> Steps:
+    """The library's own steps, counting planner calls (the path without Prefect)."""
+
+    def counted_plan(problem: Problem, settings: PlannerSettings) -> PlanResult:
+        result = plan(problem, settings)
+        stats.add(plan_calls=1, planner_wall_s=result.wall_time_s)
+        return result
+
+    return Steps(
+        propose=DIRECT.propose, plan=counted_plan, progress=DIRECT.progress, score=DIRECT.score
+    )
+
+
+# ----------------------------------------------------------------- terminal output
+
+
+def format_summary(result: RunResult | Mapping[str, Any]) -> str:
+    """One line for the terminal (from a result or its result.json dict)."""
+    r = result.to_dict() if isinstance(result, RunResult) else result
+    if r.get("status") == "failed" and "error" in r:
+        return f"{_job_name(r)} | FAILED: {r['error']}"
     parts = [
-        f"{result.domain} p{result.task:02d} {result.method}",
-        f"N={result.agents}",
-        "success" if result.success else f"FAILED ({result.status}: {result.message})",
-        f"exec_length={result.exec_length}",
+        _job_name(r),
+        f"N={r.get('agents')}",
+        "success" if r.get("success") else f"FAILED ({r.get('status')}: {r.get('message')})",
+        f"exec_length={r.get('exec_length')}",
     ]
-    if result.sa_length is not None:
-        parts.append(f"sa_length={result.sa_length}")
-    parts.append(f"planning_time={result.planning_time_s:.2f}s")
-    if result.decomposer:
-        accepted = sum(1 for s in result.subgoals if s["status"] == "accepted")
-        parts.append(f"subgoals={accepted}/{len(result.subgoals)} accepted")
-    if result.fallback:
-        parts.append(f"fallback: {result.fallback}")
+    if r.get("sa_length") is not None:
+        parts.append(f"sa_length={r['sa_length']}")
+    parts.append(f"planning_time={float(r.get('planning_time_s') or 0.0):.2f}s")
+    subgoals = r.get("subgoals") or []
+    if r.get("decomposer"):
+        accepted = sum(1 for s in subgoals if s.get("status") == "accepted")
+        parts.append(f"subgoals={accepted}/{len(subgoals)} accepted")
+    if r.get("fallback"):
+        parts.append(f"fallback: {r['fallback']}")
     return " | ".join(parts)
 
 
-def format_schedule(result: RunResult, width: int = 34) -> str:
+def _job_name(r: Mapping[str, Any]) -> str:
+    task = r.get("task")
+    task_text = f"p{task:02d}" if isinstance(task, int) else f"p{task}"
+    return f"{r.get('domain')} {task_text} {r.get('method')}"
+
+
+def _agent_number(agent: str) -> int:
+    digits = agent.removeprefix("agent")
+    return int(digits) if digits.isdigit() else 0
+
+
+def format_schedule(result: RunResult | Mapping[str, Any], width: int = 34) -> str:
     """The joint schedule as a table, one column per agent."""
-    agents = sorted(result.plans, key=lambda a: int(a.removeprefix("agent")) if a[5:].isdigit() else 0)
-    if not result.schedule or len(agents) < 2:
+    r = result.to_dict() if isinstance(result, RunResult) else result
+    agents = sorted(r.get("plans") or {}, key=_agent_number)
+    schedule = r.get("schedule") or []
+    if not schedule or len(agents) < 2:
         return ""
     header = "step  " + "".join(a.ljust(width) for a in agents)
     lines = [header, "-" * len(header)]
-    for t, step in enumerate(result.schedule, start=1):
-        acting = dict(step)
+    for t, step in enumerate(schedule, start=1):
+        acting = {agent: action for agent, action in step}
         lines.append(f"{t:>4}  " + "".join(acting.get(a, ".").ljust(width) for a in agents))
     return "\n".join(lines)

@@ -1,0 +1,73 @@
+"""The files a job leaves in its Hydra job directory, which MLflow then stores as artifacts.
+
+Layout (docs/tracking.md)::
+
+    result.json              the run's result (RunResult.to_dict() + job key and timings)
+    schedule.txt             the joint schedule, one column per agent
+    plans/<agent>.plan       each agent's plan, one action per line
+    subgoals/helper<k>.pddl  each helper's PDDL subgoal (TwoStep)
+    llm/helper<k>.json       every prompt and answer behind helper k's subgoal (LLM)
+    error.txt                traceback of a job that raised (not an artifact)
+
+Only ``result.json`` is written under that name: the reports read every result.json
+below a sweep directory.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from flows.job import format_schedule
+from flows.store import write_json_atomic
+
+
+def write_job_files(job_dir: Path, result: Mapping[str, Any]) -> list[tuple[Path, str | None]]:
+    """Write the job's files; return (file, artifact folder) pairs to log, result.json last.
+
+    result.json goes last so that, in MLflow as on disk, its presence means the rest is there.
+    """
+    job_dir.mkdir(parents=True, exist_ok=True)
+    files: list[tuple[Path, str | None]] = []
+    plans = result.get("plans") or {}
+    if plans:
+        folder = job_dir / "plans"
+        folder.mkdir(exist_ok=True)
+        for agent, steps in sorted(plans.items()):
+            path = folder / f"{agent}.plan"
+            path.write_text("".join(f"{step}\n" for step in steps))
+            files.append((path, "plans"))
+    schedule = result.get("schedule") or []
+    if schedule:
+        path = job_dir / "schedule.txt"
+        table = format_schedule(result)
+        if not table:  # one agent: the plan is the schedule
+            table = "\n".join(
+                f"{t:>4}  " + "  ".join(f"{agent}: {action}" for agent, action in step)
+                for t, step in enumerate(schedule, start=1)
+            )
+        path.write_text(table + "\n")
+        files.append((path, None))
+    for subgoal in result.get("subgoals") or []:
+        helper = subgoal.get("helper")
+        if subgoal.get("pddl"):
+            folder = job_dir / "subgoals"
+            folder.mkdir(exist_ok=True)
+            path = folder / f"helper{helper}.pddl"
+            comment = f"; helper {helper}: {subgoal.get('status')}"
+            if subgoal.get("reason"):
+                comment += f" ({subgoal['reason']})"
+            path.write_text(f"{comment}\n{subgoal['pddl']}\n")
+            files.append((path, "subgoals"))
+        if subgoal.get("exchanges"):
+            path = job_dir / "llm" / f"helper{helper}.json"
+            write_json_atomic(path, {k: subgoal.get(k) for k in _LLM_KEYS})
+            files.append((path, "llm"))
+    path = job_dir / "result.json"
+    write_json_atomic(path, dict(result))
+    files.append((path, None))
+    return files
+
+
+_LLM_KEYS = ("helper", "english", "pddl", "status", "reason", "llm_time_s", "exchanges")

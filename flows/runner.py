@@ -1,0 +1,289 @@
+"""One job, start to finish: reuse or compute, write its files, record it.
+
+:func:`execute_job` is what the ``twostep`` command runs for every job, in a single run
+and in each job of a sweep (any launcher):
+
+1. check the MLflow store (single run; a sweep's callback checked it already):
+   :class:`~flows.tracking.TrackingError` before any work;
+2. a job whose key is in the job store is read back, not recomputed (``reused``);
+3. otherwise run it: as the Prefect flow on the sweep's server (started on demand by
+   the first job that needs it, then waited for), or on a server of its own for a
+   single run, or the library directly (``orchestration.prefect=false``);
+4. write result.json and the other files to the job's Hydra directory;
+5. log params, metrics, artifacts and status to the job's MLflow run, found again by
+   ``twostep.job_key`` (a re-run adds no duplicate), child of the sweep's parent run;
+   skipped when the reused result is known to be logged there already.
+
+A job that raises is recorded as ``failed`` (result.json, MLflow status and error), is
+not stored (a re-run tries again), and the sweep goes on.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from flows.artifacts import write_job_files
+from flows.job import JobError, StepStats, check_job, counting_steps, load_job_task, run_job
+from flows.store import JobStore, job_config, job_key
+from flows.sweep import SweepState, sweep_server, sweep_tracking
+from twostep.benchmark import BenchmarkError, task_path
+from twostep.pddl import PDDLError
+
+# Errors in what the user asked for: one line, no traceback.
+INPUT_ERRORS: tuple[type[Exception], ...] = (BenchmarkError, PDDLError, JobError)
+DEFAULT_EXPERIMENT = "twostep"
+
+
+@dataclass
+class JobOutcome:
+    name: str
+    key: str
+    result: dict[str, Any]  # result.json as written
+    status: str  # success | failed | timeout (the twostep.status tag)
+    error: str | None
+    reused: bool
+    stats: StepStats = field(default_factory=StepStats)
+    timings: dict[str, float] = field(default_factory=dict)
+    input_error: bool = False  # the job's input was bad (unknown task, malformed PDDL)
+    mlflow_run_id: str | None = None
+    tracking_error: str | None = None  # logging failed; the result itself is safe
+
+
+def job_name(config: dict[str, Any]) -> str:
+    task = config.get("task")
+    task_text = f"{task:02d}" if isinstance(task, int) else str(task)
+    return (
+        f"{config['domain']['name']}-p{task_text}-{config['method']['name']}"
+        f"-n{config.get('agents')}-s{config.get('seed')}"
+    )
+
+
+def job_status(result: dict[str, Any]) -> tuple[str, str | None]:
+    """``twostep.status`` and ``twostep.error`` of a result.json dict."""
+    if result.get("success"):
+        return "success", None
+    if result.get("status") == "timeout":
+        return "timeout", result.get("message") or "planner time limit"
+    message = result.get("error") or result.get("message") or result.get("status") or "failed"
+    return "failed", " ".join(str(message).split())[:500]
+
+
+def failed_result(config: dict[str, Any], error: str) -> dict[str, Any]:
+    return {
+        "domain": config["domain"]["name"],
+        "task": config.get("task"),
+        "method": config["method"]["name"],
+        "agents": config.get("agents"),
+        "seed": config.get("seed"),
+        "success": False,
+        "status": "failed",
+        "message": error,
+        "error": error,
+    }
+
+
+def one_line(error: BaseException) -> str:
+    lines = [line for line in str(error).strip().splitlines() if line.strip()]
+    text = lines[0] if lines else ""
+    if isinstance(error, INPUT_ERRORS):
+        return text or type(error).__name__
+    return f"{type(error).__name__}: {text}" if text else type(error).__name__
+
+
+# ----------------------------------------------------------------- computing
+
+
+def _prefect_api(cfg: Any, sweep: SweepState | None) -> tuple[Any, bool]:
+    """The server this job uses (started now if the sweep has none yet) and whether
+    this job owns it (a single run's own server, stopped when the job ends)."""
+    from flows.server import ServerError, ServerInfo, ServerSettings, is_healthy, spawn_server
+
+    if sweep is not None and (sweep.server or sweep.prefect_api_url):
+        return sweep_server(sweep), False
+    external = cfg.orchestration.prefect_api_url or os.environ.get("PREFECT_API_URL")
+    if external:
+        if not is_healthy(str(external), timeout_s=10):
+            raise ServerError(f"no Prefect server answers at {external}")
+        return ServerInfo(str(external), None, time.time(), 10.0), False
+    settings = ServerSettings(
+        home=str(cfg.orchestration.prefect_home),
+        host=str(cfg.orchestration.server_host),
+        startup_timeout_s=float(cfg.orchestration.server_startup_timeout_s),
+    )
+    return spawn_server(settings, owner_pid=os.getpid()), True
+
+
+def _compute(
+    cfg: Any, config: dict[str, Any], name: str, sweep: SweepState | None
+) -> tuple[dict[str, Any], StepStats, float]:
+    """Run the job; return its result dict, step stats and seconds waited for a server."""
+    check_job(cfg)
+    stats = StepStats()
+    if not cfg.orchestration.prefect:
+        run = run_job(cfg, steps=counting_steps(stats), stats=stats)
+        return run.to_dict(), stats, 0.0
+    if sweep is None:
+        load_job_task(cfg)  # bad input fails here, before a server starts for this run
+    else:
+        task_path(cfg.domain.name, int(cfg.task), Path(cfg.data.root))  # the flow parses it
+    # Spawn the server (if it is this job's turn) before importing Prefect: they overlap.
+    server, owned = _prefect_api(cfg, sweep)
+    # Read by Prefect at import: the job's console shows warnings, not every API call.
+    os.environ.setdefault("PREFECT_LOGGING_LEVEL", str(cfg.orchestration.prefect_log_level))
+    from flows.flow import flush_to_server, run_flow
+    from flows.server import stop_server, wait_until_healthy
+
+    dask_address = (sweep.dask_address if sweep else None) or cfg.orchestration.dask_address
+    try:
+        start = time.perf_counter()
+        wait_until_healthy(server)
+        waited = time.perf_counter() - start
+        result, stats = run_flow(
+            config, server.api_url, name, _flow_tags(config, sweep), dask_address
+        )
+    finally:
+        if owned:
+            flush_to_server()
+            stop_server(server)
+    return result, stats, waited
+
+
+def _flow_tags(config: dict[str, Any], sweep: SweepState | None) -> list[str]:
+    """Tags to find a job's flow runs in the Prefect UI and API."""
+    tags = [
+        "twostep",
+        f"domain:{config['domain']['name']}",
+        f"method:{config['method']['name']}",
+        f"agents:{config.get('agents')}",
+    ]
+    if sweep is not None:
+        tags += [sweep.sweep_tag, sweep.run_tag]
+    return tags
+
+
+# ----------------------------------------------------------------- tracking
+
+
+def _experiment(cfg: Any, sweep: SweepState | None) -> str:
+    if sweep is not None and sweep.experiment:
+        return sweep.experiment
+    return str(cfg.mlflow.experiment or DEFAULT_EXPERIMENT)
+
+
+def _record_in_mlflow(
+    cfg: Any,
+    sweep: SweepState | None,
+    outcome: JobOutcome,
+    config: dict[str, Any],
+    files: list[tuple[Path, str | None]],
+) -> str:
+    from flows.tracking import ERROR, REUSED, SCRIPTED, STATUS, Tracker, job_metrics, job_params
+
+    uri = str(cfg.mlflow.tracking_uri)
+    parent: str | None = None
+    if sweep is not None and sweep.tracking_uri == uri:
+        tracker, experiment_id, parent = sweep_tracking(sweep)
+    else:
+        tracker = Tracker(uri, cfg.mlflow.artifact_location)
+        experiment_id = tracker.experiment_id(_experiment(cfg, sweep))
+    run_id, found = tracker.job_run(experiment_id, outcome.key, outcome.name, parent)
+    if found is not None and found.data.tags.get(STATUS) in ("success", "timeout"):
+        # Recorded completely before (same job key: same result). Logging again would
+        # only append a second point to every metric's history.
+        return run_id
+    tags = {
+        STATUS: outcome.status,
+        SCRIPTED: "true" if outcome.result.get("scripted_llm") else "false",
+        REUSED: "true" if outcome.reused else "false",
+    }
+    if outcome.error:
+        tags[ERROR] = outcome.error
+    tracker.log_job(
+        run_id,
+        job_params(config),
+        job_metrics(outcome.result, outcome.timings),
+        tags,
+        files,
+        existing_params=dict(found.data.params) if found is not None else None,
+        terminated="FAILED" if outcome.status == "failed" else "FINISHED",
+    )
+    return run_id
+
+
+def execute_job(cfg: Any, job_dir: Path, sweep: SweepState | None = None) -> JobOutcome:
+    """Run (or reuse) one job and record it; see the module docstring for the order.
+
+    Raises :class:`~flows.tracking.TrackingError` when the MLflow store of a single run
+    cannot be used, before any planning; every other error is a ``failed`` outcome.
+    """
+    start = time.perf_counter()
+    config = job_config(cfg)
+    key = job_key(config)
+    name = job_name(config)
+    tracking = bool(cfg.mlflow.enabled)
+    if tracking and sweep is None:
+        from flows.tracking import check_store
+
+        check_store(str(cfg.mlflow.tracking_uri), float(cfg.mlflow.connect_timeout_s))
+    store = JobStore(str(cfg.orchestration.job_store))
+    stored = store.load(key) if cfg.orchestration.reuse_results else None
+    stats, waited, error, details, input_error = StepStats(), 0.0, None, None, False
+    if stored is not None:
+        result = stored
+    else:
+        try:
+            result, stats, waited = _compute(cfg, config, name, sweep)
+        except INPUT_ERRORS as exc:
+            error, input_error = one_line(exc), True
+        except Exception as exc:
+            error, details = one_line(exc), traceback.format_exc()
+        if error is None:
+            store.save(key, config, result)
+        else:
+            result = failed_result(config, error)
+    status, status_error = job_status(result)
+    job_wall = time.perf_counter() - start
+    work = waited + stats.planner_wall_s + stats.llm_wall_s
+    timings = {
+        "job_wall_time_s": job_wall,
+        "server_wait_s": waited,
+        "orchestration_overhead_s": max(0.0, job_wall - work),
+    }
+    outcome = JobOutcome(
+        name, key, result, status, status_error, stored is not None, stats, timings,
+        input_error=input_error,
+    )  # fmt: skip
+    outcome.result = {
+        **result,
+        "job_key": key,
+        "orchestration": {
+            "reused": outcome.reused,
+            "prefect": bool(cfg.orchestration.prefect),
+            **stats.to_dict(),
+            **{k: round(v, 4) for k, v in timings.items()},
+        },
+    }
+    files = write_job_files(job_dir, outcome.result)
+    if details:
+        (job_dir / "error.txt").write_text(details)
+    experiment = _experiment(cfg, sweep)
+    uri = str(cfg.mlflow.tracking_uri)
+    if tracking and not (outcome.reused and f"{uri} {experiment}" in store.logged_to(key)):
+        try:
+            outcome.mlflow_run_id = _record_in_mlflow(cfg, sweep, outcome, config, files)
+            store.mark_logged(key, uri, experiment, outcome.mlflow_run_id)
+        except Exception as exc:  # the result is stored; the next run logs it again
+            outcome.tracking_error = one_line(exc)
+            print(
+                f"warning: {name}: not logged to MLflow: {outcome.tracking_error}", file=sys.stderr
+            )
+    # With MLflow logging: what the job cost end to end (the progress record, the bench).
+    outcome.timings["job_wall_time_s"] = job_wall = time.perf_counter() - start
+    outcome.timings["orchestration_overhead_s"] = max(0.0, job_wall - work)
+    return outcome

@@ -1,0 +1,290 @@
+"""One Prefect API server for a whole sweep: started on demand, watched, stopped by PID.
+
+Without a server every process that runs a flow starts its own temporary one (8 s with
+a warm database, over 30 s on a fresh one: STACK-NOTES). A sweep instead shares one
+``prefect server start`` on 127.0.0.1 at a free port, which every job reaches through
+``PREFECT_API_URL``.
+
+* **On demand.** The first job that needs the API starts the server (under a file lock
+  in the sweep directory, so parallel workers start exactly one) and records it in
+  ``.twostep/server.json``; a sweep whose jobs are all finished never starts one.
+* **Patient.** Jobs wait on ``/api/health`` until ``startup_timeout_s`` after the spawn:
+  the first start on a fresh database runs its migrations (over 30 s on a small machine).
+* **Watched.** The server runs under a small watchdog (``python -m flows.server``) that
+  stops it as soon as the sweep's launching process is gone, even after ``kill -9``, so
+  an interrupted sweep leaves no server behind. The server has its own session, so
+  Ctrl-C in the terminal reaches the jobs, not the server under them.
+* **Stopped by PID** at the end of the sweep (SIGTERM to the watchdog, which stops the
+  server and waits for it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import ctypes
+import fcntl
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.error
+import urllib.request
+from collections.abc import Iterator, Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+# Server-side services a sweep does not use: schedules, deployments, work pools, pauses.
+# The task run recorder and event persister stay on: they make task runs visible.
+_IDLE_SERVICES = (
+    "SCHEDULER",
+    "LATE_RUNS",
+    "FOREMAN",
+    "PAUSE_EXPIRATIONS",
+    "CANCELLATION_CLEANUP",
+    "REPOSSESSOR",
+    "TRIGGERS",
+    "DB_VACUUM",
+)
+
+
+class ServerError(Exception):
+    """The Prefect server did not start, or stopped answering."""
+
+
+@dataclass(frozen=True)
+class ServerInfo:
+    """What a job needs to reach (and wait for) a server."""
+
+    api_url: str  # http://127.0.0.1:<port>/api
+    pid: int | None  # the watchdog's PID; None for a server we did not start
+    started_at: float  # time.time() of the spawn
+    startup_timeout_s: float
+    log_path: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> ServerInfo:
+        return cls(**data)
+
+
+@dataclass(frozen=True)
+class ServerSettings:
+    home: str  # PREFECT_HOME of the server: its database lives there
+    host: str = "127.0.0.1"
+    startup_timeout_s: float = 180.0
+
+
+def free_port(host: str = "127.0.0.1") -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
+        sock.bind((host, 0))
+        return int(sock.getsockname()[1])
+
+
+def server_environment(home: Path) -> dict[str, str]:
+    """Environment of the server process: its database under ``home``, no telemetry."""
+    env = dict(os.environ)
+    env.update(
+        PREFECT_HOME=str(home),
+        PREFECT_SERVER_ANALYTICS_ENABLED="false",
+        # The UI copies its files at start-up; a sweep's server is for its jobs. To watch
+        # runs in the UI, start a server yourself and set orchestration.prefect_api_url.
+        PREFECT_SERVER_UI_ENABLED="false",
+        PREFECT_LOGGING_LEVEL="WARNING",
+        DO_NOT_TRACK="1",
+    )
+    for service in _IDLE_SERVICES:
+        env[f"PREFECT_SERVER_SERVICES_{service}_ENABLED"] = "false"
+    # A server must never talk to another server.
+    env.pop("PREFECT_API_URL", None)
+    return env
+
+
+def _die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            libc = ctypes.CDLL("libc.so.6", use_errno=True)
+            libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG: the watchdog died
+
+
+def spawn_server(settings: ServerSettings, owner_pid: int) -> ServerInfo:
+    """Start a watched ``prefect server start`` on a free port; return without waiting."""
+    home = Path(settings.home)
+    home.mkdir(parents=True, exist_ok=True)
+    port = free_port(settings.host)
+    log_path = home / f"server-{port}.log"
+    command = [sys.executable, "-m", "flows.server", "--owner", str(owner_pid), "--"]
+    command += [sys.executable, "-m", "prefect", "server", "start"]
+    command += ["--host", settings.host, "--port", str(port)]
+    with open(log_path, "wb") as log:
+        process = subprocess.Popen(
+            command,
+            env=server_environment(home),
+            stdin=subprocess.DEVNULL,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,  # Ctrl-C in the terminal must not stop it under the jobs
+        )
+    host = f"[{settings.host}]" if ":" in settings.host else settings.host
+    return ServerInfo(
+        api_url=f"http://{host}:{port}/api",
+        pid=process.pid,
+        started_at=time.time(),
+        startup_timeout_s=settings.startup_timeout_s,
+        log_path=str(log_path),
+    )
+
+
+def is_healthy(api_url: str, timeout_s: float = 2.0) -> bool:
+    try:
+        with urllib.request.urlopen(f"{api_url}/health", timeout=timeout_s) as response:
+            return bool(response.status == 200)
+    except (urllib.error.URLError, OSError, ValueError):
+        return False
+
+
+def pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    # A zombie (exited, not yet reaped by its parent) counts as dead.
+    with contextlib.suppress(OSError, IndexError):
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return fields[0] != "Z"
+    return True
+
+
+def wait_until_healthy(info: ServerInfo, poll_s: float = 0.25) -> float:
+    """Block until the server answers; return the seconds waited here.
+
+    The deadline counts from the spawn, so jobs that start late do not extend it. A
+    server that died is reported at once, with the last line of its log.
+    """
+    start = time.monotonic()
+    deadline = info.started_at + info.startup_timeout_s
+    while True:
+        if is_healthy(info.api_url):
+            return time.monotonic() - start
+        if info.pid is not None and not pid_alive(info.pid):
+            raise ServerError(f"the Prefect server at {info.api_url} exited{_log_tail(info)}")
+        if time.time() > deadline:
+            raise ServerError(
+                f"the Prefect server at {info.api_url} did not answer within "
+                f"{info.startup_timeout_s:.0f} s (raise orchestration.server_startup_timeout_s)"
+                f"{_log_tail(info)}"
+            )
+        time.sleep(poll_s)
+
+
+def _log_tail(info: ServerInfo) -> str:
+    if not info.log_path:
+        return ""
+    try:
+        lines = [line for line in Path(info.log_path).read_text().splitlines() if line.strip()]
+    except OSError:
+        return ""
+    return f"; log {info.log_path}: {lines[-1][:200]}" if lines else ""
+
+
+def stop_server(info: ServerInfo | None, grace_s: float = 20.0) -> None:
+    """Stop a server we started: SIGTERM to its watchdog, SIGKILL after ``grace_s``."""
+    if info is None or info.pid is None or not pid_alive(info.pid):
+        return
+    with contextlib.suppress(ProcessLookupError):
+        os.kill(info.pid, signal.SIGTERM)
+    deadline = time.monotonic() + grace_s
+    while pid_alive(info.pid) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    if pid_alive(info.pid):
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(info.pid, signal.SIGKILL)  # the watchdog leads the server's session
+
+
+# ----------------------------------------------------------------- on demand, shared
+
+
+@contextlib.contextmanager
+def file_lock(path: Path) -> Iterator[None]:
+    """An exclusive lock between the processes of a sweep on this machine."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a+") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def read_info(path: Path) -> ServerInfo | None:
+    try:
+        return ServerInfo.from_dict(json.loads(Path(path).read_text()))
+    except (OSError, ValueError, TypeError):
+        return None
+
+
+def shared_server(info_path: Path, settings: ServerSettings, owner_pid: int) -> ServerInfo:
+    """The server recorded at ``info_path``, started now if there is none (or it died)."""
+    with file_lock(info_path.with_suffix(".lock")):
+        info = read_info(info_path)
+        if info is not None and info.pid is not None and pid_alive(info.pid):
+            return info
+        info = spawn_server(settings, owner_pid)
+        tmp = info_path.with_name(f".{info_path.name}.{os.getpid()}.tmp")
+        tmp.write_text(json.dumps(info.to_dict()))
+        os.replace(tmp, info_path)
+        return info
+
+
+# ----------------------------------------------------------------- the watchdog
+
+
+def watch(owner_pid: int, command: Sequence[str], poll_s: float = 0.2) -> int:
+    """Run ``command``; stop it when ``owner_pid`` is gone or when we get SIGTERM/SIGINT."""
+    # The child stays in the watchdog's session (one process group to kill) and gets
+    # SIGTERM if the watchdog itself is killed.
+    child = subprocess.Popen(list(command), preexec_fn=_die_with_parent)
+    stopping = False
+
+    def stop(signum: int, frame: object) -> None:
+        nonlocal stopping
+        stopping = True
+
+    signal.signal(signal.SIGTERM, stop)
+    signal.signal(signal.SIGINT, stop)
+    while child.poll() is None and not stopping and pid_alive(owner_pid):
+        time.sleep(poll_s)
+    if child.poll() is None:
+        child.terminate()
+        try:
+            child.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            child.kill()
+            child.wait()
+    return child.returncode or 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m flows.server",
+        description="Run a command until the owner process exits (the sweep's server watchdog).",
+    )
+    parser.add_argument("--owner", type=int, required=True, help="PID whose exit stops the command")
+    parser.add_argument("command", nargs=argparse.REMAINDER)
+    args = parser.parse_args(argv)
+    command = args.command[1:] if args.command[:1] == ["--"] else args.command
+    if not command:
+        parser.error("no command given")
+    return watch(args.owner, command)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,148 @@
+"""Real sweeps through the ``twostep`` command: Prefect server, MLflow, kill -9 and resume.
+
+Each test starts the command as a user would (``twostep -m ...``) in a temporary output
+root: the sweep starts its own Prefect server on 127.0.0.1 (a fresh database: its
+migrations run first) and stops it; nothing reaches outside this machine.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from flows.server import pid_alive, read_info
+from tests.test_flows import make_data
+
+REPO = Path(__file__).resolve().parent.parent
+TWOSTEP = Path(sys.executable).parent / "twostep"  # the console script of this venv
+
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
+
+
+def benchmark_data(tmp: Path) -> Path:
+    """The project's data/ if it is there, else the same files from the generators."""
+    if all((REPO / "data" / d / "p02.pddl").is_file() for d in ("blocksworld", "grippers")):
+        return REPO / "data"
+    from twostep.generators import benchmark_files
+
+    for domain in ("blocksworld", "grippers"):
+        folder = tmp / domain
+        folder.mkdir(parents=True)
+        for name, text in benchmark_files(domain).items():
+            (folder / name).write_text(text)
+    return tmp
+
+
+def run(args: list[str], timeout: float = 600) -> tuple[subprocess.CompletedProcess[str], float]:
+    start = time.perf_counter()
+    done = subprocess.run([str(TWOSTEP), *args], capture_output=True, text=True, timeout=timeout)
+    return done, time.perf_counter() - start
+
+
+def sweep_dirs(out: Path) -> list[Path]:
+    return sorted(p.parent.parent for p in out.glob("multiruns/*/*/.twostep/sweep.json"))
+
+
+def summary(sweep_dir: Path) -> dict[str, Any]:
+    return dict(json.loads((sweep_dir / ".twostep" / "summary.json").read_text()))
+
+
+def mlflow_experiment(out: Path) -> tuple[Any, list[Any]]:
+    from mlflow.tracking import MlflowClient
+
+    client = MlflowClient(f"sqlite:///{out}/mlflow.db")
+    (experiment,) = [e for e in client.search_experiments() if e.name.startswith("sweep ")]
+    return client, list(client.search_runs([experiment.experiment_id]))
+
+
+def test_four_job_joblib_sweep_then_the_same_command_plans_nothing(tmp_path: Path) -> None:
+    """The issue's command: 4 jobs, one parent run, 4 complete child runs, flow runs."""
+    data, out = benchmark_data(tmp_path / "data"), tmp_path / "out"
+    command = [
+        "-m", "domain=blocksworld,grippers", "task=1,2", "agents=2", "method=twostep",
+        "decomposer=goal-split", "hydra/launcher=joblib", f"data.root={data}", f"output.root={out}",
+    ]  # fmt: skip
+    first, first_s = run(command)
+    assert first.returncode == 0, first.stdout + first.stderr
+    (sweep,) = sweep_dirs(out)
+    facts = summary(sweep)
+    assert facts["jobs_done"] == 4 and facts["jobs_failed"] == 0 and facts["jobs_reused"] == 0
+    assert facts["prefect_flow_runs"] == {"COMPLETED": 4}  # the server's own record
+    assert facts["prefect_server_started"] is True
+    assert "4/4 done | 0 failed" in first.stdout
+
+    client, runs = mlflow_experiment(out)
+    parents = [r for r in runs if r.data.tags["twostep.kind"] == "sweep"]
+    jobs = [r for r in runs if r.data.tags["twostep.kind"] == "job"]
+    assert len(parents) == 1 and len(jobs) == 4
+    assert {r.data.tags["mlflow.parentRunId"] for r in jobs} == {parents[0].info.run_id}
+    for job in jobs:
+        assert job.data.tags["twostep.status"] == "success"
+        assert {"success", "exec_length", "sa_length", "speedup_exec", "planning_time_s",
+                "subgoals_accepted", "planner_time_s"} <= set(job.data.metrics)  # fmt: skip
+        names = {a.path for a in client.list_artifacts(job.info.run_id)}
+        assert {"result.json", "plans", "schedule.txt"} <= names
+
+    second, second_s = run(command)
+    assert second.returncode == 0, second.stdout + second.stderr
+    facts = summary(sweep_dirs(out)[-1])
+    assert facts["jobs_reused"] == 4 and facts["planner_calls_run"] == 0
+    assert facts["prefect_server_started"] is False  # nothing to compute: no server
+    _, again = mlflow_experiment(out)
+    assert len(again) == 5  # no duplicate run
+    print(f"first run {first_s:.1f} s, same command again {second_s:.1f} s "
+          f"({second_s / first_s:.0%})")  # fmt: skip
+    assert second_s < 0.5 * first_s
+
+
+def test_sweep_killed_with_sigkill_resumes_without_duplicates(tmp_path: Path) -> None:
+    data, out = make_data(tmp_path / "data"), tmp_path / "out"
+    command = [
+        "-m", "domain=blocksworld", "task=1,2,3", "method=twostep", "agents=2",
+        f"data.root={data}", f"output.root={out}",
+    ]  # fmt: skip
+    process = subprocess.Popen(
+        [str(TWOSTEP), *command], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+    )
+    try:
+        deadline = time.monotonic() + 400
+        while not list(out.glob("multiruns/*/*/.twostep/jobs/0.json")):
+            assert process.poll() is None and time.monotonic() < deadline
+            time.sleep(0.05)
+        process.send_signal(signal.SIGKILL)  # mid-sweep: job 0 done, job 1 running
+        process.wait()
+    finally:
+        if process.poll() is None:
+            process.kill()
+    (sweep,) = sweep_dirs(out)
+    done_before = len(list((sweep / ".twostep" / "jobs").glob("*.json")))
+    assert 1 <= done_before < 3
+    server = read_info(sweep / ".twostep" / "server.json")
+    assert server is not None and server.pid is not None
+    deadline = time.monotonic() + 30
+    while pid_alive(server.pid) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not pid_alive(server.pid)  # the watchdog stopped the orphaned server
+
+    again, _ = run(command)
+    assert again.returncode == 0, again.stdout + again.stderr
+    facts = summary(sweep_dirs(out)[-1])
+    assert facts["jobs_done"] == 3 and facts["jobs_failed"] == 0
+    assert facts["jobs_reused"] == done_before  # finished jobs were not recomputed
+
+    _, runs = mlflow_experiment(out)
+    parents = [r for r in runs if r.data.tags["twostep.kind"] == "sweep"]
+    jobs = [r for r in runs if r.data.tags["twostep.kind"] == "job"]
+    assert len(parents) == 1  # the killed sweep's parent run was found again
+    assert sorted(r.data.params["task"] for r in jobs) == ["1", "2", "3"]  # one run per job
+    assert all(r.data.tags["twostep.status"] == "success" for r in jobs)
+    assert {r.data.tags["mlflow.parentRunId"] for r in jobs} == {parents[0].info.run_id}
+    assert os.environ.get("PREFECT_API_URL") is None  # nothing leaked into this process
