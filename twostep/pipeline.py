@@ -346,7 +346,9 @@ def run_twostep(
     else:
         if run.fallback is None:
             run.fallback = (
-                "no helper subgoal accepted" if proposals else "no helper subgoal proposed"
+                "no helper subgoal accepted"
+                if any(p.status != "stopped" for p in proposals)
+                else "no helper subgoal proposed"
             )
         for proposal in accepted:  # their plans are not used
             proposal.status, proposal.reason = "unused", run.fallback

@@ -10,7 +10,7 @@ one as its own task; :class:`LLMDecomposer` chains them.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -137,9 +137,20 @@ class LLMDecomposer:
 
     name = "llm"
 
-    def __init__(self, client: LLMClient, *, fixed_example: bool = True) -> None:
+    def __init__(
+        self,
+        client: LLMClient,
+        *,
+        fixed_example: bool = True,
+        generate: Callable[..., tuple[str | None, Exchange]] = generate_subgoal,
+        translate: Callable[..., tuple[str | None, Exchange]] = translate_subgoal,
+    ) -> None:
         self.client = client
         self.fixed_example = fixed_example
+        # The two LLM steps are replaceable so that flows/ can run each as a Prefect task
+        # (retries, caching) without repeating the loop below.
+        self.generate = generate
+        self.translate = translate
 
     def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]:
         return self.decompose(request).proposals
@@ -152,7 +163,7 @@ class LLMDecomposer:
         for helper in range(1, request.agents):
             step = "generate"
             try:
-                english, gen = generate_subgoal(
+                english, gen = self.generate(
                     self.client,
                     task,
                     request.agents,
@@ -180,7 +191,7 @@ class LLMDecomposer:
                     continue
                 english_so_far.append(english)
                 step = "translate"
-                pddl, tr = translate_subgoal(
+                pddl, tr = self.translate(
                     self.client, task, english, seed, helper=helper, earlier=accepted
                 )
             except LLMCallError as exc:
