@@ -506,28 +506,6 @@ class FakeClient:
         return LLMResponse(text, False, False, "test/fake", 0.01)
 
 
-class HookedDecomposer:
-    """The hook flows/tasks.route_llm_calls looks for: generate/translate as attributes."""
-
-    name = "llm"
-
-    def __init__(self, client: FakeClient) -> None:
-        from twostep.decomposers.llm import generate_subgoal, translate_subgoal
-
-        self.client = client
-        self.generate = generate_subgoal
-        self.translate = translate_subgoal
-
-    def propose(self, request: Any) -> list[Any]:
-        from twostep.decomposers.base import SubgoalProposal
-
-        english, gen = self.generate(self.client, request.task, request.agents, 1, [], request.seed)
-        pddl, tr = self.translate(
-            self.client, request.task, english, request.seed, helper=1, earlier={}
-        )
-        return [SubgoalProposal(1, pddl, english, "proposed", None, 0.02, [gen, tr])]
-
-
 @pytest.mark.integration
 def test_llm_calls_are_tasks_retried_and_cached(
     shared: dict[str, Path], tmp_path: Path, prefect_server: str, monkeypatch: pytest.MonkeyPatch
@@ -537,20 +515,19 @@ def test_llm_calls_are_tasks_retried_and_cached(
     import flows.job
     from flows.tasks import route_llm_calls
     from tests.test_llm_decomposer import GEN_B, PDDL_B
-    from twostep.decomposers.llm import LLMDecomposer
+    from twostep.decomposers.llm import LLMDecomposer, generate_subgoal
     from twostep.llm.client import LLMClient, LLMSettings
 
-    # The paper's decomposer does not expose the hook yet: nothing is changed then.
-    assert (
-        route_llm_calls(LLMDecomposer(LLMClient(LLMSettings(mode="replay"))), flows.job.StepStats())
-        is False
-    )
+    # The paper's decomposer exposes its two LLM steps: they get routed through tasks.
+    routed = LLMDecomposer(LLMClient(LLMSettings(mode="replay")))
+    assert route_llm_calls(routed, flows.job.StepStats()) is True
+    assert routed.generate is not generate_subgoal
 
     client = FakeClient([GEN_B, PDDL_B])
 
     @contextmanager
-    def fake_decomposer(cfg: Any) -> Iterator[HookedDecomposer]:
-        yield HookedDecomposer(client)
+    def fake_decomposer(cfg: Any) -> Iterator[LLMDecomposer]:
+        yield LLMDecomposer(client)  # type: ignore[arg-type]  # a client that fails once
 
     monkeypatch.setattr(flows.job, "open_decomposer", fake_decomposer)
     cfg = job_cfg(
