@@ -9,25 +9,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.test_execution import BLOCKSWORLD as DOMAIN
 from twostep.cli.score import EXIT_BAD_INPUT, EXIT_INVALID_PLANS, EXIT_VALID, main
-
-DOMAIN = """
-(define (domain blocksworld)
- (:requirements :strips)
- (:predicates (clear ?x) (ontable ?x) (on ?x ?y) (arm-empty) (holding ?x))
- (:action pickup :parameters (?x)
-  :precondition (and (clear ?x) (ontable ?x) (arm-empty))
-  :effect (and (not (ontable ?x)) (not (clear ?x)) (not (arm-empty)) (holding ?x)))
- (:action putdown :parameters (?x)
-  :precondition (holding ?x)
-  :effect (and (not (holding ?x)) (clear ?x) (arm-empty) (ontable ?x)))
- (:action stack :parameters (?x ?y)
-  :precondition (and (holding ?x) (clear ?y))
-  :effect (and (not (holding ?x)) (not (clear ?y)) (clear ?x) (arm-empty) (on ?x ?y)))
- (:action unstack :parameters (?x ?y)
-  :precondition (and (on ?x ?y) (clear ?x) (arm-empty))
-  :effect (and (holding ?x) (clear ?y) (not (clear ?x)) (not (arm-empty)) (not (on ?x ?y)))))
-"""
 
 PROBLEM = """
 (define (problem three) (:domain blocksworld)
