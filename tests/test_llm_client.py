@@ -22,7 +22,7 @@ from twostep.llm.client import (
     LLMSettings,
 )
 
-FAKE_KEY = "sk-test-DO-NOT-LEAK-0123456789"
+FAKE_KEY = "fake-test-key-DO-NOT-LEAK-0123456789"
 MESSAGES = [{"role": "system", "content": "Be brief."}, {"role": "user", "content": "Goal?"}]
 
 

@@ -209,7 +209,7 @@ def test_replay_with_network_blocked_gives_identical_result(
         "orchestration.prefect=false",
         "planner.time_limit_s=20",
     ]
-    monkeypatch.setenv("OPENAI_API_KEY", "sk-test-not-a-real-key-000000")
+    monkeypatch.setenv("OPENAI_API_KEY", "fake-test-key-not-real-000000")
     monkeypatch.setattr(litellm, "completion", provider)
     live = run_job(compose("config", overrides=overrides)).to_dict()
     assert len(calls) == 3 and [s["status"] for s in live["subgoals"]] == ["accepted", "stopped"]
@@ -218,7 +218,7 @@ def test_replay_with_network_blocked_gives_identical_result(
     monkeypatch.delenv("OPENAI_API_KEY")
     replayed = run_job(compose("config", overrides=[*overrides, "llm.mode=replay"])).to_dict()
     assert strip_timings(replayed) == strip_timings(live)
-    assert "sk-test" not in json.dumps(live) + json.dumps(replayed)
+    assert "fake-test-key" not in json.dumps(live) + json.dumps(replayed)
 
     # a replay of a request that was never recorded fails clearly (other seed)
     with pytest.raises(Exception, match=r"(?i)cache"):
