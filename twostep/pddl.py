@@ -282,7 +282,7 @@ def _repair_undeclared_constants(
     if constants_section is not None:
         new_constants += constants_section[1:]
     for name in sorted(missing):
-        new_constants += [name, "-", declared[name]] if domain_body_typed(domain_body) else [name]
+        new_constants += [name, "-", declared[name]] if _domain_body_typed(domain_body) else [name]
     rebuilt: list[SExp] = []
     inserted = False
     for item in domain_body:
@@ -302,7 +302,7 @@ def _repair_undeclared_constants(
     return _pretty(rebuilt), _pretty(problem_rebuilt)
 
 
-def domain_body_typed(domain_body: list[SExp]) -> bool:
+def _domain_body_typed(domain_body: list[SExp]) -> bool:
     return _section(domain_body, ":types") is not None
 
 

@@ -192,6 +192,21 @@ DIRECT = Steps()
 # ----------------------------------------------------------------- methods
 
 
+def _use_single_agent_plan(run: RunResult, result: PlanResult) -> None:
+    """Make ``result`` (one agent on the whole task) the run's outcome."""
+    run.status = result.status.value
+    if not result.solved or result.plan is None:
+        run.message = result.message
+        return
+    run.success = True
+    run.plans = {"agent0": list(result.plan)}
+    run.agent_order = ["agent0"]
+    run.exec_length = len(result.plan)
+    run.schedule = [[("agent0", a)] for a in result.plan]
+    if run.sa_length is None:
+        run.sa_length = len(result.plan)
+
+
 def run_single_agent(
     task: BenchmarkTask, settings: PlannerSettings, seed: int = 0, steps: Steps = DIRECT
 ) -> RunResult:
@@ -202,15 +217,7 @@ def run_single_agent(
     run = RunResult(task.domain_name, task.task_id, "sa", 1, seed)
     run.planner_calls.append(AgentPlan("agent0", "single", problem.goal.to_pddl(), result))
     run.planning_time_s = result.planner_time_s
-    run.status = result.status.value
-    if result.solved and result.plan is not None:
-        run.success = True
-        run.plans = {"agent0": list(result.plan)}
-        run.agent_order = ["agent0"]
-        run.exec_length = run.sa_length = len(result.plan)
-        run.schedule = [[("agent0", a)] for a in result.plan]
-    else:
-        run.message = result.message
+    _use_single_agent_plan(run, result)
     run.wall_time_s = time.perf_counter() - start
     return run
 
@@ -355,17 +362,7 @@ def run_twostep(
         result = steps.plan(problem, settings)
         planner_time += result.planner_time_s
         run.planner_calls.append(AgentPlan("agent0", "single", problem.goal.to_pddl(), result))
-        run.status = result.status.value
-        if result.solved and result.plan is not None:
-            run.success = True
-            run.plans = {"agent0": list(result.plan)}
-            run.agent_order = ["agent0"]
-            run.exec_length = len(result.plan)
-            run.schedule = [[("agent0", a)] for a in result.plan]
-            if run.sa_length is None:
-                run.sa_length = len(result.plan)
-        else:
-            run.message = result.message
+        _use_single_agent_plan(run, result)
     run.subgoals = [p.to_dict() for p in proposals]
     run.state_editing_time_s = editing_time
     run.planning_time_s = run.llm_time_s + planner_time + editing_time
