@@ -53,7 +53,7 @@ def test_written_pddl_reads_back_identically(quirks_root: Path) -> None:
     [
         (
             "(define (problem p) (:domain blocks)\n(:objects a b)\n(:init (on-table a)\n(:goal (on a b)))",
-            1,
+            3,  # the (:init that is never closed, not the define on line 1
             "never closed",
         ),
         (

@@ -151,6 +151,11 @@ def fact_to_pddl(fact: Fact) -> str:
 # ------------------------------------------------------------- s-expression layer
 
 _TOKEN = re.compile(r"\(|\)|[^\s()]+")
+# Sections that open directly inside (define ...): seeing one deeper means a ')' is missing.
+_SECTIONS = frozenset(
+    {":domain", ":requirements", ":types", ":constants", ":predicates", ":functions",
+     ":action", ":durative-action", ":derived", ":objects", ":init", ":goal", ":metric"}
+)  # fmt: skip
 
 
 def read_sexp(text: str, source: str | None = None, single: bool = False) -> list[SExp]:
@@ -173,6 +178,13 @@ def read_sexp(text: str, source: str | None = None, single: bool = False) -> lis
             if token == "(":
                 stack.append([])
                 opened.append(lineno)
+            elif token.lower() in _SECTIONS and len(stack) > 3 and not stack[-1]:
+                raise PDDLError(
+                    f"'({token.lower()}' on line {lineno} opens inside an expression that is "
+                    "never closed: a ')' is missing",
+                    source,
+                    opened[-2],
+                )
             elif token == ")":
                 if len(stack) == 1:
                     raise PDDLError("unexpected ')' with no matching '('", source, lineno)
