@@ -2,7 +2,7 @@
 
 For every domain, task and N = 1..4: SA (N = 1), MA (compiled N-agent PDDL) and TwoStep
 with the goal-split decomposer. Every joint schedule is re-validated by simulation
-against the original task (``check_schedule``). Prints, per domain and N, the mean
+against the original task (``check_run``). Prints, per domain and N, the mean
 execution length and planning time of each method, the ratio execution length / SA
 length, and the ratio TwoStep planning time / MA planning time; raw rows go to a JSON
 file.
@@ -27,10 +27,8 @@ import yaml
 
 from twostep.benchmark import DEFAULT_DATA_ROOT, list_domains, list_tasks, load_task
 from twostep.decomposers.goal_split import GoalSplitDecomposer
-from twostep.execution import check_schedule
-from twostep.pipeline import RunResult, run_multi_agent, run_single_agent, run_twostep
+from twostep.pipeline import RunResult, check_run, run_multi_agent, run_single_agent, run_twostep
 from twostep.planner import PlannerSettings
-from twostep.strips import Grounder
 
 CONF = Path(__file__).resolve().parent.parent / "conf" / "domain"
 
@@ -42,12 +40,7 @@ def agent_predicates(domain: str) -> list[str]:
 def verify(task: Any, result: RunResult, preds: list[str]) -> bool:
     if not result.success:
         return False
-    grounder = Grounder(task.problem)
-    order = result.agent_order
-    index = {a: i for i, a in enumerate(order)}
-    plans = [grounder.ground_plan(result.plans[a]) for a in order]
-    steps = [tuple((index[a], act) for a, act in step) for step in result.schedule]
-    check_schedule(steps, plans, task.problem.init, task.problem.goal, preds)
+    check_run(task.problem, result, preds)
     return True
 
 

@@ -22,11 +22,9 @@ from flows.config import register
 from flows.job import run_job
 from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.llm import LLMDecomposer
-from twostep.execution import check_schedule
 from twostep.llm import LLMClient, LLMSettings
-from twostep.pipeline import RunResult, run_twostep
+from twostep.pipeline import RunResult, check_run, run_twostep
 from twostep.planner import PlannerSettings
-from twostep.strips import Grounder
 
 REPO = Path(__file__).resolve().parent.parent
 BW = ["arm-empty", "holding"]
@@ -55,11 +53,7 @@ def scripted(*answers: str) -> LLMDecomposer:
 
 
 def assert_valid_schedule(task: BenchmarkTask, result: RunResult) -> None:
-    grounder = Grounder(task.problem)
-    index = {a: i for i, a in enumerate(result.agent_order)}
-    plans = [grounder.ground_plan(result.plans[a]) for a in result.agent_order]
-    steps = [tuple((index[a], act) for a, act in step) for step in result.schedule]
-    check_schedule(steps, plans, task.problem.init, task.problem.goal, BW)
+    check_run(task.problem, result, BW)
     assert result.success and result.exec_length == len(result.schedule)
 
 

@@ -9,10 +9,8 @@ from tests.test_benchmark import make_root
 from twostep.benchmark import load_task
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import GoalSplitDecomposer
-from twostep.execution import check_schedule
-from twostep.pipeline import run_multi_agent, run_single_agent, run_twostep
+from twostep.pipeline import check_run, run_multi_agent, run_single_agent, run_twostep
 from twostep.planner import PlannerSettings
-from twostep.strips import Grounder
 from twostep.validation import validate_plan
 
 BW = ["arm-empty", "holding"]
@@ -44,13 +42,8 @@ def _task(tmp_path: Path, problem: str = TWO_TOWERS):
 
 def _check(task, result) -> None:
     """The schedule re-validates and every agent's plan is valid in single-agent terms."""
-    order = result.agent_order
-    assert sorted(order) == sorted(result.plans)
-    grounder = Grounder(task.problem)
-    plans = [grounder.ground_plan(result.plans[a]) for a in order]
-    index = {a: i for i, a in enumerate(order)}
-    steps = [tuple((index[a], act) for a, act in step) for step in result.schedule]
-    check_schedule(steps, plans, task.problem.init, task.problem.goal, BW)
+    assert sorted(result.agent_order) == sorted(result.plans)
+    check_run(task.problem, result, BW)
     assert result.exec_length == len(result.schedule)
 
 

@@ -18,8 +18,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from twostep.benchmark import BenchmarkTask
-from twostep.decomposers.base import Decomposer, DecompositionRequest, SubgoalProposal
-from twostep.execution import ParallelExecution, ScheduleError, parallel_length
+from twostep.decomposers.base import (
+    Decomposer,
+    DecompositionRequest,
+    SubgoalProposal,
+    goal_conflict,
+)
+from twostep.execution import ParallelExecution, ScheduleError, check_schedule, parallel_length
 from twostep.multiagent import compile_multi_agent_problem, split_plan
 from twostep.pddl import Fact, Goal, PDDLError, Problem, parse_goal
 from twostep.planner import PlannerSettings, PlanResult, Status, plan
@@ -113,6 +118,19 @@ def score(
     return parallel_length(grounded, problem.init, problem.goal, agent_predicates, mode)
 
 
+def check_run(problem: Problem, run: RunResult, agent_predicates: Collection[str]) -> None:
+    """Re-validate a run's joint schedule against the original ``problem`` by simulation.
+
+    Raises :class:`~twostep.execution.ScheduleError` (or :class:`PlanError` for a plan
+    step the task does not know) when the schedule does not reach the goal.
+    """
+    grounder = Grounder(problem)
+    index = {agent: i for i, agent in enumerate(run.agent_order)}
+    plans = [grounder.ground_plan(run.plans[agent]) for agent in run.agent_order]
+    steps = [tuple((index[agent], action) for agent, action in step) for step in run.schedule]
+    check_schedule(steps, plans, problem.init, problem.goal, agent_predicates)
+
+
 def _named_schedule(
     execution: ParallelExecution, names: Sequence[str]
 ) -> list[list[tuple[str, str]]]:
@@ -145,15 +163,9 @@ def check_subgoal(
     if goal.holds(start):
         proposal.status, proposal.reason = "discarded", "already true in the helper's initial state"
         return None
-    if goal.positive == problem.goal.positive and goal.negative == problem.goal.negative:
-        proposal.status, proposal.reason = "discarded", "equals the full goal"
-        return None
-    conflict = sorted(
-        (goal.positive & problem.goal.negative) | (goal.negative & problem.goal.positive)
-    )
-    if conflict:
-        shown = " ".join("(" + " ".join(f) + ")" for f in conflict[:3])
-        proposal.status, proposal.reason = "discarded", f"contradicts the goal on {shown}"
+    conflict = goal_conflict(goal, problem.goal)
+    if conflict is not None:
+        proposal.status, proposal.reason = "discarded", conflict
         return None
     return goal
 

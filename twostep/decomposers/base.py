@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from twostep.benchmark import BenchmarkTask
+from twostep.pddl import Goal, fact_to_pddl
 
 
 @dataclass
@@ -56,3 +57,18 @@ class Decomposer(Protocol):
     name: str
 
     def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]: ...
+
+
+def goal_conflict(goal: Goal, full_goal: Goal) -> str | None:
+    """Why ``goal`` cannot be a helper subgoal of ``full_goal`` whatever the state, or None.
+
+    It equals the full goal (nothing left to share), or it asks for the opposite of a
+    goal literal (the main agent would have to undo the helper's work).
+    """
+    if goal.positive == full_goal.positive and goal.negative == full_goal.negative:
+        return "equals the full goal"
+    for fact in sorted(goal.negative & full_goal.positive):
+        return f"contradicts the main goal: (not {fact_to_pddl(fact)}) undoes a goal fact"
+    for fact in sorted(goal.positive & full_goal.negative):
+        return f"contradicts the main goal: {fact_to_pddl(fact)} is negated in the goal"
+    return None

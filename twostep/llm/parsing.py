@@ -18,7 +18,8 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from twostep.pddl import Goal, PDDLError, Problem, fact_to_pddl, parse_goal
+from twostep.decomposers.base import goal_conflict
+from twostep.pddl import Goal, PDDLError, Problem, parse_goal
 
 
 class SubgoalError(ValueError):
@@ -184,14 +185,13 @@ def check_subgoal(
     goal: Goal, full_goal: Goal, earlier: Mapping[int, Goal] | None = None
 ) -> str | None:
     """Why ``goal`` is no use as a helper subgoal of ``full_goal``, or None if it may be."""
-    if goal.positive == full_goal.positive and goal.negative == full_goal.negative:
-        return "equals the full goal"
+    conflict = goal_conflict(goal, full_goal)
+    if conflict is not None:
+        return conflict
+    # (a goal that includes the full goal cannot also contradict it: parse_goal rejects
+    # a literal together with its negation, so the order of these checks is immaterial)
     if full_goal.positive <= goal.positive and full_goal.negative <= goal.negative:
         return "includes the full goal: nothing would be left for the main agent"
-    for fact in sorted(goal.negative & full_goal.positive):
-        return f"contradicts the main goal: (not {fact_to_pddl(fact)}) undoes a goal fact"
-    for fact in sorted(goal.positive & full_goal.negative):
-        return f"contradicts the main goal: {fact_to_pddl(fact)} is negated in the goal"
     for helper, other in sorted((earlier or {}).items()):
         if goal.positive == other.positive and goal.negative == other.negative:
             return f"repeats the subgoal of agent{helper}"
