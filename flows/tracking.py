@@ -24,6 +24,8 @@ from pathlib import Path
 from typing import Any, TypeVar
 from urllib.parse import urlparse
 
+from twostep.params import flatten_config
+
 KIND = "twostep.kind"
 JOB_KEY = "twostep.job_key"
 SWEEP_KEY = "twostep.sweep_key"
@@ -291,17 +293,6 @@ def _clip(text: str, limit: int) -> str:
 # ----------------------------------------------------------------- params / metrics
 
 
-def flatten(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
-    flat: dict[str, Any] = {}
-    for key, value in data.items():
-        name = f"{prefix}{key}"
-        if isinstance(value, Mapping):
-            flat.update(flatten(value, f"{name}."))
-        else:
-            flat[name] = value
-    return flat
-
-
 def job_params(config: Mapping[str, Any]) -> dict[str, str]:
     """The flattened resolved config as params; secret-looking keys are left out.
 
@@ -309,10 +300,9 @@ def job_params(config: Mapping[str, Any]) -> dict[str, str]:
     never hold its value, so they are kept.
     """
     params: dict[str, str] = {}
-    for key, value in flatten(config).items():
+    for key, text in flatten_config(config).items():
         if key.startswith("hydra.") or (_SECRET.search(key) and not key.endswith("_env")):
             continue
-        text = "None" if value is None else str(value)
         params[key] = _clip(text, _PARAM_LIMIT)
     return params
 

@@ -26,6 +26,7 @@ os.environ.setdefault("MLFLOW_DISABLE_TELEMETRY", "true")
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 
 from flows.report_cli import load_runs_from_mlflow, main
+from twostep.params import flatten_config
 from twostep.report import (
     ReportInputError,
     build_report,
@@ -112,16 +113,6 @@ def make_jobs() -> list[Job]:
 JOBS = make_jobs()
 
 
-def flatten(config: dict[str, Any], prefix: str = "") -> dict[str, str]:
-    flat: dict[str, str] = {}
-    for key, value in config.items():
-        if isinstance(value, dict):
-            flat.update(flatten(value, f"{prefix}{key}."))
-        else:
-            flat[f"{prefix}{key}"] = str(value)
-    return flat
-
-
 def log_jobs(tracking_uri: str, artifacts: Path, experiment: str, jobs: list[Job]) -> None:
     from mlflow.entities import Metric, Param
     from mlflow.tracking import MlflowClient
@@ -139,7 +130,7 @@ def log_jobs(tracking_uri: str, artifacts: Path, experiment: str, jobs: list[Job
         if job.status != "success":
             tags["twostep.error"] = "planner crashed: exit code 35"
         run = client.create_run(experiment_id, tags=tags)
-        params = [Param(k, v) for k, v in flatten(job.config()).items()]
+        params = [Param(k, v) for k, v in flatten_config(job.config()).items()]
         metrics = {"success": 1.0 if job.status == "success" else 0.0}
         metrics["planning_time_s"] = job.planning_time
         if job.exec_length is not None:

@@ -40,6 +40,8 @@ from typing import Any
 import pandas as pd
 import yaml
 
+from twostep.params import flatten_config
+
 
 class ReportInputError(Exception):
     """Input a report cannot be built from; the message is one line for the terminal."""
@@ -220,18 +222,6 @@ def normalise_runs(frame: pd.DataFrame) -> pd.DataFrame:
     for column in ("domain", "method"):
         out[column] = out[column].astype("object")
     return out
-
-
-def flatten_config(config: Mapping[str, Any], prefix: str = "") -> dict[str, str]:
-    """A nested config as ``{"a.b.c": "value"}`` with every leaf as a string."""
-    flat: dict[str, str] = {}
-    for key, value in config.items():
-        name = f"{prefix}{key}"
-        if isinstance(value, Mapping):
-            flat.update(flatten_config(value, f"{name}."))
-        else:
-            flat[name] = "None" if value is None else str(value)
-    return flat
 
 
 def params_to_columns(params: Mapping[str, str]) -> dict[str, Any]:
