@@ -30,7 +30,12 @@ class Atom:
 
 @dataclass(frozen=True)
 class ActionSchema:
-    """A STRIPS action schema with negative preconditions and (in)equality constraints."""
+    """A STRIPS action schema with negative preconditions and (in)equality constraints.
+
+    ``cost`` is the action's constant cost in a domain with ``:action-costs`` (actions that
+    do not increase ``total-cost`` cost 0 there) and None in a domain without costs, where
+    every action costs 1.
+    """
 
     name: str
     parameters: tuple[tuple[str, str], ...]  # (?variable, type)
@@ -40,6 +45,8 @@ class ActionSchema:
     delete: tuple[Atom, ...] = ()
     equal: tuple[tuple[str, str], ...] = ()
     not_equal: tuple[tuple[str, str], ...] = ()
+    cost: int | None = None
+    """``(increase (total-cost) N)``: N in a domain with ``:action-costs``, else None."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,6 +64,11 @@ class Domain:
     @property
     def typed(self) -> bool:
         return any(t != "object" for t in self.types)
+
+    @property
+    def has_action_costs(self) -> bool:
+        """True when actions have costs (``:action-costs``): a plan's cost is their sum."""
+        return any(a.cost is not None for a in self.actions.values())
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,13 @@ from twostep.pddl.errors import PDDLError
 from twostep.pddl.model import Domain, Fact, Goal, Problem
 from twostep.pddl.repairs import repair_undeclared_constants
 from twostep.pddl.sexp import define_body, read_sexp, section, typed_names, write_sexp
-from twostep.pddl.unified import fact_from_up, literals, parse_with_up, schema_from_up
+from twostep.pddl.unified import (
+    action_costs,
+    fact_from_up,
+    literals,
+    parse_with_up,
+    schema_from_up,
+)
 
 
 def parse_problem(
@@ -47,7 +53,8 @@ def parse_problem(
     constants = {n: t for n, t in all_objects.items() if n in constant_names}
     objects = {n: t for n, t in all_objects.items() if n not in constant_names}
     predicates = {f.name: tuple(p.type.name for p in f.signature) for f in up_problem.fluents}
-    actions = {a.name: schema_from_up(a) for a in up_problem.actions}
+    costs = action_costs(up_problem) or {}
+    actions = {a.name: schema_from_up(a, costs.get(a.name)) for a in up_problem.actions}
     domain = Domain(domain_name, requirements, types, constants, predicates, actions, domain_source)
     init = frozenset(
         fact_from_up(k) for k, v in up_problem.explicit_initial_values.items() if v.is_true()

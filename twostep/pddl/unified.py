@@ -88,7 +88,36 @@ def literals(node: Any, where: str) -> Iterator[tuple[bool, str, tuple[str, ...]
         raise PDDLError(f"{where}: unsupported PDDL construct {node} (only STRIPS literals)")
 
 
-def schema_from_up(action: Any) -> ActionSchema:
+def action_costs(up_problem: Any) -> dict[str, int] | None:
+    """Each action's constant cost when the problem minimises action costs, else None.
+
+    unified-planning reads ``(increase (total-cost) N)`` effects into its
+    ``MinimizeActionCosts`` metric (not into the actions' effects); an action without
+    one costs the metric's default (0 in PDDL).
+    """
+    for metric in up_problem.quality_metrics:
+        if not metric.is_minimize_action_costs():
+            continue
+        default = metric.default
+        costs: dict[str, int] = {}
+        for action in up_problem.actions:
+            value = metric.costs.get(action, default)
+            if value is None:
+                costs[action.name] = 0
+            elif isinstance(value, int):
+                costs[action.name] = value
+            elif value.is_int_constant():
+                costs[action.name] = int(value.constant_value())
+            else:
+                raise PDDLError(
+                    f"action {action.name}: only constant integer action costs are "
+                    f"supported, not {value}"
+                )
+        return costs
+    return None
+
+
+def schema_from_up(action: Any, cost: int | None = None) -> ActionSchema:
     where = f"action {action.name}"
     params = tuple(("?" + p.name, p.type.name) for p in action.parameters)
     pre_pos: list[Atom] = []
@@ -117,6 +146,7 @@ def schema_from_up(action: Any) -> ActionSchema:
         tuple(delete),
         tuple(equal),
         tuple(not_equal),
+        cost,
     )
 
 
