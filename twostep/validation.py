@@ -13,7 +13,6 @@ from dataclasses import dataclass
 from typing import Any
 
 from twostep.pddl import Problem, domain_to_pddl, problem_to_pddl
-from twostep.pddl.unified import up_environment
 from twostep.strips import parse_action
 
 
@@ -26,6 +25,8 @@ class Validation:
 def to_up_problem(problem: Problem) -> Any:
     """The unified-planning problem for ``problem`` (read back from our PDDL text)."""
     from unified_planning.io import PDDLReader
+
+    from twostep.pddl.environment import up_environment
 
     up_environment()
     extra = (":negative-preconditions",) if problem.goal.negative else ()

@@ -1,6 +1,7 @@
 """Conversion from unified-planning: its PDDLReader's problem into the model.
 
 unified-planning is imported inside the functions: importing this module stays cheap.
+The environment it reads in is :func:`twostep.pddl.environment.up_environment`.
 """
 
 from __future__ import annotations
@@ -13,17 +14,6 @@ from typing import Any
 from twostep.pddl.errors import PDDLError
 from twostep.pddl.model import ActionSchema, Atom, Fact
 
-
-def up_environment() -> Any:
-    from unified_planning.shortcuts import get_environment
-
-    env = get_environment()
-    # LLM+P tyreworld names actions like predicates (open, close): allow it.
-    env.error_used_name = False
-    env.credits_stream = None
-    return env
-
-
 _LINE_IN_MESSAGE = re.compile(r"line:? (\d+)", re.IGNORECASE)
 
 
@@ -32,15 +22,18 @@ def parse_with_up(
 ) -> Any:
     from unified_planning.io import PDDLReader
 
+    from twostep.pddl.environment import up_environment
+
     up_environment()
+    reader = PDDLReader()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
         try:
-            return PDDLReader().parse_problem_string(domain_text, problem_text)
+            return reader.parse_problem_string(domain_text, problem_text)
         except Exception as exc:
             problem_error = exc
         try:  # which file is wrong? the domain alone tells (only on failure: parsing is slow)
-            PDDLReader().parse_problem_string(domain_text)
+            reader.parse_problem_string(domain_text)
         except Exception as exc:
             raise _as_pddl_error(exc, domain_source) from None
         raise _as_pddl_error(problem_error, problem_source) from None
