@@ -38,8 +38,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from twostep import execution
-from twostep.execution import parallel_length
+from twostep.execution import ParallelExecution, parallel_length
+from twostep.execution.parallel import _parallel_length
 from twostep.pddl import parse_problem
 from twostep.strips import Grounder
 
@@ -272,12 +272,12 @@ def measure_ours(case: Case, length: int, mode: str, repeats: int) -> Row:
     grounder = Grounder(problem)
     plans = [grounder.ground_plan(plan) for plan in instance.plans]
 
-    def run() -> execution.ParallelExecution:
+    def run() -> ParallelExecution:
         return parallel_length(plans, problem.init, problem.goal, AGENT_PREDICATES, mode)
 
-    def run_plain() -> execution.ParallelExecution:
+    def run_plain() -> ParallelExecution:
         # Bench only: the private entry point switches the bound and the pruning off.
-        return execution._parallel_length(
+        return _parallel_length(
             plans, problem.init, problem.goal, AGENT_PREDICATES, mode, plain=True
         )
 

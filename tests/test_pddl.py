@@ -109,3 +109,46 @@ def test_goal_holds_and_unmet() -> None:
     )
     assert p.goal.holds(p.init)
     assert p.goal.unmet(frozenset({("holding", "a")})) == ["(on a b)", "(not (holding a))"]
+
+
+def test_action_costs_are_read_and_written_back() -> None:
+    from tests.test_planner import ROAD_COSTS, ROADS_DOMAIN, ROADS_PROBLEM
+
+    problem = parse_problem(ROADS_DOMAIN, ROADS_PROBLEM)
+    assert {a.name: a.cost for a in problem.domain.actions.values()} == ROAD_COSTS
+    domain_text, problem_text = domain_to_pddl(problem.domain), problem_to_pddl(problem)
+    assert "(increase (total-cost) 12)" in domain_text
+    assert "(:metric minimize (total-cost))" in problem_text
+    again = parse_problem(domain_text, problem_text)
+    assert {a.name: a.cost for a in again.domain.actions.values()} == ROAD_COSTS
+    assert again.init == problem.init and again.goal == problem.goal
+    # A domain without costs says nothing about them.
+    blocks = parse_problem(
+        BLOCKS_DOMAIN, blocks_problem("(on-table a) (clear a) (arm-empty)", "(holding a)")
+    )
+    assert not blocks.domain.has_action_costs
+    assert "total-cost" not in domain_to_pddl(blocks.domain) + problem_to_pddl(blocks)
+
+
+def test_reading_pddl_does_not_build_unified_planning_engines(tmp_path: Path) -> None:
+    # The engine factory's imports (ConfigSpace, scipy) cost seconds per process; reading
+    # needs none of it (twostep-score only reads).
+    import subprocess
+    import sys
+
+    from tests.conftest import REPO
+
+    (tmp_path / "domain.pddl").write_text(BLOCKS_DOMAIN)
+    (tmp_path / "problem.pddl").write_text(
+        blocks_problem("(on-table a) (clear a) (arm-empty)", "(holding a)")
+    )
+    code = (
+        "import sys; from twostep.pddl import load_problem; "
+        f"p = load_problem({str(tmp_path / 'domain.pddl')!r}, {str(tmp_path / 'problem.pddl')!r}); "
+        "print(len(p.domain.actions), sorted(m for m in sys.modules "
+        "if m.startswith(('unified_planning.engines', 'ConfigSpace'))))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, check=True
+    ).stdout
+    assert out.split() == ["4", "[]"]

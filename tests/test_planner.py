@@ -2,12 +2,25 @@
 
 from __future__ import annotations
 
+import json
+import textwrap
 from pathlib import Path
+
+import pytest
 
 from tests.conftest import BLOCKS_DOMAIN, blocks_problem
 from twostep.benchmark import load_task
 from twostep.pddl import parse_problem
-from twostep.planner import PlannerSettings, Status, plan
+from twostep.planner import (
+    PlannerSettings,
+    PlanResult,
+    Status,
+    plan,
+    plan_pddl,
+    read_plan_file,
+    returncodes,
+)
+from twostep.planner import driver as planner_driver
 from twostep.strips import Grounder, simulate
 from twostep.validation import validate_plan
 
@@ -72,3 +85,130 @@ def test_quirky_real_world_files_plan_and_validate(quirks_root: Path) -> None:
     assert result.status is Status.SOLVED and result.plan is not None
     assert any(step.startswith("(open ") for step in result.plan)
     assert validate_plan(task.problem, result.plan).valid
+
+
+# ------------------------------------------------ exit codes and plan files (fake driver)
+
+
+def _fake_driver(tmp_path: Path, exit_code: int, files: dict[str, str]) -> Path:
+    """A stand-in for fast-downward.py: writes ``files`` into its cwd and exits."""
+    script = tmp_path / "fake-fast-downward.py"
+    script.write_text(
+        textwrap.dedent(
+            f"""
+            import json, pathlib, sys
+            for name, text in json.loads({json.dumps(json.dumps(files))}).items():
+                pathlib.Path(name).write_text(text)
+            print("Planner time: 0.25s")
+            sys.exit({exit_code})
+            """
+        )
+    )
+    return script
+
+
+def _run_fake(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, code: int, files: dict[str, str]
+) -> PlanResult:
+    script = _fake_driver(tmp_path, code, files)
+    monkeypatch.setattr(planner_driver, "driver_path", lambda: script)
+    problem = parse_problem(BLOCKS_DOMAIN, TOWER)
+    return plan(problem, PlannerSettings("lama", 5))
+
+
+COMPLETE = "(unstack c b)\n(putdown c)\n; cost = 2 (unit cost)\n"
+TRUNCATED = "(unstack c b)\n(putdo"
+
+
+def test_exhausted_incomplete_search_is_not_reported_unsolvable(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    incomplete = _run_fake(tmp_path, monkeypatch, returncodes.SEARCH_UNSOLVED_INCOMPLETE, {})
+    unsolvable = _run_fake(tmp_path, monkeypatch, returncodes.SEARCH_UNSOLVABLE, {})
+    assert incomplete.status is Status.INCOMPLETE and incomplete.status.value == "incomplete"
+    assert incomplete.exit_code == 12 and incomplete.plan is None
+    assert unsolvable.status is Status.UNSOLVABLE and unsolvable.exit_code == 11
+    assert incomplete.message != unsolvable.message
+
+
+def test_truncated_plan_file_is_not_trusted(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The search was stopped mid-write: a time-out with a cut-off plan is no plan.
+    timed_out = _run_fake(
+        tmp_path, monkeypatch, returncodes.SEARCH_OUT_OF_TIME, {"plan.1": TRUNCATED}
+    )
+    assert timed_out.status is Status.TIMEOUT and timed_out.plan is None
+    assert timed_out.plans_found == 0 and "incomplete plan file" in timed_out.message
+    # Exit 0 without a complete plan file is a planner error, not a solution.
+    success = _run_fake(tmp_path, monkeypatch, returncodes.SUCCESS, {"plan": TRUNCATED})
+    assert success.status is Status.ERROR and success.plan is None
+
+
+def test_anytime_run_keeps_the_last_complete_plan(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    longer = "(unstack c b)\n(stack c d)\n(unstack c d)\n(putdown c)\n; cost = 4 (unit cost)\n"
+    files = {"plan.1": longer, "plan.2": COMPLETE, "plan.3": TRUNCATED}
+    result = _run_fake(tmp_path, monkeypatch, returncodes.SEARCH_OUT_OF_TIME, files)
+    assert result.status is Status.SOLVED
+    assert result.plan == ("(unstack c b)", "(putdown c)") and result.cost == 2
+    assert result.plans_found == 2 and result.planner_time_s == 0.25
+
+
+def test_read_plan_file_needs_the_cost_trailer_with_its_newline(tmp_path: Path) -> None:
+    path = tmp_path / "plan"
+    path.write_text("(fly a d)\n; cost = 12 (general cost)\n")
+    complete = read_plan_file(path)
+    assert complete is not None
+    assert (complete.actions, complete.cost, complete.general_cost) == (("(fly a d)",), 12, True)
+    for cut in (
+        "(fly a d)\n",
+        "(fly a d)\n; cost = 12 (general",
+        "(fly a d)\n; cost = 12 (general cost)",
+        "",
+    ):
+        path.write_text(cut)
+        assert read_plan_file(path) is None, cut
+
+
+# ------------------------------------------------------------------ action costs
+
+ROADS_DOMAIN = """
+(define (domain roads)
+ (:requirements :strips :typing :action-costs)
+ (:types place)
+ (:predicates (at ?p - place) (road ?a ?b - place))
+ (:functions (total-cost) - number)
+ (:action drive :parameters (?a ?b - place)
+  :precondition (and (at ?a) (road ?a ?b))
+  :effect (and (not (at ?a)) (at ?b) (increase (total-cost) 5)))
+ (:action fly :parameters (?a ?b - place)
+  :precondition (at ?a)
+  :effect (and (not (at ?a)) (at ?b) (increase (total-cost) 12))))
+"""
+ROADS_PROBLEM = """
+(define (problem trip) (:domain roads) (:objects a b c d - place)
+ (:init (at a) (road a b) (road b c) (road c d) (= (total-cost) 0))
+ (:goal (at d)) (:metric minimize (total-cost)))
+"""
+ROAD_COSTS = {"drive": 5, "fly": 12}
+
+
+def test_domain_with_action_costs_gives_the_plan_cost() -> None:
+    problem = parse_problem(ROADS_DOMAIN, ROADS_PROBLEM)
+    # By hand: fly a->d costs 12; driving a->b->c->d costs 3 * 5 = 15; any mix costs more.
+    optimal = plan(problem, PlannerSettings("seq-opt-lmcut", 10))
+    assert optimal.status is Status.SOLVED
+    assert optimal.plan == ("(fly a d)",) and optimal.cost == 12
+    first = plan(problem, PlannerSettings("lama-first", 10))
+    assert first.status is Status.SOLVED and first.plan is not None
+    assert first.cost == sum(ROAD_COSTS[step[1:].split()[0]] for step in first.plan)
+    assert validate_plan(problem, first.plan).valid
+
+
+def test_unit_cost_domain_cost_is_the_plan_length_from_the_trailer() -> None:
+    problem = parse_problem(BLOCKS_DOMAIN, TOWER)
+    result = plan_pddl(*planner_driver.planner_input(problem), PlannerSettings("lama-first", 10))
+    assert result.status is Status.SOLVED and result.plan is not None
+    assert result.cost == len(result.plan) > 0

@@ -5,11 +5,12 @@ One module per step of the paper's pipeline:
 
 - :mod:`twostep.pddl`         read domains and problems (unified-planning), the model, writing
 - :mod:`twostep.strips`       grounded actions and states; plan simulation
-- :mod:`twostep.planner`      Fast Downward (the up-fast-downward wheel's driver)
+- :mod:`twostep.planner`      Fast Downward (the up-fast-downward wheel's driver): named exit
+                              codes, checked plan files, costs, statuses
 - :mod:`twostep.validation`   independent plan validation (unified-planning)
 - :mod:`twostep.multiagent`   the MA-PDDL baseline compilation
 - :mod:`twostep.progression`  hand-off of the environment state between agents
-- :mod:`twostep.execution`    parallel execution length and joint schedule
+- :mod:`twostep.execution`    parallel execution length (A*) and joint schedule check
 - :mod:`twostep.decomposers`  where helper subgoals come from (goal-split, expert, llm)
 - :mod:`twostep.llm`          LLM access (litellm), prompts and answer parsing
 - :mod:`twostep.pipeline`     SA, MA and TwoStep end to end

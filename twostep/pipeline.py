@@ -57,6 +57,7 @@ class RunResult:
     success: bool = False
     exec_length: int | None = None
     sa_length: int | None = None
+    sa_cost: int | None = None  # the SA plan's cost (its length unless the domain has costs)
     planning_time_s: float = 0.0
     llm_time_s: float = 0.0
     plans: dict[str, list[str]] = field(default_factory=dict)
@@ -84,6 +85,7 @@ class RunResult:
             "success": self.success,
             "exec_length": self.exec_length,
             "sa_length": self.sa_length,
+            "sa_cost": self.sa_cost,
             "planning_time_s": round(self.planning_time_s, 4),
             "llm_time_s": round(self.llm_time_s, 4),
             "plans": self.plans,
@@ -217,6 +219,7 @@ def _use_single_agent_plan(run: RunResult, result: PlanResult) -> None:
     run.schedule = [[("agent0", a)] for a in result.plan]
     if run.sa_length is None:
         run.sa_length = len(result.plan)
+        run.sa_cost = result.cost
 
 
 def run_single_agent(

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from twostep.pddl import Problem, _up_environment, domain_to_pddl, problem_to_pddl
+from twostep.pddl import Problem, domain_to_pddl, problem_to_pddl
 from twostep.strips import parse_action
 
 
@@ -26,7 +26,9 @@ def to_up_problem(problem: Problem) -> Any:
     """The unified-planning problem for ``problem`` (read back from our PDDL text)."""
     from unified_planning.io import PDDLReader
 
-    _up_environment()
+    from twostep.pddl.environment import up_environment
+
+    up_environment()
     extra = (":negative-preconditions",) if problem.goal.negative else ()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)

@@ -1,0 +1,73 @@
+"""Parallel execution length: how many time steps N sequential agent plans take together.
+
+This is the paper's execution-length metric (its Algorithm 1), made exact for every N.
+
+Model
+    ``plans[i]`` is agent i's sequential plan. Plans come in hand-off order: each was planned
+    from the environment state the previous ones left, so running them one after the other
+    is a valid schedule when the plans are right, and where that run breaks is the
+    diagnosis when no schedule exists (plans that only work interleaved, such as a
+    multi-agent plan split per agent, are scored all the same). Facts whose predicate is
+    agent-specific (``arm-empty``, ``holding`` in blocksworld) are private: every agent has
+    its own copy, initialised to the agent-specific facts of the initial state, and only its
+    own actions read or write it.
+    All other facts form one shared environment. Because an agent's copy changes only
+    through its own actions, its content after k actions is fixed in advance; the search
+    state is therefore (plan indices, environment state).
+
+Interference (Graphplan, extended to negative preconditions)
+    Several agents may take their next actions in the same time step when every action's
+    preconditions hold in the current state and no action deletes a positive precondition
+    of another, adds a negative precondition of another, or adds what another deletes. Only
+    environment facts can interfere: agent copies are private. A step applies all deletes
+    and then all adds; with no interference this equals applying the actions in any order.
+    After the last step every goal literal must hold: environment literals on the shared
+    state, agent-specific literals in every agent's copy.
+
+Search
+    Both modes run A* over (plan indices, environment state) with unit step cost. The bound
+    h is the larger of the longest remaining plan and, for every pair of agents whose plans
+    interact, the exact makespan of those two plans with the other agents abstracted away
+    (:class:`~twostep.execution.bounds.PairProjection`, solved once up front, then a dict lookup per node). Both
+    parts are admissible and consistent, so the first goal node popped is optimal and a
+    closed set is safe; a pair that cannot reach its goal marks a dead end, which also
+    refutes impossible cases quickly. The pair bound is what sees a main agent waiting for
+    a helper's effect, the usual shape of hand-off plans. Ties on f go to the node with
+    more progress (larger g, then fewer actions left), so cases without contention go
+    straight down.
+
+    * ``paper`` -- the successors of the paper's recursion: one agent alone, or all agents
+      that still have actions together. Its memoised recursion computes the shortest path in
+      exactly this graph, which A* finds without visiting every index tuple.
+    * ``exact`` -- any non-empty set of applicable, pairwise non-interfering agents. One
+      dominance rule keeps it fast; see :func:`~twostep.execution.search.free_agents` for
+      why it is safe.
+
+Facts are numbered and states are Python ints used as bit sets, so a joint step is a few
+integer operations. :func:`check_schedule` re-validates a schedule with plain frozensets,
+independently of the search, and :func:`parallel_length` runs it on every result.
+
+One job per module:
+
+- :mod:`twostep.execution.model`      :class:`ParallelExecution`, :class:`ScheduleError`, modes
+- :mod:`twostep.execution.diagnosis`  why no schedule exists (agent copies, hand-off run)
+- :mod:`twostep.execution.compiled`   plans as bit sets over numbered facts
+- :mod:`twostep.execution.bounds`     the A* lower bound (remaining plans, pair projections)
+- :mod:`twostep.execution.search`     A* with the successor sets of each mode
+- :mod:`twostep.execution.check`      :func:`check_schedule`, the independent re-validation
+- :mod:`twostep.execution.parallel`   :func:`parallel_length`, which ties them together
+"""
+
+from twostep.execution.check import check_schedule
+from twostep.execution.model import MODES, ParallelExecution, Schedule, ScheduleError, split_state
+from twostep.execution.parallel import parallel_length
+
+__all__ = [
+    "MODES",
+    "ParallelExecution",
+    "Schedule",
+    "ScheduleError",
+    "check_schedule",
+    "parallel_length",
+    "split_state",
+]

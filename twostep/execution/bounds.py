@@ -1,0 +1,140 @@
+"""Lower bounds for the A* search: the longest remaining plan and exact pair projections."""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+
+from twostep.execution.compiled import CompiledStep, CompiledTask
+
+
+class PairProjection:
+    """Exact makespans of two agents' plans with every other agent abstracted away.
+
+    The projection keeps agents i and j, their plans and the facts no other agent writes
+    ("tracked"); preconditions on the other facts are assumed to hold, since some other
+    agent might make them so at the right time. Interference stays as it is (it depends on
+    the actions alone). Every real schedule, restricted to i and j, is a schedule of the
+    projection that ends in the real final values of the tracked facts, so the projection's
+    shortest makespan from a node's projection is an admissible bound, and a projection
+    with no way to its goal proves the real node a dead end. A real step maps to one
+    projected step (or none when neither agent acts), so the bound is also consistent.
+
+    The projected space is small (index pairs times the few tracked states each), so it
+    is explored once, forwards from the start, and solved backwards; lookups are then a
+    dict access per pair and node. Exploration stops at nodes past the pair's last point
+    of contact (neither remaining plan writes a fact the other touches): there the answer
+    is the longer remainder, after one run of both remainders to check they still work.
+    This is what sees an agent waiting for another: the main agent's next action needs a
+    fact only a helper adds, or must not run before a helper's action it would disable.
+    """
+
+    def __init__(self, task: CompiledTask, first: int, second: int):
+        self.first, self.second = first, second
+        others = 0
+        for agent, written in enumerate(task.writes_from):
+            if agent not in (first, second):
+                others |= written[0]
+        tracked = self.tracked = task.all_facts & ~others
+        plans = (task.steps[first], task.steps[second])
+        lengths = (len(plans[0]), len(plans[1]))
+        reads = (task.reads_from[first], task.reads_from[second])
+        writes = (task.writes_from[first], task.writes_from[second])
+        goal_positive = task.goal_positive & tracked
+        goal_negative = task.goal_negative & tracked
+
+        def applicable(step: CompiledStep, state: int) -> bool:
+            positive = step.pre_positive & tracked
+            return positive & state == positive and not step.pre_negative & tracked & state
+
+        def alone(k: int, m: int, state: int) -> int | None:
+            """Steps to go once the rest of the two plans cannot affect each other."""
+            for step in (*plans[0][k:], *plans[1][m:]):
+                if not applicable(step, state):
+                    return None
+                state = ((state & ~step.delete) | step.add) & tracked
+            if goal_positive & state != goal_positive or goal_negative & state:
+                return None
+            return max(lengths[0] - k, lengths[1] - m)
+
+        start = (0, 0, task.initial & tracked)
+        children: dict[tuple[int, int, int], list[tuple[int, int, int]]] = {}
+        settled: dict[tuple[int, int, int], int | None] = {}
+        frontier = [start]
+        while frontier:
+            node = frontier.pop()
+            if node in children:
+                continue
+            k, m, state = node
+            children[node] = []
+            # Past the last point of contact the pair needs no search: both just run on.
+            if not (writes[0][k] & (reads[1][m] | writes[1][m]) or writes[1][m] & reads[0][k]):
+                settled[node] = alone(k, m, state)
+                continue
+            can_first = k < lengths[0] and applicable(plans[0][k], state)
+            can_second = m < lengths[1] and applicable(plans[1][m], state)
+            moves = []
+            if can_first:
+                moves.append((1, 0, plans[0][k].delete, plans[0][k].add))
+            if can_second:
+                moves.append((0, 1, plans[1][m].delete, plans[1][m].add))
+            if can_first and can_second and not plans[0][k].interferes(plans[1][m]):
+                delete = plans[0][k].delete | plans[1][m].delete
+                moves.append((1, 1, delete, plans[0][k].add | plans[1][m].add))
+            for step_first, step_second, delete, add in moves:
+                child = (k + step_first, m + step_second, ((state & ~delete) | add) & tracked)
+                children[node].append(child)
+                if child not in children:
+                    frontier.append(child)
+        # Every move advances k + m, so deciding nodes by decreasing k + m sees children first.
+        self.explored = children.keys()
+        self.distance: dict[tuple[int, int, int], int] = {}
+        for node in sorted(children, key=lambda n: -(n[0] + n[1])):
+            if node in settled:
+                steps = settled[node]
+            else:
+                reachable = [self.distance[c] for c in children[node] if c in self.distance]
+                steps = 1 + min(reachable) if reachable else None
+            if steps is not None:
+                self.distance[node] = steps
+
+    def __call__(self, indices: Sequence[int], state: int) -> int | None:
+        """Steps the pair still needs, or None when the node is a dead end."""
+        node = (indices[self.first], indices[self.second], state & self.tracked)
+        steps = self.distance.get(node)
+        if steps is None and node not in self.explored:
+            return 0  # unreachable in theory; a bound of 0 is always safe
+        return steps
+
+
+def interacting_pairs(task: CompiledTask) -> list[PairProjection]:
+    """Projections for the pairs of agents whose plans share a fact one of them writes."""
+    pairs = []
+    for i, j in itertools.combinations(range(len(task.steps)), 2):
+        reads_i, writes_i = task.reads_from[i][0], task.writes_from[i][0]
+        reads_j, writes_j = task.reads_from[j][0], task.writes_from[j][0]
+        if writes_i & (reads_j | writes_j) or writes_j & reads_i:
+            pairs.append(PairProjection(task, i, j))
+    return pairs
+
+
+class LowerBound:
+    """An admissible, consistent lower bound on the steps left from a search node.
+
+    The maximum of the longest remaining plan (each step advances an agent by at most one
+    action) and the pair projections of :class:`PairProjection`; None for a dead end.
+    Each part drops by at most one per real step, so the maximum is consistent too.
+    """
+
+    def __init__(self, task: CompiledTask, pairs: bool = True):
+        self.lengths = task.lengths
+        self.pairs = interacting_pairs(task) if pairs else []
+
+    def __call__(self, indices: Sequence[int], state: int) -> int | None:
+        bound = max((n - i for n, i in zip(self.lengths, indices, strict=True)), default=0)
+        for pair in self.pairs:
+            steps = pair(indices, state)
+            if steps is None:
+                return None
+            bound = max(bound, steps)
+        return bound

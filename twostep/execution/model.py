@@ -1,0 +1,68 @@
+"""What the parallel-length search returns and raises, and the environment/agent state split."""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Iterable
+from dataclasses import dataclass
+
+from twostep.pddl import Fact
+
+MODES = ("exact", "paper")
+
+Schedule = tuple[tuple[tuple[int, str], ...], ...]
+"""Per time step, the (agent index, action text) pairs that act in it, in agent order."""
+
+
+@dataclass(frozen=True)
+class ParallelExecution:
+    """A joint schedule of per-agent plans and its makespan."""
+
+    length: int
+    """Makespan: the number of time steps."""
+    steps: Schedule
+    """Per time step: (agent index, action text), agents in index order."""
+    mode: str
+    """``"exact"`` or ``"paper"``."""
+    nodes_expanded: int
+    """Search nodes expanded, a measure of effort for benchmarks."""
+
+
+class ScheduleError(Exception):
+    """No schedule of the plans reaches the goal, or a given schedule is invalid.
+
+    ``agent`` is the agent index, ``step`` the 1-based step in that agent's plan, ``action``
+    its text and ``precondition`` the failing precondition as PDDL; a failure at the end
+    names the goal literal in ``goal`` instead. ``time_step`` (1-based) is set when a
+    given joint schedule is checked.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        agent: int | None = None,
+        step: int | None = None,
+        action: str | None = None,
+        precondition: str | None = None,
+        goal: str | None = None,
+        time_step: int | None = None,
+    ):
+        super().__init__(message)
+        self.message = message
+        self.agent = agent
+        self.step = step
+        self.action = action
+        self.precondition = precondition
+        self.goal = goal
+        self.time_step = time_step
+
+
+def split_state(
+    state: Iterable[Fact], agent_predicates: Collection[str]
+) -> tuple[frozenset[Fact], frozenset[Fact]]:
+    """Split ``state`` into (environment facts, agent-specific facts) by predicate."""
+    environment: set[Fact] = set()
+    agent: set[Fact] = set()
+    for fact in state:
+        (agent if fact[0] in agent_predicates else environment).add(fact)
+    return frozenset(environment), frozenset(agent)

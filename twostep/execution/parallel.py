@@ -1,0 +1,59 @@
+"""The entry point: the shortest joint schedule of per-agent plans (see :mod:`twostep.execution`)."""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Sequence
+
+from twostep.execution.check import check_schedule
+from twostep.execution.compiled import compile_task
+from twostep.execution.diagnosis import check_agent_copies, diagnose
+from twostep.execution.model import MODES, ParallelExecution
+from twostep.execution.search import search
+from twostep.pddl import Fact, Goal
+from twostep.strips import GroundAction
+
+
+def _parallel_length(
+    plans: Sequence[Sequence[GroundAction]],
+    init: frozenset[Fact],
+    goal: Goal,
+    agent_predicates: Collection[str],
+    mode: str,
+    plain: bool = False,
+) -> ParallelExecution:
+    if mode not in MODES:
+        raise ValueError(f"unknown mode {mode!r}; expected one of {', '.join(MODES)}")
+    check_agent_copies(plans, init, goal, agent_predicates)
+    task = compile_task(plans, init, goal, agent_predicates)
+    sets, expanded = search(task, mode, plain)
+    if sets is None:
+        raise diagnose(plans, init, goal, agent_predicates)
+    indices = [0] * len(plans)
+    steps = []
+    for chosen in sets:
+        joint = []
+        for agent in chosen:
+            joint.append((agent, str(plans[agent][indices[agent]])))
+            indices[agent] += 1
+        steps.append(tuple(joint))
+    schedule = tuple(steps)
+    check_schedule(schedule, plans, init, goal, agent_predicates)
+    return ParallelExecution(len(schedule), schedule, mode, expanded)
+
+
+def parallel_length(
+    plans: Sequence[Sequence[GroundAction]],
+    init: frozenset[Fact],
+    goal: Goal,
+    agent_predicates: Collection[str],
+    mode: str = "exact",
+) -> ParallelExecution:
+    """The shortest joint schedule of per-agent plans that reaches ``goal``.
+
+    ``mode="exact"`` minimises over any set of agents per step; ``mode="paper"`` allows
+    only one agent or all remaining agents per step (the paper's Algorithm 1), so its
+    length is never shorter. With one agent the length is its plan length.
+    Raises :class:`ScheduleError` when no schedule reaches the goal, naming the agent, the
+    1-based step, the action and the failing precondition (or the failing goal literal).
+    """
+    return _parallel_length(plans, init, goal, agent_predicates, mode)

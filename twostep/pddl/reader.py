@@ -1,0 +1,125 @@
+"""Reading domains, problems and goals: the s-expression checks, the repairs, unified-planning.
+
+Supported fragment: STRIPS with typing, constants, negative preconditions and equality.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from twostep.pddl.errors import PDDLError
+from twostep.pddl.model import Domain, Fact, Goal, Problem
+from twostep.pddl.repairs import repair_undeclared_constants
+from twostep.pddl.sexp import define_body, read_sexp, section, typed_names, write_sexp
+from twostep.pddl.unified import (
+    action_costs,
+    fact_from_up,
+    literals,
+    parse_with_up,
+    schema_from_up,
+)
+
+
+def parse_problem(
+    domain_text: str,
+    problem_text: str,
+    domain_source: str | None = None,
+    problem_source: str | None = None,
+) -> Problem:
+    """Parse a domain and a problem given as PDDL text."""
+    read_sexp(domain_text, domain_source, single=True)  # unbalanced parentheses: file and line
+    read_sexp(problem_text, problem_source, single=True)
+    domain_text, problem_text = repair_undeclared_constants(
+        domain_text, problem_text, domain_source, problem_source
+    )
+    up_problem = parse_with_up(domain_text, problem_text, domain_source, problem_source)
+    domain_body = define_body(domain_text, "domain", domain_source)
+    domain_name_expr = domain_body[1]
+    domain_name = (
+        str(domain_name_expr[1])
+        if isinstance(domain_name_expr, list) and len(domain_name_expr) > 1
+        else "domain"
+    )
+    requirements = tuple(
+        r for r in (section(domain_body, ":requirements") or [":r"])[1:] if isinstance(r, str)
+    )
+    constant_names = {n for n, _ in typed_names((section(domain_body, ":constants") or [":c"])[1:])}
+    types: dict[str, str | None] = {}
+    for user_type in up_problem.user_types:
+        types[user_type.name] = user_type.father.name if user_type.father is not None else None
+    if not types:
+        types["object"] = None
+    all_objects = {o.name: o.type.name for o in up_problem.all_objects}
+    constants = {n: t for n, t in all_objects.items() if n in constant_names}
+    objects = {n: t for n, t in all_objects.items() if n not in constant_names}
+    predicates = {f.name: tuple(p.type.name for p in f.signature) for f in up_problem.fluents}
+    costs = action_costs(up_problem) or {}
+    actions = {a.name: schema_from_up(a, costs.get(a.name)) for a in up_problem.actions}
+    domain = Domain(domain_name, requirements, types, constants, predicates, actions, domain_source)
+    init = frozenset(
+        fact_from_up(k) for k, v in up_problem.explicit_initial_values.items() if v.is_true()
+    )
+    positive: set[Fact] = set()
+    negative: set[Fact] = set()
+    for goal in up_problem.goals:
+        for is_positive, pred, terms in literals(goal, "goal"):
+            if pred == "=":
+                raise PDDLError("equality in the goal is not supported", problem_source)
+            (positive if is_positive else negative).add((pred, *terms))
+    return Problem(
+        up_problem.name,
+        domain,
+        objects,
+        init,
+        Goal(frozenset(positive), frozenset(negative)),
+        problem_source,
+    )
+
+
+def load_problem(domain_path: str | Path, problem_path: str | Path) -> Problem:
+    """Read a domain file and a problem file."""
+    domain_path, problem_path = Path(domain_path), Path(problem_path)
+    for path in (domain_path, problem_path):
+        if not path.is_file():
+            raise PDDLError("no such file", str(path))
+    return parse_problem(
+        domain_path.read_text(), problem_path.read_text(), str(domain_path), str(problem_path)
+    )
+
+
+def parse_goal(text: str, problem: Problem, source: str = "subgoal") -> Goal:
+    """Parse a PDDL goal and check it against ``problem``.
+
+    Accepts ``(:goal (and ...))``, ``(and ...)``, a single literal, or several literals in a
+    row. Raises :class:`PDDLError` naming the first unknown predicate, wrong arity or
+    unknown object.
+    """
+    exprs = read_sexp(text, source)
+    if len(exprs) == 1 and isinstance(exprs[0], list) and exprs[0][:1] == [":goal"]:
+        exprs = exprs[0][1:]
+    if len(exprs) == 1 and isinstance(exprs[0], list) and exprs[0][:1] == ["and"]:
+        exprs = exprs[0][1:]
+    if not exprs:
+        raise PDDLError("the goal is empty", source)
+    objects = problem.all_objects
+    positive: set[Fact] = set()
+    negative: set[Fact] = set()
+    for expr in exprs:
+        is_positive = True
+        if isinstance(expr, list) and expr[:1] == ["not"] and len(expr) == 2:
+            is_positive, expr = False, expr[1]
+        if not isinstance(expr, list) or not expr or not all(isinstance(t, str) for t in expr):
+            raise PDDLError(f"not a ground literal: {write_sexp(expr)}", source)
+        pred, *args = [str(t) for t in expr]
+        if pred not in problem.domain.predicates:
+            raise PDDLError(f"unknown predicate '{pred}'", source)
+        arity = len(problem.domain.predicates[pred])
+        if len(args) != arity:
+            raise PDDLError(f"'{pred}' takes {arity} argument(s), got {len(args)}", source)
+        for arg in args:
+            if arg not in objects:
+                raise PDDLError(f"unknown object '{arg}' in {write_sexp(expr)}", source)
+        (positive if is_positive else negative).add((pred, *args))
+    if positive & negative:
+        raise PDDLError("the goal asks for a fact and its negation", source)
+    return Goal(frozenset(positive), frozenset(negative))

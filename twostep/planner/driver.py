@@ -1,0 +1,138 @@
+"""Running Fast Downward's driver (shipped in the ``up-fast-downward`` wheel) on a task.
+
+It writes the problem as PDDL into a private temporary folder, runs the driver with a CPU
+search time limit and a wall-clock guard, reads the last complete plan file and turns the
+exit code into a :class:`~twostep.planner.results.Status`.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from twostep.pddl import Problem, domain_to_pddl, problem_to_pddl
+from twostep.planner import returncodes
+from twostep.planner.aliases import ALIASES
+from twostep.planner.plan_files import PlanFile, complete_plans, plan_files
+from twostep.planner.results import PlanResult, Status
+from twostep.planner.settings import PlannerSettings
+
+_PLANNER_TIME = re.compile(r"Planner time: ([0-9.]+)s")
+
+
+def driver_path() -> Path:
+    """The ``fast-downward.py`` driver inside the installed up-fast-downward wheel."""
+    import up_fast_downward
+
+    return Path(up_fast_downward.__file__).resolve().parent / "downward" / "fast-downward.py"
+
+
+def status_for(code: int | None, plan: PlanFile | None) -> tuple[Status, str]:
+    """The status of a run that ended with exit ``code`` (None: killed by the guard)."""
+    if code is None:
+        stopped = "wall-clock guard stopped the planner"
+        return (Status.SOLVED if plan is not None else Status.TIMEOUT), stopped
+    message = returncodes.meaning(code)
+    ended_with_plans = returncodes.PLAN_FOUND | returncodes.OUT_OF_TIME | returncodes.OUT_OF_MEMORY
+    if plan is not None and code in ended_with_plans:
+        return Status.SOLVED, message
+    if code in returncodes.PLAN_FOUND:
+        return Status.ERROR, f"{message}, but no complete plan file"
+    if code in returncodes.PROVEN_UNSOLVABLE:
+        return Status.UNSOLVABLE, message
+    if code in returncodes.INCOMPLETE:
+        return Status.INCOMPLETE, message
+    if code in returncodes.OUT_OF_TIME:
+        return Status.TIMEOUT, message
+    return Status.ERROR, message
+
+
+def run_driver(
+    domain_file: Path, problem_file: Path, settings: PlannerSettings, workdir: Path
+) -> PlanResult:
+    """Run the driver on PDDL files in ``workdir`` (which receives plan and SAS files)."""
+    if settings.alias not in ALIASES:
+        known = ", ".join(sorted(ALIASES))
+        return PlanResult(
+            Status.ERROR,
+            None,
+            0.0,
+            0.0,
+            f"unknown planner alias '{settings.alias}' (known: {known})",
+        )
+    command = [sys.executable, str(driver_path())]
+    if settings.memory_limit_mb is not None:
+        command += ["--overall-memory-limit", f"{settings.memory_limit_mb}M"]
+    command += [
+        *ALIASES[settings.alias],
+        "--search-time-limit",
+        f"{max(1, round(settings.search_time_limit_s))}s",
+    ]
+    command += ["--plan-file", "plan", str(domain_file), str(problem_file)]
+    start = time.perf_counter()
+    process = subprocess.Popen(
+        command,
+        cwd=workdir,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        start_new_session=True,  # so the guard can stop translator and search together
+    )
+    try:
+        output, _ = process.communicate(timeout=settings.wall_guard())
+        code: int | None = process.returncode
+    except subprocess.TimeoutExpired:
+        os.killpg(process.pid, signal.SIGKILL)
+        output, _ = process.communicate()
+        code = None
+    wall = time.perf_counter() - start
+    plans = complete_plans(workdir)
+    best = plans[-1] if plans else None
+    status, message = status_for(code, best)
+    incomplete = len(plan_files(workdir)) - len(plans)
+    if incomplete and status is not Status.SOLVED:
+        message = f"{message} ({incomplete} incomplete plan file(s) ignored)"
+    if status is Status.ERROR:
+        tail = [line for line in output.splitlines() if line.strip()][-3:]
+        message = f"{message}: {' | '.join(tail)}" if tail else message
+    reported = [float(m) for m in _PLANNER_TIME.findall(output)]
+    solved = status is Status.SOLVED and best is not None
+    return PlanResult(
+        status,
+        best.actions if solved and best is not None else None,
+        reported[-1] if reported else wall,
+        wall,
+        message,
+        code,
+        len(plans),
+        best.cost if solved and best is not None else None,
+    )
+
+
+def plan_pddl(domain_pddl: str, problem_pddl: str, settings: PlannerSettings) -> PlanResult:
+    """Solve a task given as PDDL text (deterministic inputs: a good cache key)."""
+    with tempfile.TemporaryDirectory(prefix="twostep-fd-") as tmp:
+        folder = Path(tmp)
+        (folder / "domain.pddl").write_text(domain_pddl)
+        (folder / "problem.pddl").write_text(problem_pddl)
+        return run_driver(folder / "domain.pddl", folder / "problem.pddl", settings, folder)
+
+
+def planner_input(problem: Problem) -> tuple[str, str]:
+    """The PDDL texts the planner receives for ``problem``."""
+    extra = (":negative-preconditions",) if problem.goal.negative else ()
+    return domain_to_pddl(problem.domain, extra), problem_to_pddl(problem)
+
+
+def plan(problem: Problem, settings: PlannerSettings | None = None) -> PlanResult:
+    """Solve ``problem`` with Fast Downward. A goal that already holds gives an empty plan."""
+    settings = settings or PlannerSettings()
+    if problem.goal.holds(problem.init):
+        return PlanResult(Status.SOLVED, (), 0.0, 0.0, "goal holds in the initial state", 0, 0, 0)
+    return plan_pddl(*planner_input(problem), settings)
