@@ -184,15 +184,17 @@ def _llm_step(task_fn: Any, stats: StepStats) -> Callable[..., LLMStepResult]:
         start = time.perf_counter()
         state = task_fn(quote(client), quote(task), *args, return_state=True, **kwargs)
         outcome = state.result()  # raises what the task raised (a bug, not an LLM error)
-        if isinstance(outcome, BaseException):
-            raise outcome
-        text, exchange = outcome
-        cached = bool(exchange.get("cached"))  # a hit of the LLM client's disk cache
+        failed = isinstance(outcome, BaseException)
+        # a hit of the LLM client's disk cache costs no call; a failed call does
+        cached = not failed and bool(outcome[1].get("cached"))
         stats.add(
             llm_calls=0 if cached else 1,
             llm_cache_hits=1 if cached else 0,
             llm_wall_s=0.0 if cached else time.perf_counter() - start,
         )
+        if failed:
+            raise outcome
+        text, exchange = outcome
         return text, exchange
 
     return call

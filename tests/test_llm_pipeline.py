@@ -450,6 +450,6 @@ def test_llm_tasks_under_prefect_neither_cache_nor_retry(
                  "seed=1"),
         tmp_path / "job3",
     )  # fmt: skip
-    assert provider.calls == 4
+    assert provider.calls == 4 and down.stats.llm_calls == 1  # one generate task run
     assert (down.result["status"], down.result["fallback"]) == ("llm_error", None)
     assert "APIConnectionError" in down.result["message"]

@@ -172,7 +172,7 @@ def check_proposal(
             source=f"helper {proposal.helper} subgoal",
         )
     except SubgoalError as error:
-        proposal.status, proposal.reason = SubgoalStatus.DISCARDED, proposal.reason or str(error)
+        proposal.status, proposal.reason = SubgoalStatus.DISCARDED, str(error)
         return None
 
 
