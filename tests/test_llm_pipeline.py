@@ -453,3 +453,26 @@ def test_llm_tasks_under_prefect_neither_cache_nor_retry(
     assert provider.calls == 4 and down.stats.llm_calls == 1  # one generate task run
     assert (down.result["status"], down.result["fallback"]) == ("llm_error", None)
     assert "APIConnectionError" in down.result["message"]
+
+
+def test_steps_replace_the_llm_calls(task: BenchmarkTask) -> None:
+    """Steps.generate / Steps.translate are what the pipeline calls for the LLM decomposer."""
+    from twostep.decomposers.llm import generate_subgoal, translate_subgoal
+    from twostep.pipeline import Steps
+
+    seen: list[tuple[str, int]] = []
+
+    def generate(
+        client: Any, task: BenchmarkTask, agents: int, helper: int, *a: Any, **k: Any
+    ) -> Any:
+        seen.append(("generate", helper))
+        return generate_subgoal(client, task, agents, helper, *a, **k)
+
+    def translate(*args: Any, **kwargs: Any) -> Any:
+        seen.append(("translate", kwargs["helper"]))
+        return translate_subgoal(*args, **kwargs)
+
+    steps = Steps(generate=generate, translate=translate)
+    result = run_twostep(task, 3, scripted(GOOD_EN, GOOD_PDDL, "None"), BW, FAST, steps=steps)
+    assert seen == [("generate", 1), ("translate", 1), ("generate", 2)]
+    assert [s["status"] for s in result.subgoals] == ["accepted", "stopped"]
