@@ -19,7 +19,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from prefect import flow, get_run_logger, tags
+from prefect import flow, tags
 from prefect.context import SettingsContext
 from prefect.settings import (
     PREFECT_API_URL,
@@ -31,7 +31,7 @@ from prefect.settings import (
 )
 
 from flows.job import StepStats, run_job
-from flows.tasks import prefect_steps, route_llm_calls
+from flows.tasks import prefect_steps
 
 
 @flow(name="twostep-job", persist_result=False, validate_parameters=False, log_prints=False)
@@ -41,23 +41,9 @@ def job_flow(job: dict[str, Any]) -> dict[str, Any]:
     cfg = OmegaConf.create(job)
     stats = StepStats()
     orchestration = cfg.orchestration
+    # The steps, the LLM calls among them, as task runs; the library keeps the control flow.
     steps = prefect_steps(stats, submit=orchestration.task_runner == "dask")
-
-    def prepare(decomposer: Any) -> None:
-        routed = route_llm_calls(
-            decomposer,
-            stats,
-            retries=int(orchestration.llm_task_retries),
-            retry_delay_s=float(orchestration.llm_task_retry_delay_s),
-        )
-        if not routed and getattr(decomposer, "name", "") == "llm":
-            # SEAM: this LLM decomposer does not expose generate/translate; its calls run
-            # inside the job (replayed by the LLM client's disk cache), not as task runs.
-            get_run_logger().warning(
-                "LLM decomposer without generate/translate hooks: LLM calls are not task runs"
-            )
-
-    result = run_job(cfg, steps=steps, prepare_decomposer=prepare, stats=stats)
+    result = run_job(cfg, steps=steps, stats=stats)
     return {"result": result.to_dict(), "stats": stats.to_dict()}
 
 

@@ -1,14 +1,14 @@
 """The pipeline's steps as Prefect tasks: each task calls one library function.
 
-=================  =======================================  ==========================
-task               library function                          cache / retries
-=================  =======================================  ==========================
-``plan``           :func:`twostep.planner.plan_pddl`         cached on PDDL text
-``generate``       :func:`~twostep.decomposers.llm.generate_subgoal`   cached, retried
-``translate``      :func:`~twostep.decomposers.llm.translate_subgoal`  cached, retried
-``progress_state`` :func:`twostep.pipeline.progress`         no (microseconds)
-``score``          :func:`twostep.pipeline.score`            no (milliseconds)
-=================  =======================================  ==========================
+=================  =================================================  ===================
+task               library function                                   cache / retries
+=================  =================================================  ===================
+``plan``           :func:`twostep.planner.plan_pddl`                  cached on PDDL text
+``generate``       :func:`~twostep.decomposers.llm.generate_subgoal`  no (see below)
+``translate``      :func:`~twostep.decomposers.llm.translate_subgoal` no (see below)
+``progress_state`` :func:`twostep.pipeline.progress`                  no (microseconds)
+``score``          :func:`twostep.pipeline.score`                     no (milliseconds)
+=================  =================================================  ===================
 
 :func:`prefect_steps` packs them into a :class:`twostep.pipeline.Steps`, so the library
 runs its own control flow and only the step calls become task runs.
@@ -16,12 +16,15 @@ runs its own control flow and only the step calls become task runs.
 Cache keys are explicit (``cache_key_fn``): Prefect's INPUTS policy would hash Python
 objects, and a :class:`~twostep.pddl.Problem` holds frozensets whose iteration order,
 hence pickle, changes between processes. ``plan`` is keyed on the PDDL text the planner
-reads, the planner settings, the Fast Downward wheel version and :data:`PLAN_VERSION`;
-the LLM tasks on the LLM client's own request key (model, messages, sampling, seed: no
-secret) plus :data:`LLM_VERSION`. Results persist under ``orchestration.result_storage``,
-so a cache hit survives the process, the sweep and a ``kill -9``. A planner crash is not
-cached (the task fails; the pipeline still gets the crash as a status), and scripted LLM
-answers are never cached (they depend on call order).
+reads, the planner settings, the Fast Downward wheel version and :data:`PLAN_VERSION`.
+Results persist under ``orchestration.result_storage``, so a cache hit survives the
+process, the sweep and a ``kill -9``. A planner crash is not cached (the task fails; the
+pipeline still gets the crash as a status).
+
+The LLM tasks exist for observability only: the LLM client owns the one answer cache
+(its disk cache, which replay reads) and the one retry loop, so these tasks neither
+cache nor retry. A failed LLM call is the job's outcome (``llm_error``), not a task
+crash: the task ends in a state named :data:`LLM_ERROR_STATE`, with no traceback.
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ from typing import Any
 from prefect import State, task
 from prefect.cache_policies import NO_CACHE
 from prefect.context import TaskRunContext
+from prefect.states import Completed
 from prefect.utilities.annotations import quote
 
 from flows.job import StepStats
@@ -49,7 +53,9 @@ from twostep.planner import PlannerSettings, PlanResult, Status
 
 # Bump when a change in the library makes cached task results stale.
 PLAN_VERSION = "plan-1"
-LLM_VERSION = "llm-1"
+# The state name of an LLM task whose call failed (see _llm_call_outcome).
+LLM_ERROR_STATE = "LLMError"
+LLMStepResult = tuple[str | None, dict[str, Any]]
 
 
 @cache
@@ -118,55 +124,23 @@ def score_task(
 # ----------------------------------------------------------------- LLM
 
 
-def _llm_request_key(client: Any, messages: Any, seed: int) -> str | None:
-    if client.settings.mode == "scripted":
-        return None  # answers depend on call order: never cache them
-    return str(client.cache_key(client.request(messages, seed)))
+def _llm_call_outcome(call: Callable[[], LLMStepResult]) -> Any:
+    """Run one LLM step inside its task; a failed LLM call ends the task as a state.
 
-
-def generate_cache_key(context: TaskRunContext, parameters: dict[str, Any]) -> str | None:
-    from twostep.llm.prompts import generator_messages
-
-    messages = generator_messages(
-        parameters["task"],
-        parameters["agents"],
-        parameters["helper"],
-        parameters["earlier"],
-        fixed_example=parameters.get("fixed_example", True),
-    )
-    request = _llm_request_key(parameters["client"], messages, parameters["seed"])
-    return None if request is None else _digest(["generate", LLM_VERSION, request])
-
-
-def translate_cache_key(context: TaskRunContext, parameters: dict[str, Any]) -> str | None:
-    from twostep.llm.prompts import translator_messages
-
-    messages = translator_messages(parameters["task"], parameters["english"])
-    request = _llm_request_key(parameters["client"], messages, parameters["seed"])
-    if request is None:
-        return None
-    # helper and earlier subgoals decide the check (repeats are rejected), not the request
-    earlier = sorted((parameters.get("earlier") or {}).items())
-    return _digest(["translate", LLM_VERSION, request, parameters.get("helper", 1), earlier])
-
-
-def _retry_transient(task: Any, task_run: Any, state: State[Any]) -> bool:
-    """Retry only provider failures; missing credentials, replay misses and scripts are final."""
-    from twostep.llm.client import LLMCallError
+    An :class:`~twostep.llm.client.LLMError` raised in a task would make Prefect log a
+    traceback (and retry, with retries set): the error is the job's one-line outcome, so
+    the task returns it in a ``Completed`` state named ``LLMError`` instead and
+    :func:`_llm_step` raises it again in the caller, as the plain function would.
+    """
+    from twostep.llm.client import LLMError
 
     try:
-        error = state.result(raise_on_failure=False)
-    except Exception:  # the state holds no readable result: do not retry blindly
-        return False
-    return isinstance(error, LLMCallError)
+        return call()
+    except LLMError as error:
+        return Completed(name=LLM_ERROR_STATE, message=str(error), data=error)
 
 
-@task(
-    name="generate",
-    persist_result=True,
-    cache_key_fn=generate_cache_key,
-    retry_condition_fn=_retry_transient,
-)
+@task(name="generate", cache_policy=NO_CACHE, persist_result=False, retries=0)
 def generate_task(
     client: Any,
     task: Any,
@@ -176,20 +150,17 @@ def generate_task(
     seed: int,
     *,
     fixed_example: bool = True,
-) -> tuple[str | None, dict[str, Any]]:
+) -> Any:
     from twostep.decomposers.llm import generate_subgoal
 
-    return generate_subgoal(
-        client, task, agents, helper, list(earlier), seed, fixed_example=fixed_example
+    return _llm_call_outcome(
+        lambda: generate_subgoal(
+            client, task, agents, helper, list(earlier), seed, fixed_example=fixed_example
+        )
     )
 
 
-@task(
-    name="translate",
-    persist_result=True,
-    cache_key_fn=translate_cache_key,
-    retry_condition_fn=_retry_transient,
-)
+@task(name="translate", cache_policy=NO_CACHE, persist_result=False, retries=0)
 def translate_task(
     client: Any,
     task: Any,
@@ -198,10 +169,35 @@ def translate_task(
     *,
     helper: int = 1,
     earlier: dict[int, str] | None = None,
-) -> tuple[str | None, dict[str, Any]]:
+) -> Any:
     from twostep.decomposers.llm import translate_subgoal
 
-    return translate_subgoal(client, task, english, seed, helper=helper, earlier=earlier)
+    return _llm_call_outcome(
+        lambda: translate_subgoal(client, task, english, seed, helper=helper, earlier=earlier)
+    )
+
+
+def _llm_step(task_fn: Any, stats: StepStats) -> Callable[..., LLMStepResult]:
+    """``task_fn`` as a library step: same arguments, same result, same exceptions."""
+
+    def call(client: Any, task: Any, *args: Any, **kwargs: Any) -> LLMStepResult:
+        start = time.perf_counter()
+        state = task_fn(quote(client), quote(task), *args, return_state=True, **kwargs)
+        outcome = state.result()  # raises what the task raised (a bug, not an LLM error)
+        failed = isinstance(outcome, BaseException)
+        # a hit of the LLM client's disk cache costs no call; a failed call does
+        cached = not failed and bool(outcome[1].get("cached"))
+        stats.add(
+            llm_calls=0 if cached else 1,
+            llm_cache_hits=1 if cached else 0,
+            llm_wall_s=0.0 if cached else time.perf_counter() - start,
+        )
+        if failed:
+            raise outcome
+        text, exchange = outcome
+        return text, exchange
+
+    return call
 
 
 # ----------------------------------------------------------------- steps
@@ -270,41 +266,11 @@ def prefect_steps(stats: StepStats, submit: bool = False) -> Steps:
         )
         return execution
 
-    return Steps(propose=pipeline.propose, plan=plan, progress=progress, score=score)
-
-
-def route_llm_calls(
-    decomposer: Any, stats: StepStats, retries: int = 2, retry_delay_s: float = 5.0
-) -> bool:
-    """Run the LLM decomposer's ``generate`` and ``translate`` calls as Prefect tasks.
-
-    The hook: a decomposer that exposes its two steps as the attributes ``generate`` and
-    ``translate`` (same signatures as :func:`~twostep.decomposers.llm.generate_subgoal`
-    and :func:`~twostep.decomposers.llm.translate_subgoal`) gets task-wrapped versions
-    with retries, backoff and caching. Returns False, changing nothing, for a decomposer
-    without them: its calls then run inside the job untasked (still replayed from the
-    LLM client's own disk cache).
-    """
-    if not (hasattr(decomposer, "generate") and hasattr(decomposer, "translate")):
-        return False
-    delays = [retry_delay_s * 2**i for i in range(retries)]
-    generate = generate_task.with_options(retries=retries, retry_delay_seconds=delays)
-    translate = translate_task.with_options(retries=retries, retry_delay_seconds=delays)
-    decomposer.generate = _llm_step(generate, stats)
-    decomposer.translate = _llm_step(translate, stats)
-    return True
-
-
-def _llm_step(task_fn: Any, stats: StepStats) -> Callable[..., Any]:
-    def call(client: Any, task: Any, *args: Any, **kwargs: Any) -> Any:
-        start = time.perf_counter()
-        state = task_fn(quote(client), quote(task), *args, return_state=True, **kwargs)
-        cached = state.name == "Cached"
-        stats.add(
-            llm_calls=0 if cached else 1,
-            llm_cache_hits=1 if cached else 0,
-            llm_wall_s=0.0 if cached else time.perf_counter() - start,
-        )
-        return state.result()  # raises the task's error, as the plain function would
-
-    return call
+    return Steps(
+        propose=pipeline.propose,
+        generate=_llm_step(generate_task, stats),
+        translate=_llm_step(translate_task, stats),
+        plan=plan,
+        progress=progress,
+        score=score,
+    )

@@ -3,13 +3,12 @@
 The fast tests run jobs on the library path (``orchestration.prefect=false``) against a
 SQLite MLflow store in a temporary folder. Tests marked ``integration`` share one Prefect
 server for the session (started on 127.0.0.1, stopped by PID) and run jobs as flows:
-planner and LLM task caching (counted calls), the API's record of the runs, and a
+planner task caching (counted calls), the API's record of the runs, and a
 2-job sweep on a local Dask cluster.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import signal
@@ -477,78 +476,6 @@ def test_flow_caches_planner_calls_across_runs(
         time.sleep(0.5)
     assert names.count(("plan", "Completed")) == 3 and names.count(("plan", "Cached")) == 3
     assert ("score", "Completed") in names and ("progress_state", "Completed") in names
-
-
-class FakeClient:
-    """Stands in for LLMClient: answers written by this test (no model), first call fails."""
-
-    def __init__(self, answers: list[str]) -> None:
-        from twostep.llm.client import LLMSettings
-
-        self.settings = LLMSettings(mode="live", model="test/fake")
-        self.answers = answers
-        self.calls = 0
-
-    def request(self, messages: Any, seed: int) -> dict[str, Any]:
-        return {"messages": [dict(m) for m in messages], "seed": seed, "model": self.settings.model}
-
-    @staticmethod
-    def cache_key(request: Any) -> str:
-        return hashlib.sha256(json.dumps(request, sort_keys=True).encode()).hexdigest()
-
-    def complete(self, messages: Any, seed: int) -> Any:
-        from twostep.llm.client import LLMCallError, LLMResponse
-
-        self.calls += 1
-        if self.calls == 1:
-            raise LLMCallError("rate limited (test)")
-        text = self.answers[(self.calls - 2) % len(self.answers)]
-        return LLMResponse(text, False, False, "test/fake", 0.01)
-
-
-@pytest.mark.integration
-def test_llm_calls_are_tasks_retried_and_cached(
-    shared: dict[str, Path], tmp_path: Path, prefect_server: str, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    from contextlib import contextmanager
-
-    import flows.job
-    from flows.tasks import route_llm_calls
-    from tests.test_llm_decomposer import GEN_B, PDDL_B
-    from twostep.decomposers.llm import LLMDecomposer, generate_subgoal
-    from twostep.llm.client import LLMClient, LLMSettings
-
-    # The paper's decomposer exposes its two LLM steps: they get routed through tasks.
-    routed = LLMDecomposer(LLMClient(LLMSettings(mode="replay")))
-    assert route_llm_calls(routed, flows.job.StepStats()) is True
-    assert routed.generate is not generate_subgoal
-
-    client = FakeClient([GEN_B, PDDL_B])
-
-    @contextmanager
-    def fake_decomposer(cfg: Any) -> Iterator[LLMDecomposer]:
-        yield LLMDecomposer(client)  # type: ignore[arg-type]  # a client that fails once
-
-    monkeypatch.setattr(flows.job, "open_decomposer", fake_decomposer)
-    cfg = job_cfg(
-        shared,
-        tmp_path,
-        "method=twostep",
-        "task=1",
-        "decomposer=llm",
-        "orchestration.prefect=true",
-        f"orchestration.prefect_api_url={prefect_server}",
-        f"orchestration.result_storage={tmp_path / 'results'}",
-        "orchestration.reuse_results=false",
-        "orchestration.llm_task_retry_delay_s=0",
-    )
-    first = execute_job(cfg, tmp_path / "job1")
-    assert first.status == "success", first.error
-    assert client.calls == 3  # generate failed once and was retried, then translate
-    assert first.stats.llm_calls == 2 and first.result["subgoals"][0]["status"] == "accepted"
-    second = execute_job(cfg, tmp_path / "job2")
-    assert client.calls == 3 and second.stats.llm_cache_hits == 2  # replayed from the task cache
-    assert second.result["subgoals"] == first.result["subgoals"]
 
 
 @pytest.mark.integration

@@ -7,6 +7,7 @@ provider registered by the test, or a patched ``litellm.completion``.
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -14,6 +15,7 @@ import pytest
 
 from twostep.llm import client as client_module
 from twostep.llm.client import (
+    LLMCacheCorrupt,
     LLMCacheMiss,
     LLMCallError,
     LLMClient,
@@ -278,3 +280,55 @@ def test_custom_provider_through_the_real_litellm_path(
     answer = LLMClient(settings).complete(MESSAGES, seed=3)
     assert answer.text == "echo: Goal?" and not answer.cached and len(seen) == 2
     assert LLMClient(settings).complete(MESSAGES, seed=3).cached
+
+
+@pytest.mark.parametrize(
+    "damage",
+    [
+        lambda text: text[: len(text) // 2],  # truncated mid-write (before atomic writes)
+        lambda text: "",  # an empty file
+        lambda text: '{"key": "k", "request": {}}',  # valid JSON without the answer
+    ],
+    ids=["truncated", "empty", "no-answer"],
+)
+def test_corrupt_cache_entry_is_reported_and_fetched_again_live(
+    settings: LLMSettings,
+    litellm: Any,
+    monkeypatch: pytest.MonkeyPatch,
+    caplog: pytest.LogCaptureFixture,
+    damage: Any,
+) -> None:
+    client = LLMClient(settings)
+    first = client.complete(MESSAGES, seed=0)
+    path = client.cache_path(first.key)
+    path.write_text(damage(path.read_text()))
+    real = litellm.completion
+    calls: list[int] = []
+
+    def counted(**kwargs: Any) -> Any:
+        calls.append(1)
+        return real(**kwargs)
+
+    monkeypatch.setattr(litellm, "completion", counted)
+    with caplog.at_level("WARNING", logger="twostep.llm.client"):
+        again = client.complete(MESSAGES, seed=0)
+    assert not again.cached and again.text == first.text and calls == [1]
+    [warning] = [r for r in caplog.records if r.levelname == "WARNING"]
+    assert str(path) in warning.getMessage() and "corrupt" in warning.getMessage()
+    # the entry was written again: the next call is a hit, with no warning
+    caplog.clear()
+    assert client.complete(MESSAGES, seed=0).cached and calls == [1]
+    assert not caplog.records
+
+
+def test_corrupt_cache_entry_fails_a_replay_naming_the_file(
+    settings: LLMSettings, litellm: Any, no_network: list[Any]
+) -> None:
+    replay = LLMClient(replace(settings, mode="replay"))
+    path = replay.cache_path(replay.cache_key(replay.request(MESSAGES, 0)))
+    path.parent.mkdir(parents=True)
+    path.write_text('{"key": "x", "text": "(on-tab')  # an entry cut off mid-write
+    with pytest.raises(LLMCacheCorrupt) as info:
+        replay.complete(MESSAGES, seed=0)
+    assert str(path) in str(info.value) and "llm.mode=live" in str(info.value)
+    assert not no_network

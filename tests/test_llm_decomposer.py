@@ -244,3 +244,13 @@ def test_replay_reproduces_a_recorded_decomposition(
     other_seed = DecompositionRequest(task, 2, seed=2)
     with pytest.raises(LLMCacheMiss, match="seed 2"):
         LLMDecomposer(LLMClient(replace(settings, mode="replay"))).propose(other_seed)
+
+
+def test_failed_call_makes_propose_raise_llm_error(task: BenchmarkTask) -> None:
+    from twostep.decomposers.base import DecomposerError
+
+    with pytest.raises(DecomposerError) as info:
+        LLMDecomposer(FailingClient(LLMSettings())).propose(DecompositionRequest(task, 3))
+    assert info.value.status == "llm_error"
+    assert str(info.value).startswith("LLM call failed: generate for agent1")
+    assert [p.helper for p in info.value.proposals] == [1]

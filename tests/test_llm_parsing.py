@@ -7,12 +7,12 @@ import pytest
 from tests.conftest import BLOCKS_DOMAIN, blocks_problem
 from twostep.llm.parsing import (
     SubgoalError,
-    check_subgoal,
     extract_pddl_goal,
     parse_english_subgoal,
     parse_pddl_subgoal,
 )
 from twostep.pddl import Goal, Problem, parse_goal, parse_problem
+from twostep.subgoals import goal_conflict
 
 INIT = "(arm-empty) (on-table a) (on-table c) (on b c) (clear a) (clear b)"
 
@@ -158,14 +158,14 @@ def test_bad_pddl(answer: str, reason: str, problem: Problem) -> None:
 
 def test_check_subgoal(problem: Problem) -> None:
     full = problem.goal
-    assert check_subgoal(parse_goal("(and (on c a) (on a b))", problem), full) == (
+    assert goal_conflict(parse_goal("(and (on c a) (on a b))", problem), full) == (
         "equals the full goal"
     )
     assert "includes the full goal" in str(
-        check_subgoal(parse_goal("(and (on c a) (on a b) (arm-empty))", problem), full)
+        goal_conflict(parse_goal("(and (on c a) (on a b) (arm-empty))", problem), full)
     )
-    reason = check_subgoal(parse_goal("(and (not (on a b)) (clear c))", problem), full)
+    reason = goal_conflict(parse_goal("(and (not (on a b)) (clear c))", problem), full)
     assert reason is not None and reason.startswith("contradicts the main goal: (not (on a b))")
     first = parse_goal("(on-table b)", problem)
-    assert check_subgoal(first, full) is None
-    assert check_subgoal(first, full, {1: first}) == "repeats the subgoal of agent1"
+    assert goal_conflict(first, full) is None
+    assert goal_conflict(first, full, {1: first}) == "repeats the subgoal of agent1"

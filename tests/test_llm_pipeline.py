@@ -246,6 +246,233 @@ def test_cli_missing_credentials_is_one_line(data_root: Path, tmp_path: Path) ->
         capture_output=True, text=True, cwd=REPO, env=env, timeout=240,
     )  # fmt: skip
     assert proc.returncode != 0
-    message = [line for line in proc.stderr.splitlines() if line.strip()]
-    assert any("OPENAI_API_KEY" in line and "goal-split" in line for line in message), proc.stderr
-    assert "Traceback" not in proc.stderr
+    # The job's outcome (status llm_error, the summary line on stdout) or a job error (stderr).
+    output = proc.stdout + proc.stderr
+    message = [line for line in output.splitlines() if line.strip()]
+    assert any("OPENAI_API_KEY" in line and "goal-split" in line for line in message), output
+    assert "Traceback" not in output
+
+
+# ------------------------------------------------- failed LLM calls fail the run
+
+FAKE_KEY = "fake-test-key-not-real-000000"
+
+
+def transport_error(litellm: Any, kind: str) -> Exception:
+    """The exception litellm raises for ``kind`` (what the network would give us)."""
+    made: dict[str, Any] = {
+        "connection": lambda: litellm.APIConnectionError(
+            message="Connection error.", llm_provider="openai", model="gpt-4o"
+        ),
+        "timeout": lambda: litellm.Timeout(
+            "Request timed out.", model="gpt-4o", llm_provider="openai"
+        ),
+        "rate limit": lambda: litellm.RateLimitError(
+            "Rate limit reached", llm_provider="openai", model="gpt-4o"
+        ),
+        "server error": lambda: litellm.InternalServerError(
+            "upstream failed", llm_provider="openai", model="gpt-4o"
+        ),
+    }
+    error: Exception = made[kind]()
+    return error
+
+
+class StandIn:
+    """Stands in for ``litellm.completion``: answers by prompt kind, or raises ``error``."""
+
+    def __init__(self, litellm: Any, generate: str = GOOD_EN, translate: str = GOOD_PDDL) -> None:
+        self.real = litellm.completion
+        self.answers = {"generate": generate, "translate": translate}
+        self.error: Exception | None = None
+        self.calls = 0
+
+    def __call__(self, **kwargs: Any) -> Any:
+        self.calls += 1
+        if self.error is not None:
+            raise self.error
+        user = str(kwargs["messages"][-1]["content"])
+        step = "translate" if "PDDL" in user.splitlines()[-1] else "generate"
+        return self.real(**kwargs, mock_response=self.answers[step])
+
+
+@pytest.fixture
+def litellm(monkeypatch: pytest.MonkeyPatch) -> Any:
+    from twostep.llm.client import _import_litellm
+
+    monkeypatch.setenv("OPENAI_API_KEY", FAKE_KEY)
+    return _import_litellm()
+
+
+def live(tmp_path: Path, retries: int = 2) -> LLMDecomposer:
+    settings = LLMSettings(cache_dir=tmp_path / "cache", max_retries=retries, backoff_s=0.001)
+    return LLMDecomposer(LLMClient(settings))
+
+
+@pytest.mark.parametrize("kind", ["connection", "timeout", "rate limit", "server error"])
+def test_failed_llm_call_fails_the_run_without_fallback(
+    task: BenchmarkTask, tmp_path: Path, litellm: Any, monkeypatch: pytest.MonkeyPatch, kind: str
+) -> None:
+    provider = StandIn(litellm)
+    provider.error = transport_error(litellm, kind)
+    monkeypatch.setattr(litellm, "completion", provider)
+    result = run_twostep(task, 3, live(tmp_path, retries=2), BW, FAST)
+    assert (result.status, result.success, result.fallback) == ("llm_error", False, None)
+    assert type(provider.error).__name__ in result.message and "3 attempts" in result.message
+    assert "generate for agent1" in result.message and FAKE_KEY not in result.message
+    # the first call, tried 1 + 2 times by the client; no translate, no second helper, no plan
+    assert provider.calls == 3
+    assert result.planner_calls == [] and result.plans == {} and result.exec_length is None
+    assert [s["status"] for s in result.subgoals] == ["discarded"]
+
+
+def test_bad_live_answer_is_discarded_and_falls_back(
+    task: BenchmarkTask, tmp_path: Path, litellm: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    provider = StandIn(litellm, translate="Sorry, I cannot write PDDL.")
+    monkeypatch.setattr(litellm, "completion", provider)
+    result = run_twostep(task, 2, live(tmp_path), BW, FAST)
+    assert result.status == "solved" and result.success and provider.calls == 2
+    assert result.fallback == "no helper subgoal accepted"
+    [subgoal] = result.subgoals
+    assert subgoal["status"] == "discarded" and "no PDDL goal" in subgoal["reason"]
+    assert_valid_schedule(task, result)
+
+
+def test_failed_llm_call_through_the_config(
+    hydra_conf: None, data_root: Path, tmp_path: Path, litellm: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    provider = StandIn(litellm)
+    provider.error = transport_error(litellm, "connection")
+    monkeypatch.setattr(litellm, "completion", provider)
+    overrides = [
+        f"data.root={data_root}", f"output.root={tmp_path}", "domain=blocksworld", "task=6",
+        "decomposer=llm", "llm=gpt-4o", "llm.max_retries=1", "llm.backoff_s=0.001",
+        "orchestration.prefect=false", "compare_sa=false",
+    ]  # fmt: skip
+    result = run_job(compose("config", overrides=overrides)).to_dict()
+    assert (result["status"], result["success"], result["fallback"]) == ("llm_error", False, None)
+    assert "APIConnectionError" in result["message"] and provider.calls == 2
+
+
+# ------------------------------------------------------------- under Prefect
+
+
+@pytest.fixture(scope="module")
+def prefect_api(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    """A Prefect server for this module's flow tests; stopped by PID."""
+    from flows.server import ServerSettings, spawn_server, stop_server, wait_until_healthy
+
+    home = tmp_path_factory.mktemp("prefect-home")
+    info = spawn_server(ServerSettings(home=str(home), startup_timeout_s=240), os.getpid())
+    try:
+        wait_until_healthy(info)
+        yield info.api_url
+    finally:
+        from flows.flow import flush_to_server
+
+        flush_to_server()  # the logs still queued for it, before it stops
+        stop_server(info)
+
+
+def flow_cfg(data_root: Path, tmp_path: Path, api_url: str, *overrides: str) -> Any:
+    return compose(
+        "config",
+        overrides=[
+            f"data.root={data_root}", f"output.root={tmp_path}", "domain=blocksworld", "task=6",
+            "agents=2", "decomposer=llm", "llm=gpt-4o", "compare_sa=false", "mlflow.enabled=false",
+            "orchestration.prefect=true", f"orchestration.prefect_api_url={api_url}",
+            "orchestration.reuse_results=false", *overrides,
+        ],
+    )  # fmt: skip
+
+
+@pytest.mark.integration
+def test_missing_key_under_prefect_is_one_line_and_one_attempt(
+    hydra_conf: None,
+    data_root: Path,
+    tmp_path: Path,
+    prefect_api: str,
+    monkeypatch: pytest.MonkeyPatch,
+    capfd: pytest.CaptureFixture[str],
+) -> None:
+    from flows.job import format_summary
+    from flows.runner import execute_job
+
+    attempts: list[int] = []
+    real_complete = LLMClient.complete
+
+    def counted(self: LLMClient, *args: Any, **kwargs: Any) -> Any:
+        attempts.append(1)
+        return real_complete(self, *args, **kwargs)
+
+    monkeypatch.setattr(LLMClient, "complete", counted)
+    monkeypatch.delenv("OPENAI_API_KEY", raising=False)
+    capfd.readouterr()
+    outcome = execute_job(flow_cfg(data_root, tmp_path, prefect_api), tmp_path / "job")
+    output = "".join(capfd.readouterr())
+    assert attempts == [1]  # no retry of something that can never succeed
+    result = outcome.result
+    assert (result["status"], result["success"], result["fallback"]) == ("llm_error", False, None)
+    assert "OPENAI_API_KEY" in result["message"] and "goal-split" in result["message"]
+    assert "Traceback" not in output and "OPENAI_API_KEY" not in output, output
+    line = format_summary(result)
+    assert "\n" not in line and "OPENAI_API_KEY" in line
+
+
+@pytest.mark.integration
+def test_llm_tasks_under_prefect_neither_cache_nor_retry(
+    hydra_conf: None,
+    data_root: Path,
+    tmp_path: Path,
+    prefect_api: str,
+    litellm: Any,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from flows.runner import execute_job
+
+    provider = StandIn(litellm)
+    monkeypatch.setattr(litellm, "completion", provider)
+    cfg = flow_cfg(data_root, tmp_path, prefect_api, "llm.max_retries=1", "llm.backoff_s=0.001")
+    first = execute_job(cfg, tmp_path / "job1")
+    assert first.status == "success", first.error
+    assert first.result["subgoals"][0]["status"] == "accepted" and provider.calls == 2
+    assert (first.stats.llm_calls, first.stats.llm_cache_hits) == (2, 0)
+    # Run again: the LLM client's disk cache answers (the one cache), no provider call.
+    second = execute_job(cfg, tmp_path / "job2")
+    assert provider.calls == 2 and (second.stats.llm_calls, second.stats.llm_cache_hits) == (0, 2)
+    assert second.result["subgoals"][0]["pddl"] == first.result["subgoals"][0]["pddl"]
+    # A new seed asks the provider again; it is down: the client's 1 + 1 attempts, no
+    # task retry on top, and the run fails as llm_error (no fallback).
+    provider.error = transport_error(litellm, "connection")
+    down = execute_job(
+        flow_cfg(data_root, tmp_path, prefect_api, "llm.max_retries=1", "llm.backoff_s=0.001",
+                 "seed=1"),
+        tmp_path / "job3",
+    )  # fmt: skip
+    assert provider.calls == 4 and down.stats.llm_calls == 1  # one generate task run
+    assert (down.result["status"], down.result["fallback"]) == ("llm_error", None)
+    assert "APIConnectionError" in down.result["message"]
+
+
+def test_steps_replace_the_llm_calls(task: BenchmarkTask) -> None:
+    """Steps.generate / Steps.translate are what the pipeline calls for the LLM decomposer."""
+    from twostep.decomposers.llm import generate_subgoal, translate_subgoal
+    from twostep.pipeline import Steps
+
+    seen: list[tuple[str, int]] = []
+
+    def generate(
+        client: Any, task: BenchmarkTask, agents: int, helper: int, *a: Any, **k: Any
+    ) -> Any:
+        seen.append(("generate", helper))
+        return generate_subgoal(client, task, agents, helper, *a, **k)
+
+    def translate(*args: Any, **kwargs: Any) -> Any:
+        seen.append(("translate", kwargs["helper"]))
+        return translate_subgoal(*args, **kwargs)
+
+    steps = Steps(generate=generate, translate=translate)
+    result = run_twostep(task, 3, scripted(GOOD_EN, GOOD_PDDL, "None"), BW, FAST, steps=steps)
+    assert seen == [("generate", 1), ("translate", 1), ("generate", 2)]
+    assert [s["status"] for s in result.subgoals] == ["accepted", "stopped"]

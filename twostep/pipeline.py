@@ -6,30 +6,44 @@ TwoStep, readable top to bottom in :func:`run_twostep`:
     ->  plan each helper from the current environment  ->  progress the state
     ->  plan the main agent to the full goal  ->  score the parallel execution
 
-Each step is one function here so that the Prefect flow (``flows/``) can run it as a task.
+Each step is one function here (the LLM decomposer's two calls are
+:func:`~twostep.decomposers.llm.generate_subgoal` and
+:func:`~twostep.decomposers.llm.translate_subgoal`), and :class:`Steps` is the one way to
+replace them: the Prefect flow (``flows/``) passes task-wrapped versions.
+The subgoal rules are :mod:`twostep.subgoals`.
 Every method returns a :class:`RunResult`, which serialises to the common result.json.
+A decomposer that cannot propose (an LLM call failed after its retries) fails the run
+with status ``llm_error``; only unusable subgoals lead to the single-agent fallback.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Collection, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 from twostep.benchmark import BenchmarkTask
 from twostep.decomposers.base import (
     Decomposer,
+    DecomposerError,
     DecompositionRequest,
     SubgoalProposal,
-    goal_conflict,
+)
+from twostep.decomposers.llm import (
+    GenerateStep,
+    LLMDecomposer,
+    TranslateStep,
+    generate_subgoal,
+    translate_subgoal,
 )
 from twostep.execution import ParallelExecution, ScheduleError, check_schedule, parallel_length
 from twostep.multiagent import compile_multi_agent_problem, split_plan
-from twostep.pddl import Fact, Goal, PDDLError, Problem, parse_goal
+from twostep.pddl import Fact, Goal, Problem
 from twostep.planner import PlannerSettings, PlanResult, Status, plan
 from twostep.progression import environment_part, handoff_problem, progress_state
 from twostep.strips import Grounder, PlanError
+from twostep.subgoals import SubgoalError, SubgoalStatus, check_subgoal
 
 
 @dataclass
@@ -65,7 +79,7 @@ class RunResult:
     schedule: list[list[tuple[str, str]]] = field(default_factory=list)
     subgoals: list[dict[str, Any]] = field(default_factory=list)
     decomposer: str | None = None
-    status: str = "solved"
+    status: str = "solved"  # the planner's status, or "llm_error" (then ``message`` says why)
     message: str = ""
     fallback: str | None = None
     planner_calls: list[AgentPlan] = field(default_factory=list)
@@ -139,41 +153,41 @@ def _named_schedule(
     return [[(names[agent], action) for agent, action in step] for step in execution.steps]
 
 
-def check_subgoal(
+def check_proposal(
     proposal: SubgoalProposal,
     problem: Problem,
     environment: frozenset[Fact],
     agent_predicates: Collection[str],
+    earlier: Mapping[int, Goal],
 ) -> Goal | None:
-    """Parse a proposal against the task; on a problem set its status and reason, return None.
-
-    A subgoal is discarded when it is not valid PDDL for this task (unknown predicate or
-    object, wrong arity), already holds for the helper, equals the whole goal, or asks for
-    the opposite of a goal literal.
-    """
-    if proposal.status != "proposed":  # discarded or stopped by the decomposer itself
+    """The proposal's goal if :func:`twostep.subgoals.check_subgoal` accepts it from the
+    helper's start (``environment`` plus its own agent facts); else mark it discarded."""
+    if proposal.status != SubgoalStatus.PROPOSED:  # discarded or stopped by the decomposer
         return None
-    if not proposal.pddl:
-        proposal.status, proposal.reason = "discarded", proposal.reason or "no PDDL subgoal"
-        return None
+    start = handoff_problem(problem, environment, problem.goal, agent_predicates).init
     try:
-        goal = parse_goal(proposal.pddl, problem, source=f"helper {proposal.helper} subgoal")
-    except PDDLError as error:
-        proposal.status, proposal.reason = "discarded", f"invalid PDDL: {error.message}"
+        return check_subgoal(
+            proposal.pddl,
+            problem,
+            start=start,
+            earlier=earlier,
+            source=f"helper {proposal.helper} subgoal",
+        )
+    except SubgoalError as error:
+        proposal.status, proposal.reason = SubgoalStatus.DISCARDED, str(error)
         return None
-    start = handoff_problem(problem, environment, goal, agent_predicates).init
-    if goal.holds(start):
-        proposal.status, proposal.reason = "discarded", "already true in the helper's initial state"
-        return None
-    conflict = goal_conflict(goal, problem.goal)
-    if conflict is not None:
-        proposal.status, proposal.reason = "discarded", conflict
-        return None
-    return goal
 
 
-def propose(decomposer: Decomposer, request: DecompositionRequest) -> list[SubgoalProposal]:
-    """Ask the decomposer for helper subgoals (generate + translate for the LLM)."""
+def propose(
+    decomposer: Decomposer,
+    request: DecompositionRequest,
+    generate: GenerateStep = generate_subgoal,
+    translate: TranslateStep = translate_subgoal,
+) -> list[SubgoalProposal]:
+    """Ask the decomposer for helper subgoals; the LLM decomposer calls ``generate`` and
+    ``translate``. Raises :class:`~twostep.decomposers.base.DecomposerError`."""
+    if isinstance(decomposer, LLMDecomposer):
+        return decomposer.propose(request, generate, translate)
     return decomposer.propose(request)
 
 
@@ -189,10 +203,15 @@ class Steps:
     """The pipeline's steps as replaceable functions.
 
     The library runs them directly; ``flows/`` passes versions wrapped as Prefect tasks
-    (caching, retries, persisted results) without repeating the control flow.
+    without repeating the control flow. ``generate`` and ``translate`` are the LLM
+    decomposer's two calls (caching and retries stay in the LLM client).
     """
 
-    propose: Callable[[Decomposer, DecompositionRequest], list[SubgoalProposal]] = propose
+    propose: Callable[
+        [Decomposer, DecompositionRequest, GenerateStep, TranslateStep], list[SubgoalProposal]
+    ] = propose
+    generate: GenerateStep = generate_subgoal
+    translate: TranslateStep = translate_subgoal
     plan: Callable[[Problem, PlannerSettings], PlanResult] = plan
     progress: Callable[[Problem, Sequence[str], Collection[str]], frozenset[Fact]] = progress
     score: Callable[[Problem, Sequence[Sequence[str]], Collection[str], str], ParallelExecution] = (
@@ -298,19 +317,25 @@ def run_twostep(
     per_agent_settings = settings.with_time_limit(settings.search_time_limit_s / max(agents, 1))
 
     # 1-2. generate + translate (the decomposer)
-    proposals = steps.propose(decomposer, DecompositionRequest(task, agents, seed))[
-        : max(agents - 1, 0)
-    ]
-    run.llm_time_s = sum(p.llm_time_s for p in proposals)
-    run.scripted_llm = any(x.get("scripted") for p in proposals for x in p.exchanges)
+    request = DecompositionRequest(task, agents, seed)
+    try:
+        proposals = steps.propose(decomposer, request, steps.generate, steps.translate)
+    except DecomposerError as error:  # no answer at all: the run fails, no SA fallback
+        _record_proposals(run, error.proposals)
+        run.status, run.message = error.status, str(error)
+        run.planning_time_s = run.llm_time_s
+        run.wall_time_s = time.perf_counter() - start
+        return run
+    proposals = proposals[: max(agents - 1, 0)]
 
     # 3-4. check each subgoal, plan its helper, progress the environment
     environment = environment_part(problem.init, agent_predicates)
     helper_plans: list[list[str]] = []
+    accepted_goals: dict[int, Goal] = {}
     planner_time = 0.0
     editing_time = 0.0
     for proposal in proposals:
-        goal = check_subgoal(proposal, problem, environment, agent_predicates)
+        goal = check_proposal(proposal, problem, environment, agent_predicates, accepted_goals)
         if goal is None:
             continue
         edit_start = time.perf_counter()
@@ -322,7 +347,7 @@ def run_twostep(
             AgentPlan(f"agent{proposal.helper}", "helper", goal.to_pddl(), result)
         )
         if not result.solved or result.plan is None:
-            proposal.status = "discarded"
+            proposal.status = SubgoalStatus.DISCARDED
             proposal.reason = {
                 Status.TIMEOUT: "timed out",
                 Status.UNSOLVABLE: "unsolvable from the helper's initial state",
@@ -331,7 +356,8 @@ def run_twostep(
         edit_start = time.perf_counter()
         environment = steps.progress(helper_problem, result.plan, agent_predicates)
         editing_time += time.perf_counter() - edit_start
-        proposal.status = "accepted"
+        proposal.status = SubgoalStatus.ACCEPTED
+        accepted_goals[proposal.helper] = goal
         helper_plans.append(list(result.plan))
 
     # 5. the main agent, from the final environment, to the full goal
@@ -349,7 +375,7 @@ def run_twostep(
             run.fallback = f"main agent after helpers: {result.status.value} ({result.message})"
 
     # 6. score; fall back to the single-agent plan when nothing usable remains
-    accepted = [p for p in proposals if p.status == "accepted"]
+    accepted = [p for p in proposals if p.status == SubgoalStatus.ACCEPTED]
     execution: ParallelExecution | None = None
     if main_plan is not None:
         score_start = time.perf_counter()
@@ -369,17 +395,24 @@ def run_twostep(
         if run.fallback is None:
             run.fallback = (
                 "no helper subgoal accepted"
-                if any(p.status != "stopped" for p in proposals)
+                if any(p.status != SubgoalStatus.STOPPED for p in proposals)
                 else "no helper subgoal proposed"
             )
         for proposal in accepted:  # their plans are not used
-            proposal.status, proposal.reason = "unused", run.fallback
+            proposal.status, proposal.reason = SubgoalStatus.UNUSED, run.fallback
         result = steps.plan(problem, settings)
         planner_time += result.planner_time_s
         run.planner_calls.append(AgentPlan("agent0", "single", problem.goal.to_pddl(), result))
         _use_single_agent_plan(run, result)
-    run.subgoals = [p.to_dict() for p in proposals]
+    _record_proposals(run, proposals)
     run.state_editing_time_s = editing_time
     run.planning_time_s = run.llm_time_s + planner_time + editing_time
     run.wall_time_s = time.perf_counter() - start
     return run
+
+
+def _record_proposals(run: RunResult, proposals: Sequence[SubgoalProposal]) -> None:
+    """The proposals as result.json records them, with their LLM time."""
+    run.llm_time_s = sum(p.llm_time_s for p in proposals)
+    run.scripted_llm = any(x.get("scripted") for p in proposals for x in p.exchanges)
+    run.subgoals = [p.to_dict() for p in proposals]

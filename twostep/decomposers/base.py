@@ -2,8 +2,12 @@
 
 A decomposer proposes, for N agents, up to N-1 helper subgoals. Each proposal carries the
 PDDL goal text (and, for the LLM, the English subgoal and every prompt and answer). The
-pipeline (:mod:`twostep.pipeline`) then checks every proposal against the task and plans
-the accepted ones; a decomposer never plans.
+pipeline (:mod:`twostep.pipeline`) then checks every proposal against the task
+(:mod:`twostep.subgoals`) and plans the accepted ones; a decomposer never plans.
+
+A decomposer that cannot propose at all (its LLM calls failed) raises
+:class:`DecomposerError`; the run then fails with the error's status instead of falling
+back to the single-agent plan, which is only for subgoals that turned out unusable.
 """
 
 from __future__ import annotations
@@ -12,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from twostep.benchmark import BenchmarkTask
-from twostep.pddl import Goal, fact_to_pddl
+from twostep.subgoals import SubgoalStatus
 
 
 @dataclass
@@ -20,14 +24,14 @@ class SubgoalProposal:
     """One helper's subgoal as proposed, before the pipeline checks and plans it.
 
     ``pddl`` is the goal text (None when no usable PDDL came out); ``status`` is
-    ``"proposed"`` until the pipeline decides, or ``"discarded"`` when the decomposer
-    already knows it is unusable (``reason`` then says why).
+    ``PROPOSED`` until the pipeline decides, or ``DISCARDED`` (or ``STOPPED``) when the
+    decomposer already knows it is unusable (``reason`` then says why).
     """
 
     helper: int  # 1-based helper index
     pddl: str | None
     english: str | None = None
-    status: str = "proposed"
+    status: SubgoalStatus = SubgoalStatus.PROPOSED
     reason: str | None = None
     llm_time_s: float = 0.0
     exchanges: list[dict[str, Any]] = field(default_factory=list)  # prompts and answers
@@ -37,7 +41,7 @@ class SubgoalProposal:
             "helper": self.helper,
             "english": self.english,
             "pddl": self.pddl,
-            "status": self.status,
+            "status": SubgoalStatus(self.status).value,
             "reason": self.reason,
             "llm_time_s": round(self.llm_time_s, 6),
             "exchanges": self.exchanges,
@@ -59,16 +63,16 @@ class Decomposer(Protocol):
     def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]: ...
 
 
-def goal_conflict(goal: Goal, full_goal: Goal) -> str | None:
-    """Why ``goal`` cannot be a helper subgoal of ``full_goal`` whatever the state, or None.
+class DecomposerError(Exception):
+    """The decomposer could not propose (e.g. an LLM call failed after its retries).
 
-    It equals the full goal (nothing left to share), or it asks for the opposite of a
-    goal literal (the main agent would have to undo the helper's work).
+    ``status`` becomes the run's status; ``proposals`` are those made before the failure
+    (recorded in result.json, never planned).
     """
-    if goal.positive == full_goal.positive and goal.negative == full_goal.negative:
-        return "equals the full goal"
-    for fact in sorted(goal.negative & full_goal.positive):
-        return f"contradicts the main goal: (not {fact_to_pddl(fact)}) undoes a goal fact"
-    for fact in sorted(goal.positive & full_goal.negative):
-        return f"contradicts the main goal: {fact_to_pddl(fact)} is negated in the goal"
-    return None
+
+    def __init__(
+        self, message: str, status: str, proposals: list[SubgoalProposal] | None = None
+    ) -> None:
+        super().__init__(message)
+        self.status = status
+        self.proposals = list(proposals or [])

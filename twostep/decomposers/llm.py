@@ -2,10 +2,18 @@
 
 For helpers 1..N-1: :func:`generate_subgoal` asks for the helper's English subgoal (the
 answer "none" ends the loop), :func:`translate_subgoal` turns it into a PDDL goal and
-checks it against the task. Every prompt and raw answer is kept in the proposal's
-``exchanges``; an answer that gives no usable subgoal becomes a ``discarded`` proposal
-with the reason. The two steps are plain functions so a workflow engine can run each
-one as its own task; :class:`LLMDecomposer` chains them.
+checks it against the task (:mod:`twostep.subgoals`, the rules that need no state).
+Every prompt and raw answer is kept in the proposal's ``exchanges``; an answer that
+gives no usable subgoal becomes a ``discarded`` proposal with the reason.
+
+A call that fails (:class:`~twostep.llm.client.LLMCallError`: the client's retries are
+spent, or credentials are missing) is no answer at all: :meth:`LLMDecomposer.propose`
+raises :class:`~twostep.decomposers.base.DecomposerError` with status ``llm_error``, and
+the run fails instead of falling back to the single-agent plan.
+
+The two steps are plain functions that :meth:`LLMDecomposer.decompose` takes as
+arguments (the pipeline passes :attr:`twostep.pipeline.Steps.generate` and ``translate``),
+so a workflow engine can run each call as its own task.
 """
 
 from __future__ import annotations
@@ -15,18 +23,16 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from twostep.benchmark import BenchmarkTask
-from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
+from twostep.decomposers.base import DecomposerError, DecompositionRequest, SubgoalProposal
 from twostep.llm.client import LLMCallError, LLMClient, LLMResponse
-from twostep.llm.parsing import (
-    SubgoalError,
-    check_subgoal,
-    parse_english_subgoal,
-    parse_pddl_subgoal,
-)
+from twostep.llm.parsing import parse_english_subgoal, parse_pddl_subgoal
 from twostep.llm.prompts import Message, generator_messages, translator_messages
 from twostep.pddl import parse_goal
+from twostep.subgoals import SubgoalError, SubgoalStatus, goal_conflict
 
 Exchange = dict[str, Any]
+# The run status of a decomposition whose LLM call failed (result.json ``status``).
+LLM_ERROR = "llm_error"
 
 
 def _exchange(
@@ -106,12 +112,17 @@ def translate_subgoal(
         exchange.update(status="discarded", reason=str(exc))
         return None, exchange
     others = {h: parse_goal(text, problem) for h, text in (earlier or {}).items()}
-    reason = check_subgoal(goal, problem.goal, others)
+    reason = goal_conflict(goal, problem.goal, others)
     exchange["parsed"] = goal.to_pddl()
     if reason is not None:
         exchange.update(status="discarded", reason=reason)
         return None, exchange
     return goal.to_pddl(), exchange
+
+
+# The signatures of the two steps, as :class:`twostep.pipeline.Steps` holds them.
+GenerateStep = Callable[..., tuple[str | None, Exchange]]
+TranslateStep = Callable[..., tuple[str | None, Exchange]]
 
 
 @dataclass
@@ -137,25 +148,29 @@ class LLMDecomposer:
 
     name = "llm"
 
-    def __init__(
-        self,
-        client: LLMClient,
-        *,
-        fixed_example: bool = True,
-        generate: Callable[..., tuple[str | None, Exchange]] = generate_subgoal,
-        translate: Callable[..., tuple[str | None, Exchange]] = translate_subgoal,
-    ) -> None:
+    def __init__(self, client: LLMClient, *, fixed_example: bool = True) -> None:
         self.client = client
         self.fixed_example = fixed_example
-        # The two LLM steps are replaceable so that flows/ can run each as a Prefect task
-        # (retries, caching) without repeating the loop below.
-        self.generate = generate
-        self.translate = translate
 
-    def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]:
-        return self.decompose(request).proposals
+    def propose(
+        self,
+        request: DecompositionRequest,
+        generate: GenerateStep = generate_subgoal,
+        translate: TranslateStep = translate_subgoal,
+    ) -> list[SubgoalProposal]:
+        """The proposals; :class:`DecomposerError` (``llm_error``) when a call failed."""
+        result = self.decompose(request, generate, translate)
+        if result.error is not None:
+            raise DecomposerError(f"LLM call failed: {result.error}", LLM_ERROR, result.proposals)
+        return result.proposals
 
-    def decompose(self, request: DecompositionRequest) -> LLMDecomposition:
+    def decompose(
+        self,
+        request: DecompositionRequest,
+        generate: GenerateStep = generate_subgoal,
+        translate: TranslateStep = translate_subgoal,
+    ) -> LLMDecomposition:
+        """Generate and translate a subgoal per helper with the given step functions."""
         task, seed = request.task, request.seed
         result = LLMDecomposition(proposals=[])
         english_so_far: list[str] = []
@@ -163,7 +178,7 @@ class LLMDecomposer:
         for helper in range(1, request.agents):
             step = "generate"
             try:
-                english, gen = self.generate(
+                english, gen = generate(
                     self.client,
                     task,
                     request.agents,
@@ -178,30 +193,55 @@ class LLMDecomposer:
                     # kept as a proposal so that result.json records the answer
                     result.proposals.append(
                         SubgoalProposal(
-                            helper, None, None, "stopped", NONE_REASON, _seconds(gen), [gen]
+                            helper,
+                            None,
+                            None,
+                            SubgoalStatus.STOPPED,
+                            NONE_REASON,
+                            _seconds(gen),
+                            [gen],
                         )
                     )
                     break
                 if english is None:
                     result.proposals.append(
                         SubgoalProposal(
-                            helper, None, None, "discarded", gen["reason"], _seconds(gen), [gen]
+                            helper,
+                            None,
+                            None,
+                            SubgoalStatus.DISCARDED,
+                            gen["reason"],
+                            _seconds(gen),
+                            [gen],
                         )
                     )
                     continue
                 english_so_far.append(english)
                 step = "translate"
-                pddl, tr = self.translate(
+                pddl, tr = translate(
                     self.client, task, english, seed, helper=helper, earlier=accepted
                 )
             except LLMCallError as exc:
                 result.error = f"{step} for agent{helper}: {exc}"
+                done = [gen] if step == "translate" else []  # the answer given before it
                 result.proposals.append(
-                    SubgoalProposal(helper, None, None, "discarded", f"LLM call failed: {exc}")
+                    SubgoalProposal(
+                        helper,
+                        None,
+                        None,
+                        SubgoalStatus.DISCARDED,
+                        f"LLM call failed: {exc}",
+                        _seconds(*done),
+                        done,
+                    )
                 )
                 break
             result.exchanges.append(tr)
-            status, reason = ("proposed", None) if pddl is not None else ("discarded", tr["reason"])
+            status, reason = (
+                (SubgoalStatus.PROPOSED, None)
+                if pddl is not None
+                else (SubgoalStatus.DISCARDED, tr["reason"])
+            )
             if pddl is not None:
                 accepted[helper] = pddl
             result.proposals.append(
@@ -219,9 +259,12 @@ class LLMDecomposer:
 
 
 __all__ = [
+    "LLM_ERROR",
     "Exchange",
+    "GenerateStep",
     "LLMDecomposer",
     "LLMDecomposition",
+    "TranslateStep",
     "generate_subgoal",
     "translate_subgoal",
 ]

@@ -14,6 +14,7 @@ from contextlib import contextmanager
 from dataclasses import replace
 
 from twostep.llm.client import (
+    LLMCacheCorrupt,
     LLMCacheMiss,
     LLMCallError,
     LLMClient,
@@ -39,6 +40,7 @@ def open_client(settings: LLMSettings) -> Iterator[LLMClient]:
 
 
 __all__ = [
+    "LLMCacheCorrupt",
     "LLMCacheMiss",
     "LLMCallError",
     "LLMClient",

@@ -7,12 +7,17 @@
   request under ``cache_dir``, so a re-run needs no network; the run's seed is part of
   the request, so seeds 0, 1, 2 are three distinct calls;
 * ``mode="replay"``: answers only from the cache and raises :class:`LLMCacheMiss` on a miss;
+* a cache entry that cannot be read back (truncated, not JSON, no answer text) is corrupt,
+  never a silent miss: a live call warns naming the file and asks the model again (the
+  new answer replaces the entry); a replay raises :class:`LLMCacheCorrupt` naming it;
 * ``mode="scripted"``: answers from a YAML script (``answers:`` list, in call order),
   marked ``scripted`` and never written to the cache;
-* retries with exponential backoff on rate limits, timeouts, connection errors and 5xx,
-  none on authentication or bad requests;
-* missing credentials become a one-line :class:`LLMCredentialsError` naming the variable
-  to set and the offline alternatives. No key is ever printed, logged or stored.
+* the one retry loop of the project for LLM calls: exponential backoff (``backoff_s``,
+  doubling, ``max_retries`` retries) on rate limits, timeouts, connection errors and 5xx,
+  none on authentication or bad requests; what still fails is an :class:`LLMCallError`;
+* missing or rejected credentials become a one-line :class:`LLMCredentialsError` (an
+  :class:`LLMCallError`) naming the variable to set and the offline alternatives. No key
+  is ever printed, logged or stored.
 
 litellm is imported lazily on the first live call (it takes seconds to import).
 """
@@ -21,6 +26,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import os
 import re
 import time
@@ -28,6 +34,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+from twostep.files import write_json_atomic
 
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 
@@ -51,6 +59,8 @@ _SECRET_PARAM = re.compile(r"key|secret|password|authorization|headers", re.IGNO
 
 Message = Mapping[str, str]
 
+log = logging.getLogger(__name__)
+
 _litellm: Any = None  # the lazily imported litellm module
 
 
@@ -69,7 +79,11 @@ class LLMError(Exception):
     """An LLM call that could not produce an answer."""
 
 
-class LLMCredentialsError(LLMError):
+class LLMCallError(LLMError):
+    """The provider failed (after retries, or with an error that is not worth retrying)."""
+
+
+class LLMCredentialsError(LLMCallError):
     """No usable API key: the message names the variable to set (never the key)."""
 
 
@@ -77,12 +91,12 @@ class LLMCacheMiss(LLMError):
     """``mode="replay"`` and the request is not in the cache."""
 
 
+class LLMCacheCorrupt(LLMError):
+    """``mode="replay"`` and the request's cache entry cannot be read back."""
+
+
 class LLMScriptError(LLMError):
     """The scripted answers are missing, malformed or used up."""
-
-
-class LLMCallError(LLMError):
-    """The provider failed (after retries, or with an error that is not worth retrying)."""
 
 
 @dataclass
@@ -215,7 +229,7 @@ class LLMClient:
         request = self.request(messages, seed)
         key = self.cache_key(request)
         if s.use_cache or s.mode == "replay":
-            hit = self._read_cache(key)
+            hit = self._read_cache(key, replay=s.mode == "replay")
             if hit is not None:
                 seconds = time.perf_counter() - start
                 recorded = float(hit.get("seconds", 0.0))
@@ -291,16 +305,28 @@ class LLMClient:
 
     # ------------------------------------------------------------------ cache
 
-    def _read_cache(self, key: str) -> dict[str, Any] | None:
+    def _read_cache(self, key: str, replay: bool) -> dict[str, Any] | None:
+        """The cached entry, or None when there is none; a corrupt one is reported."""
+        path = self.cache_path(key)
         try:
-            data = json.loads(self.cache_path(key).read_text())
-        except (OSError, ValueError):
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
             return None
-        return data if isinstance(data, dict) and isinstance(data.get("text"), str) else None
+        except (OSError, ValueError) as error:
+            problem = f"{type(error).__name__}: {error}"
+        else:
+            if isinstance(data, dict) and isinstance(data.get("text"), str):
+                return data
+            problem = "no answer text in it"
+        if replay:
+            raise LLMCacheCorrupt(
+                f"llm.mode=replay: the cache entry {path} is corrupt ({problem}); delete it "
+                "and record it again with llm.mode=live"
+            )
+        log.warning("LLM cache entry %s is corrupt (%s): asking the model again", path, problem)
+        return None
 
     def _write_cache(self, key: str, request: Mapping[str, Any], text: str, seconds: float) -> None:
-        path = self.cache_path(key)
-        path.parent.mkdir(parents=True, exist_ok=True)
         entry = {
             "key": key,
             "request": request,
@@ -309,9 +335,8 @@ class LLMClient:
             "model": self.settings.model,
             "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         }
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(json.dumps(entry, indent=1, ensure_ascii=False, default=str))
-        os.replace(tmp, path)  # atomic: parallel jobs never read half a file
+        # atomic: parallel jobs (and a kill -9) never leave half an entry
+        write_json_atomic(self.cache_path(key), entry, indent=1)
 
 
 def _retryable(litellm: Any, exc: Exception) -> bool:

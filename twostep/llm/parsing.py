@@ -5,25 +5,20 @@
   sentence if it names something of the task) and recognises the answer "none".
 * :func:`extract_pddl_goal` finds the goal in the translator's answer, tolerating code
   fences, prose around it, a missing ``(:goal`` wrapper and unbalanced trailing parens.
-* :func:`parse_pddl_subgoal` checks it against the task with :func:`twostep.pddl.parse_goal`
-  (unknown predicate, wrong arity, unknown object), and :func:`check_subgoal` against the
-  main goal (equal to it, contradicting it, or a repeat of an earlier helper's subgoal).
+* :func:`parse_pddl_subgoal` parses it as a goal of the task
+  (:func:`twostep.subgoals.parse_subgoal`: unknown predicate, wrong arity, unknown object).
 
-Every failure is a :class:`SubgoalError` whose message is the reason recorded for a discard.
+The rules a parsed subgoal must then meet live in :mod:`twostep.subgoals`. Every failure
+is a :class:`~twostep.subgoals.SubgoalError` whose message is the reason for a discard.
 """
 
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
 from dataclasses import dataclass
 
-from twostep.decomposers.base import goal_conflict
-from twostep.pddl import Goal, PDDLError, Problem, parse_goal
-
-
-class SubgoalError(ValueError):
-    """An answer that gives no usable subgoal; the message says why."""
+from twostep.pddl import Goal, Problem
+from twostep.subgoals import SubgoalError, parse_subgoal
 
 
 @dataclass(frozen=True)
@@ -175,24 +170,13 @@ def parse_pddl_subgoal(answer: str, problem: Problem) -> Goal:
     goal_text = extract_pddl_goal(answer)
     if goal_text is None:
         raise SubgoalError("no PDDL goal in the translator's answer")
-    try:
-        return parse_goal(goal_text, problem, source="subgoal")
-    except PDDLError as exc:
-        raise SubgoalError(f"invalid PDDL subgoal: {exc.message}") from None
+    return parse_subgoal(goal_text, problem)
 
 
-def check_subgoal(
-    goal: Goal, full_goal: Goal, earlier: Mapping[int, Goal] | None = None
-) -> str | None:
-    """Why ``goal`` is no use as a helper subgoal of ``full_goal``, or None if it may be."""
-    conflict = goal_conflict(goal, full_goal)
-    if conflict is not None:
-        return conflict
-    # (a goal that includes the full goal cannot also contradict it: parse_goal rejects
-    # a literal together with its negation, so the order of these checks is immaterial)
-    if full_goal.positive <= goal.positive and full_goal.negative <= goal.negative:
-        return "includes the full goal: nothing would be left for the main agent"
-    for helper, other in sorted((earlier or {}).items()):
-        if goal.positive == other.positive and goal.negative == other.negative:
-            return f"repeats the subgoal of agent{helper}"
-    return None
+__all__ = [
+    "EnglishSubgoal",
+    "SubgoalError",
+    "extract_pddl_goal",
+    "parse_english_subgoal",
+    "parse_pddl_subgoal",
+]
