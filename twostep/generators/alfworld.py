@@ -106,9 +106,7 @@ class Kitchen:
         return "\n".join(lines) + "\n"
 
 
-def _counter_block(
-    prefix: int, x: int, location: tuple[str, tuple[int, int]]
-) -> list[Receptacle]:
+def _counter_block(prefix: int, x: int, location: tuple[str, tuple[int, int]]) -> list[Receptacle]:
     """A counter with a cabinet above and a drawer below, all reached from one place."""
     loc = location[0]
     return [
@@ -225,9 +223,13 @@ PAPER_TASKS: tuple[KitchenTask, ...] = (
             "spoon1": "drawer1",
         },
         (("handempty", AGENT),),
-        (("in", "plate1", _TABLE), ("in", "bowl1", _TABLE), ("in", "bowl2", _TABLE),
-         ("in", "mug1", _TABLE)),
-    ),  # fmt: skip
+        (
+            ("in", "plate1", _TABLE),
+            ("in", "bowl1", _TABLE),
+            ("in", "bowl2", _TABLE),
+            ("in", "mug1", _TABLE),
+        ),
+    ),
     KitchenTask(
         "Put the apple, the egg and the wine bottle in the fridge",
         {
@@ -250,9 +252,13 @@ PAPER_TASKS: tuple[KitchenTask, ...] = (
             "egg1": "fridge1",
         },
         (("handempty", AGENT),),
-        (("in", "spoon1", _SINK), ("in", "cup1", _SINK), ("in", "knife1", _SINK),
-         ("in", "apple1", _SINK)),
-    ),  # fmt: skip
+        (
+            ("in", "spoon1", _SINK),
+            ("in", "cup1", _SINK),
+            ("in", "knife1", _SINK),
+            ("in", "apple1", _SINK),
+        ),
+    ),
 )
 
 EXAMPLE_TASK = KitchenTask(
@@ -334,8 +340,7 @@ def describe_task(spec: TaskSpec, kitchen: Kitchen) -> str:
     facts = set(spec.init)
     items = [o for o, t in spec.objects if t == "item"]
     lines = [
-        f"You are {AGENT}, a robot in a kitchen. You stand at {kitchen.start} "
-        "with empty hands.",
+        f"You are {AGENT}, a robot in a kitchen. You stand at {kitchen.start} with empty hands.",
     ]
     by_location: dict[str, list[str]] = {}
     for r in kitchen.receptacles:
