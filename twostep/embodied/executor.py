@@ -206,7 +206,7 @@ def embody(
     A plan's agent is the first agent-typed argument it names; a body whose plan names an
     agent the task does not have (an MA plan's added agent) or no agent at all starts as
     a copy of the task's first agent. Goal literals about the task's agents must hold for
-    every body.
+    every body that plays that agent.
     """
     domain = problem.domain
     agents = _objects_of_type(problem, agent_type)
@@ -219,7 +219,9 @@ def embody(
         name: [i for i, (_, t) in enumerate(a.parameters) if _is_a(domain, t, agent_type)]
         for name, a in domain.actions.items()
     }
-    bodies = body_names(names, problem.all_objects)
+    agent_set = set(agents)
+    # bodies replace the task's agent objects, so only the other objects' names are taken
+    bodies = body_names(names, {o: t for o, t in problem.all_objects.items() if o not in agent_set})
     renamed: list[tuple[str, ...]] = []
     templates: list[str] = []
     for plan, body in zip(plans, bodies, strict=True):
@@ -236,7 +238,6 @@ def embody(
             out.append("(" + " ".join((name, *new_args)) + ")")
         renamed.append(tuple(out))
         templates.append(template if template in agents else agents[0])
-    agent_set = set(agents)
 
     def mentions_agent(fact: Fact) -> bool:
         return any(term in agent_set for term in fact[1:])
@@ -249,14 +250,19 @@ def embody(
             if template in f[1:]
         }
 
+    bodies_of = {agent: [b for b, t in zip(bodies, templates, strict=True) if t == agent]
+                 for agent in agents}  # fmt: skip
+
     def per_body(facts: frozenset[Fact]) -> frozenset[Fact]:
-        out = {f for f in facts if not mentions_agent(f)}
-        for body in bodies:
-            out |= {
-                tuple(body if term in agent_set else term for term in f)
-                for f in facts
-                if mentions_agent(f)
-            }
+        """A literal about agent X holds for each body playing X (or every body, if none)."""
+        out: set[Fact] = set()
+        for fact in facts:
+            named = [t for t in fact[1:] if t in agent_set]
+            if not named:
+                out.add(fact)
+                continue
+            for body in bodies_of[named[0]] or bodies:
+                out.add(tuple(body if term in agent_set else term for term in fact))
         return frozenset(out)
 
     objects = {o: t for o, t in problem.objects.items() if o not in agent_set}
