@@ -23,6 +23,7 @@ from twostep.embodied import (
     build_floor_plan,
     embody,
     execute,
+    floor_plan_for_task,
     floor_plan_from_dict,
     floor_plan_from_locations,
     load_floor_plan,
@@ -309,3 +310,23 @@ def test_same_seed_same_trace_and_the_trace_replays_in_unified_planning(
     k = next(i for i, a in enumerate(broken) if a.startswith("(pickup"))
     broken[k - 1], broken[k] = broken[k], broken[k - 1]
     assert not validate_plan(first.problem, broken).valid
+
+
+def test_a_task_with_alfworld_location_names_runs_without_a_floor_plan(tmp_path: Path) -> None:
+    """Locations named as AlfWorld names them: (0,0) start, fridge at x=3 z=-2."""
+    start, fridge = "loc_bar_0_bar_0_bar_1_bar_45", "loc_bar_3_bar__minus_2_bar_2_bar_30"
+    problem = kitchen(
+        f"alice - agent {start} {fridge} - location fridge1 - receptacle egg1 - item",
+        f"(at alice {start}) (handempty alice) (reached-from fridge1 {fridge}) "
+        "(openable fridge1) (in egg1 fridge1)",
+        "(holding alice egg1)",
+    )
+    floor = floor_plan_for_task([start, fridge], tmp_path)  # no kitchen.yaml there
+    steps = [
+        f"(goto alice {start} {fridge})",
+        f"(open alice fridge1 {fridge})",
+        f"(pickup alice egg1 fridge1 {fridge})",
+    ]
+    result = execute(problem, [steps], floor, ["alice"], FIXED)
+    assert result.status == "success", result.message
+    assert result.embodied_length == 5 + 2  # |3| + |-2| moves on an open grid, 2 interactions

@@ -193,3 +193,14 @@ def floor_plan_from_locations(locations: Iterable[str], margin: int = 1) -> Floo
     height = max(z for _, z in positions.values()) - min_z + margin + 1
     cells = {name: (x - min_x, z - min_z) for name, (x, z) in positions.items()}
     return build_floor_plan("alfworld-locations", width, height, cells)
+
+
+FLOOR_PLAN_FILE = "kitchen.yaml"
+
+
+def floor_plan_for_task(location_names: Iterable[str], folder: str | Path | None) -> FloorPlan:
+    """The floor plan of a task: ``<folder>/kitchen.yaml`` if there is one, else the
+    task's own AlfWorld location names placed by their x and z."""
+    if folder is not None and (Path(folder) / FLOOR_PLAN_FILE).is_file():
+        return load_floor_plan(Path(folder) / FLOOR_PLAN_FILE)
+    return floor_plan_from_locations(location_names)
