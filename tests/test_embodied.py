@@ -330,3 +330,33 @@ def test_a_task_with_alfworld_location_names_runs_without_a_floor_plan(tmp_path:
     result = execute(problem, [steps], floor, ["alice"], FIXED)
     assert result.status == "success", result.message
     assert result.embodied_length == 5 + 2  # |3| + |-2| moves on an open grid, 2 interactions
+
+
+def test_a_multi_agent_plan_gets_one_body_per_planning_agent(kitchen_plan: FloorPlan) -> None:
+    """Task 1 planned for alice and an added agent bob, split per agent: both walk."""
+    task = load_task("alfworld", 1, DATA)
+    problem = task.problem
+    copies = {tuple("bob" if t == "alice" else t for t in f) for f in problem.init if "alice" in f}
+    two = Problem(
+        "two",
+        problem.domain,
+        {**problem.objects, "bob": "agent"},
+        problem.init | copies,
+        problem.goal,
+    )
+    result = plan(two, FAST)
+    assert result.plan is not None
+    per_agent: dict[str, list[str]] = {"alice": [], "bob": []}
+    for step in result.plan:
+        per_agent[step.split()[1]].append(step)
+    run = execute(
+        problem, [per_agent["alice"], per_agent["bob"]], kitchen_plan, ["agent0", "agent1"]
+    )
+    assert run.status == "success", run.message
+    assert run.problem is not None
+    applied = [t.applied for t in run.trace if t.applied is not None]
+    assert {a.split()[1] for a in applied} == {"agent0", "agent1"} & {
+        "agent0" if per_agent["alice"] else "",
+        "agent1" if per_agent["bob"] else "",
+    }
+    assert validate_plan(run.problem, applied).valid
