@@ -14,6 +14,7 @@ from twostep.embodied.executor import (
     TraceStep,
     embody,
     execute,
+    execute_plans,
 )
 from twostep.embodied.floorplan import (
     FloorPlan,
@@ -38,6 +39,7 @@ __all__ = [
     "build_floor_plan",
     "embody",
     "execute",
+    "execute_plans",
     "floor_plan_for_task",
     "floor_plan_from_dict",
     "floor_plan_from_locations",

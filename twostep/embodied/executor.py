@@ -333,6 +333,7 @@ class _Execution:
         self.backoffs = 0
         self.step = 0
         self.bodies: list[_Body] = []
+        self._connections: dict[tuple[Cell, Cell], bool] = {}
         grounder = Grounder(self.problem)
         for body, plan, source in zip(
             embodiment.bodies, embodiment.plans, embodiment.sources, strict=True
@@ -388,9 +389,11 @@ class _Execution:
                 or free[0]
             )
             distances = reachable_cells(self.floor_plan, start)
+            # the start cell, else the nearest free one (two bodies of one PDDL agent)
             cell = min(
                 (c for c in [start, *distances] if c not in taken),
                 key=lambda c: (distances.get(c, 0), c),
+                default=next(c for c in free if c not in taken),
             )
             body.position = cell
             taken.add(cell)
@@ -457,7 +460,7 @@ class _Execution:
             if not body.path or body.path[-1] != target or body.path[0] in occupied:
                 path = shortest_path(self.floor_plan, body.position, target, occupied)
                 if path is None:
-                    if shortest_path(self.floor_plan, body.position, target) is None:
+                    if not self._connected(body.position, target):
                         raise _Failure(
                             UNREACHABLE,
                             body.name,
@@ -482,6 +485,13 @@ class _Execution:
         else:
             self._record(body, "move", action=source)
         return "progress"
+
+    def _connected(self, start: Cell, goal: Cell) -> bool:
+        """Whether walls and furniture (agents aside) leave a way from start to goal."""
+        key = (start, goal)
+        if key not in self._connections:
+            self._connections[key] = shortest_path(self.floor_plan, start, goal) is not None
+        return self._connections[key]
 
     def _free_path(self, body: _Body) -> list[Cell]:
         target = body.targets[body.index] if not body.done else None
@@ -636,3 +646,14 @@ def execute(
         return result
     result.embodied_length = execution.step
     return result
+
+
+def execute_plans(
+    problem: Problem,
+    plans: Mapping[str, Sequence[str]],
+    agent_order: Sequence[str],
+    floor_plan: FloorPlan,
+    settings: ExecutorSettings | None = None,
+) -> EmbodiedResult:
+    """Execute a run's plans as result.json holds them (``plans`` by agent, ``agent_order``)."""
+    return execute(problem, [plans[a] for a in agent_order], floor_plan, agent_order, settings)
