@@ -50,8 +50,10 @@ def test_unknown_domain_and_task_list_what_exists(tmp_path: Path) -> None:
 
 
 def test_generated_data_set_is_complete(data_root: Path) -> None:
-    assert list_domains(data_root) == ["barman", "blocksworld", "grippers", "termes", "tyreworld"]
+    symbolic = ["barman", "blocksworld", "grippers", "termes", "tyreworld"]
+    assert list_domains(data_root) == ["alfworld", *symbolic]  # + the embodied kitchen
     for domain in list_domains(data_root):
-        assert list_tasks(domain, data_root) == list(range(1, 21))
+        tasks = [1, 2, 3, 4] if domain == "alfworld" else list(range(1, 21))  # Table II: 4
+        assert list_tasks(domain, data_root) == tasks
         task = load_task(domain, 1, data_root)
         assert task.task_nl and task.domain_nl and task.example_nl and task.example_plan

@@ -1,0 +1,206 @@
+"""Floor plans of the embodied executor: a grid, what blocks it, and where locations are.
+
+A :class:`FloorPlan` is a ``width x height`` grid of cells ``(x, y)``; walls and furniture
+block cells; every PDDL location object has the free cell an agent stands on to act
+there. Plans are read from a YAML file (``data/alfworld/kitchen.yaml``)::
+
+    name: paper-kitchen
+    width: 13
+    height: 11
+    walls: [[0, 0, 13, 1], ...]        # rectangles [x, y, width, height]
+    furniture: {fridge1: [1, 1, 2, 1]}  # drawn and blocking
+    locations: {loc-fridge1: [1, 2]}
+
+Real AlfWorld problems need no file: their location objects carry their own position
+(``loc|x|z|rotation|horizon``, mangled in PDDL as ``loc_bar_4_bar__minus_3_bar_1_bar_45``),
+and :func:`floor_plan_from_locations` places them on an open grid by x and z.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+Cell = tuple[int, int]
+Rect = tuple[int, int, int, int]
+
+
+class FloorPlanError(Exception):
+    """A floor plan that cannot be used: a bad file, a location off the grid or blocked."""
+
+
+@dataclass(frozen=True)
+class FloorPlan:
+    """A grid with blocked cells and the cell of every location."""
+
+    name: str
+    width: int
+    height: int
+    blocked: frozenset[Cell]
+    locations: Mapping[str, Cell]
+    furniture: Mapping[str, Rect] = field(default_factory=dict)
+    walls: tuple[Rect, ...] = ()
+
+    def inside(self, cell: Cell) -> bool:
+        return 0 <= cell[0] < self.width and 0 <= cell[1] < self.height
+
+    def free(self, cell: Cell) -> bool:
+        """On the grid and not a wall or furniture (other agents aside)."""
+        return self.inside(cell) and cell not in self.blocked
+
+    def free_cells(self) -> list[Cell]:
+        return [
+            (x, y)
+            for y in range(self.height)
+            for x in range(self.width)
+            if (x, y) not in self.blocked
+        ]
+
+    def cell_of(self, location: str) -> Cell | None:
+        return self.locations.get(location)
+
+    def check(self) -> None:
+        """Raise :class:`FloorPlanError` for a location that is off the grid or blocked."""
+        for name, cell in self.locations.items():
+            if not self.inside(cell):
+                raise FloorPlanError(f"{self.name}: location {name} at {cell} is off the grid")
+            if cell in self.blocked:
+                raise FloorPlanError(
+                    f"{self.name}: location {name} at {cell} is on a wall or furniture"
+                )
+
+
+def _cells(rects: Iterable[Rect]) -> set[Cell]:
+    return {(x + dx, y + dy) for x, y, w, h in rects for dx in range(w) for dy in range(h)}
+
+
+def build_floor_plan(
+    name: str,
+    width: int,
+    height: int,
+    locations: Mapping[str, Cell],
+    walls: Iterable[Rect] = (),
+    furniture: Mapping[str, Rect] | None = None,
+) -> FloorPlan:
+    """A checked floor plan; walls and furniture rectangles block their cells."""
+    walls = tuple(walls)
+    furniture = dict(furniture or {})
+    blocked = frozenset(_cells(walls) | _cells(furniture.values()))
+    plan = FloorPlan(name, width, height, blocked, dict(locations), furniture, walls)
+    plan.check()
+    return plan
+
+
+def _pair(value: Any, what: str) -> Cell:
+    if not (isinstance(value, list | tuple) and len(value) == 2):
+        raise FloorPlanError(f"{what}: expected [x, y], got {value!r}")
+    return int(value[0]), int(value[1])
+
+
+def _rect(value: Any, what: str) -> Rect:
+    if not (isinstance(value, list | tuple) and len(value) == 4):
+        raise FloorPlanError(f"{what}: expected [x, y, width, height], got {value!r}")
+    x, y, w, h = (int(v) for v in value)
+    return x, y, w, h
+
+
+def floor_plan_from_dict(data: Mapping[str, Any], source: str = "floor plan") -> FloorPlan:
+    """A floor plan from the parsed YAML layout above."""
+    try:
+        width, height = int(data["width"]), int(data["height"])
+    except (KeyError, TypeError, ValueError):
+        raise FloorPlanError(f"{source}: 'width' and 'height' must be integers") from None
+    locations = {
+        str(k).lower(): _pair(v, f"{source}: location {k}")
+        for k, v in (data.get("locations") or {}).items()
+    }
+    walls = [_rect(v, f"{source}: wall") for v in data.get("walls") or []]
+    furniture = {
+        str(k).lower(): _rect(v, f"{source}: furniture {k}")
+        for k, v in (data.get("furniture") or {}).items()
+    }
+    try:
+        return build_floor_plan(
+            str(data.get("name", source)), width, height, locations, walls, furniture
+        )
+    except FloorPlanError as error:
+        raise FloorPlanError(f"{source}: {error}") from None
+
+
+def load_floor_plan(path: str | Path) -> FloorPlan:
+    """Read a floor plan YAML file (see the module docstring)."""
+    path = Path(path)
+    if not path.is_file():
+        raise FloorPlanError(f"{path}: no such floor plan file")
+    data = yaml.safe_load(path.read_text())
+    if not isinstance(data, dict):
+        raise FloorPlanError(f"{path}: expected a mapping with width, height and locations")
+    return floor_plan_from_dict(data, str(path))
+
+
+# ------------------------------------------------------------- AlfWorld's own names
+
+_MANGLED = (("_bar_", "|"), ("_minus_", "-"), ("_dot_", "."), ("_plus_", "+"))
+_LOCATION = re.compile(r"^loc\|(-?[\d.]+)\|(-?[\d.]+)\|")
+
+
+def unmangle(name: str) -> str:
+    """AlfWorld's PDDL spelling back to its own: ``loc_bar_4_bar__minus_3`` -> ``loc|4|-3``."""
+    for mangled, plain in _MANGLED:
+        name = name.replace(mangled, plain)
+    return name
+
+
+def alfworld_position(name: str) -> Cell | None:
+    """The grid position ``(x, z)`` encoded in an AlfWorld location name, or None."""
+    match = _LOCATION.match(unmangle(name.lower()))
+    if match is None:
+        return None
+    try:
+        return round(float(match.group(1))), round(float(match.group(2)))
+    except ValueError:
+        return None
+
+
+def floor_plan_from_locations(locations: Iterable[str], margin: int = 1) -> FloorPlan:
+    """An open grid on which AlfWorld location objects sit at their own x and z.
+
+    Raises :class:`FloorPlanError` naming any location that does not encode a position.
+    """
+    positions: dict[str, Cell] = {}
+    unplaced: list[str] = []
+    for name in locations:
+        position = alfworld_position(name)
+        if position is None:
+            unplaced.append(name)
+        else:
+            positions[name] = position
+    if unplaced:
+        raise FloorPlanError(
+            "location(s) without a position in their name (expected loc|x|z|rotation|horizon): "
+            + ", ".join(sorted(unplaced))
+        )
+    if not positions:
+        raise FloorPlanError("no location objects to place")
+    min_x = min(x for x, _ in positions.values()) - margin
+    min_z = min(z for _, z in positions.values()) - margin
+    width = max(x for x, _ in positions.values()) - min_x + margin + 1
+    height = max(z for _, z in positions.values()) - min_z + margin + 1
+    cells = {name: (x - min_x, z - min_z) for name, (x, z) in positions.items()}
+    return build_floor_plan("alfworld-locations", width, height, cells)
+
+
+FLOOR_PLAN_FILE = "kitchen.yaml"
+
+
+def floor_plan_for_task(location_names: Iterable[str], folder: str | Path | None) -> FloorPlan:
+    """The floor plan of a task: ``<folder>/kitchen.yaml`` if there is one, else the
+    task's own AlfWorld location names placed by their x and z."""
+    if folder is not None and (Path(folder) / FLOOR_PLAN_FILE).is_file():
+        return load_floor_plan(Path(folder) / FLOOR_PLAN_FILE)
+    return floor_plan_from_locations(location_names)

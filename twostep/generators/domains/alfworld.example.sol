@@ -1,0 +1,6 @@
+(goto alice loc-door loc-counter2)
+(pickup alice tomato1 countertop2 loc-counter2)
+(goto alice loc-counter2 loc-fridge1)
+(cool alice tomato1 fridge1 loc-fridge1)
+(goto alice loc-fridge1 loc-diningtable1)
+(put alice tomato1 diningtable1 loc-diningtable1)
