@@ -42,6 +42,19 @@ class ActionSchema:
     not_equal: tuple[tuple[str, str], ...] = ()
 
 
+@dataclass(frozen=True)
+class ActionOrigin:
+    """Where a compiled action comes from (:mod:`twostep.pddl.adl`).
+
+    ``name`` is the task's own action name (None for a goal action the compilation added)
+    and ``arity`` its number of parameters: parameters after those were added for
+    ``exists`` and are dropped when a plan is written in the task's own terms.
+    """
+
+    name: str | None
+    arity: int
+
+
 @dataclass(frozen=True, eq=False)
 class Domain:
     """A planning domain: types, constants, predicates and action schemas."""
@@ -53,6 +66,10 @@ class Domain:
     predicates: dict[str, tuple[str, ...]]  # predicate -> parameter types
     actions: dict[str, ActionSchema]
     source: str | None = None
+    origins: dict[str, ActionOrigin] = field(default_factory=dict)
+    """Compiled action -> the task's own action; empty when the domain was STRIPS already."""
+    action_costs: dict[str, int] = field(default_factory=dict)
+    """Action -> its cost (``:action-costs``); actions not listed cost 0, if any is listed."""
 
     @property
     def typed(self) -> bool:

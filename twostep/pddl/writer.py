@@ -15,6 +15,8 @@ def _requirements(domain: Domain, extra: Iterable[str] = ()) -> list[str]:
         reqs.add(":negative-preconditions")
     if any(a.equal or a.not_equal for a in domain.actions.values()):
         reqs.add(":equality")
+    if domain.action_costs:
+        reqs.add(":action-costs")
     return sorted(reqs)
 
 
@@ -47,12 +49,16 @@ def domain_to_pddl(domain: Domain, extra_requirements: Iterable[str] = ()) -> st
         params = _typed_list(((f"?x{i}", t) for i, t in enumerate(arg_types)), typed)
         preds.append(f"({name}{' ' + params if params else ''})")
     lines.append(" (:predicates " + " ".join(preds) + ")")
+    if domain.action_costs:  # so that Fast Downward minimises them
+        lines.append(" (:functions (total-cost) - number)")
     for action in domain.actions.values():
         pre = [str(a) for a in action.pre_positive]
         pre += [f"(not {a})" for a in action.pre_negative]
         pre += [f"(= {x} {y})" for x, y in action.equal]
         pre += [f"(not (= {x} {y}))" for x, y in action.not_equal]
         eff = [str(a) for a in action.add] + [f"(not {a})" for a in action.delete]
+        if domain.action_costs.get(action.name):
+            eff.append(f"(increase (total-cost) {domain.action_costs[action.name]})")
         lines.append(f" (:action {action.name}")
         lines.append(f"  :parameters ({_typed_list(action.parameters, typed)})")
         if pre:
@@ -69,7 +75,11 @@ def problem_to_pddl(problem: Problem) -> str:
     lines.append(" (:objects " + _typed_list(sorted(problem.objects.items()), typed) + ")")
     lines.append(" (:init")
     lines += [f"  {fact_to_pddl(f)}" for f in sorted(problem.init)]
+    if problem.domain.action_costs:
+        lines.append("  (= (total-cost) 0)")
     lines.append(" )")
     lines.append(f" (:goal {problem.goal.to_pddl()})")
+    if problem.domain.action_costs:
+        lines.append(" (:metric minimize (total-cost))")
     lines.append(")")
     return "\n".join(lines) + "\n"
