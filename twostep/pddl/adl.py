@@ -24,8 +24,8 @@ preconditions and equality, and records how every compiled action maps back:
 
 Each compiled action keeps the original name when it has a single variant, else
 ``<name>-v<k>``; :class:`~twostep.pddl.model.ActionOrigin` maps it back (original name and
-number of original arguments), and :func:`original_action` writes a compiled plan step in
-the task's own terms. The compilation is sound and complete for the fragment above: every
+number of original arguments); :mod:`twostep.pddl.origins` writes compiled plans in the
+task's own terms and back. The compilation is sound and complete for the fragment above: every
 compiled plan maps to a plan of the original task and vice versa.
 
 Unsupported constructs (derived predicates, durative actions, numeric fluents other than
@@ -41,7 +41,7 @@ from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from twostep.pddl.errors import PDDLError
-from twostep.pddl.model import ActionOrigin
+from twostep.pddl.model import ActionOrigin, Goal, Problem
 from twostep.pddl.sexp import SExp, define_body, section, write_sexp
 
 TypeSpec = str | tuple[str, ...]
@@ -101,9 +101,9 @@ def needs_compilation(domain_body: list[SExp], problem_body: list[SExp]) -> bool
     for item in problem_body[2:]:
         if isinstance(item, list) and item and item[0] in (":metric",):
             return True
-        if isinstance(item, list) and item and item[0] in (":goal", ":init"):
-            if (_ADL_HEADS | {"="}) & set(_heads(item[1:])):
-                return True
+        heads = set(_heads(item[1:])) if isinstance(item, list) and item else set()
+        if item[0] in (":goal", ":init") and (_ADL_HEADS | {"="}) & heads:
+            return True
     return False
 
 
@@ -389,6 +389,7 @@ def _parse_effect(
 ) -> tuple[_Effect, list[_When]]:
     if isinstance(expr, str):
         raise ctx.source.error(f"{where}: expected an effect, got '{expr}'")
+    whens: list[_When]
     if not expr or expr[0] == "and":
         total, whens = _Effect(), []
         for sub in expr[1:]:
@@ -524,57 +525,96 @@ def ground_disjuncts(
     when there are more than :data:`MAX_GOAL_BINDINGS` bindings.
     """
     found: list[tuple[frozenset[Atom], frozenset[Atom]]] = []
-
-    def static_holds(lit: _Lit) -> bool:
-        atom = lit.atom
-        if atom[0] == "=":
-            return (atom[1] == atom[2]) == lit.positive
-        return (atom in init) == lit.positive
-
+    budget = [MAX_GOAL_BINDINGS]
     for disjunct in disjuncts:
-        variables = [v for v, _ in disjunct.parameters]
-        domains = [ctx.objects_of(t) for _, t in disjunct.parameters]
-        static = [
-            lit for lit in disjunct.literals if lit.atom[0] == "=" or lit.atom[0] not in changing
-        ]
-        count = 0
-
-        def search(i: int, binding: dict[str, str], d: _Disjunct = disjunct) -> bool:
-            nonlocal count
-            for lit in static:
-                ground = tuple(binding.get(t, t) for t in lit.atom)
-                if all(not t.startswith("?") for t in ground[1:]) and not static_holds(
-                    _Lit(lit.positive, ground)
-                ):
-                    return True
-            if i == len(variables):
-                count += 1
-                if count > MAX_GOAL_BINDINGS:
-                    return False
-                positive = frozenset(
-                    tuple(binding.get(t, t) for t in lit.atom)
-                    for lit in d.literals
-                    if lit.positive and lit not in static
-                )
-                negative = frozenset(
-                    tuple(binding.get(t, t) for t in lit.atom)
-                    for lit in d.literals
-                    if not lit.positive and lit not in static
-                )
-                if not positive & negative:
-                    found.append((positive, negative))
-                return True
-            for obj in domains[i]:
-                binding[variables[i]] = obj
-                if not search(i + 1, binding):
-                    return False
-            binding.pop(variables[i], None)
-            return True
-
-        if not search(0, {}):
+        if not _bind(disjunct, ctx, init, changing, {}, found, budget):
             return None
-    unique = list(dict.fromkeys(found))
-    return unique
+    return list(dict.fromkeys(found))
+
+
+def _is_static(lit: _Lit, changing: set[str]) -> bool:
+    return lit.atom[0] == "=" or lit.atom[0] not in changing
+
+
+def _bind(
+    disjunct: _Disjunct,
+    ctx: _Context,
+    init: frozenset[Atom],
+    changing: set[str],
+    binding: dict[str, str],
+    found: list[tuple[frozenset[Atom], frozenset[Atom]]],
+    budget: list[int],
+) -> bool:
+    """Backtracking over the existential parameters; False when the budget runs out."""
+    for lit in disjunct.literals:
+        if not _is_static(lit, changing):
+            continue
+        atom = tuple(binding.get(t, t) for t in lit.atom)
+        if any(t.startswith("?") for t in atom[1:]):
+            continue
+        holds = atom[1] == atom[2] if atom[0] == "=" else atom in init
+        if holds != lit.positive:
+            return True  # this branch cannot hold: prune it
+    if len(binding) == len(disjunct.parameters):
+        budget[0] -= 1
+        if budget[0] < 0:
+            return False
+        dynamic = [
+            (lit.positive, tuple(binding.get(t, t) for t in lit.atom))
+            for lit in disjunct.literals
+            if not _is_static(lit, changing)
+        ]
+        positive = frozenset(a for p, a in dynamic if p)
+        negative = frozenset(a for p, a in dynamic if not p)
+        if not positive & negative:
+            found.append((positive, negative))
+        return True
+    variable, spec = disjunct.parameters[len(binding)]
+    for obj in ctx.objects_of(spec):
+        binding[variable] = obj
+        if not _bind(disjunct, ctx, init, changing, binding, found, budget):
+            return False
+        del binding[variable]
+    return True
+
+
+def ground_goal(exprs: Sequence[SExp], problem: Problem, source: str) -> Goal:
+    """A goal with quantifiers or disjunctions, grounded against ``problem`` (for subgoals).
+
+    The static facts of the task must leave exactly one conjunction of literals, e.g.
+    ``(exists (?o - object) (and (objectType ?o EggType) (isHot ?o)))`` with one egg.
+    """
+    domain = problem.domain
+    types = _Types({t: p for t, p in domain.types.items() if t != "object"})
+    objects = problem.all_objects
+    ctx = _Context(types, dict(domain.predicates), dict(objects), _Source(None, source))
+    node = _parse_formula(["and", *exprs], ctx, "goal")
+    disjuncts = _dnf(node, ctx)
+    for disjunct in disjuncts:
+        bound = {v for v, _ in disjunct.parameters}
+        for lit in disjunct.literals:
+            predicate, *terms = lit.atom
+            if predicate != "=" and len(terms) != len(domain.predicates[predicate]):
+                arity = len(domain.predicates[predicate])
+                raise PDDLError(
+                    f"'{predicate}' takes {arity} argument(s), got {len(terms)}", source
+                )
+            for term in terms:
+                if term not in bound and term not in objects:
+                    raise PDDLError(f"unknown object '{term}' in {_lit_text(lit)}", source)
+    changing = {
+        a.predicate for schema in domain.actions.values() for a in (*schema.add, *schema.delete)
+    }
+    grounded = ground_disjuncts(disjuncts, ctx, problem.init, changing)
+    if grounded is None or len(grounded) != 1:
+        count = "too many" if grounded is None else str(len(grounded))
+        raise PDDLError(
+            f"the goal can be met in {count} different ways (0 means never); "
+            "name the objects instead of quantifying over them",
+            source,
+        )
+    positive, negative = grounded[0]
+    return Goal(positive, negative)
 
 
 # ----------------------------------------------------------------- the whole task
@@ -664,8 +704,8 @@ def compile_task(
             collect(sub, variables)
 
     for item in actions:
-        for key, value in zip(item[2::2], item[3::2], strict=False):
-            if key in (":precondition", ":effect"):
+        for part, value in zip(item[2::2], item[3::2], strict=False):
+            if part in (":precondition", ":effect"):
                 collect(value, set())
     for name, spec in used_constants.items():
         constants[name] = problem_objects.get(name, spec)
@@ -698,11 +738,11 @@ def compile_task(
     disjuncts = _dnf(goal_node, goal_ctx)
     grounded = ground_disjuncts(disjuncts, goal_ctx, frozenset(init), changing)
     goal_fact: str | None = None
+    goal_literals: list[SExp]
     if grounded is not None and len(grounded) == 1:
         positive, negative = grounded[0]
-        goal_literals = [list(a) for a in sorted(positive)] + [
-            ["not", list(a)] for a in sorted(negative)
-        ]
+        goal_literals = [_sexp(a) for a in sorted(positive)]
+        goal_literals += [["not", _sexp(a)] for a in sorted(negative)]
     else:
         # a choice the static facts do not settle: let the planner choose (goal action)
         goal_fact = _fresh(GOAL_FACT, predicates)
@@ -723,7 +763,7 @@ def compile_task(
                         ActionOrigin(None, 0),
                     )
                 )
-        goal_literals = [[goal_fact]]
+        goal_literals = [_sexp((goal_fact,))]
 
     # predicate signatures: widened where the task applies them to other types
     signatures = _signatures(predicates, types, variants, objects, init, goal_literals)
@@ -748,6 +788,12 @@ def compile_task(
         {v.name: v.origin for v in variants},
         {v.name: v.effect.cost for v in variants if v.effect.cost},
     )
+
+
+def _sexp(atom: Atom) -> list[SExp]:
+    out: list[SExp] = []
+    out.extend(atom)
+    return out
 
 
 def _agent_parameter(types: _Types, variants: Sequence[_Variant]) -> tuple[tuple[str, str], ...]:
@@ -787,9 +833,9 @@ def _signatures(
             note(atom, scope)
     for atom in init:
         note(atom, {})
-    for lit in goal:
-        if isinstance(lit, list) and lit:
-            inner = lit[1] if lit[0] == "not" else lit
+    for entry in goal:
+        if isinstance(entry, list) and entry:
+            inner = entry[1] if entry[0] == "not" else entry
             if isinstance(inner, list):
                 note([str(t) for t in inner], {})
     result: dict[str, tuple[str, ...]] = {}
@@ -864,27 +910,10 @@ def _write_problem(
     return "\n".join(lines) + "\n"
 
 
-# ----------------------------------------------------------------- back to the task's terms
-
-
-def original_action(origins: Mapping[str, ActionOrigin], action: str) -> str | None:
-    """A compiled plan step in the task's own terms; None for a goal action.
-
-    ``(toggleobject-v2 a1 l1 lamp t1)`` -> ``(toggleobject a1 l1 lamp t1)``; parameters
-    added for ``exists`` (after the original ones) are dropped.
-    """
-    words = action.strip().strip("()").split()
-    if not words:
-        return action
-    origin = origins.get(words[0].lower())
-    if origin is None:
-        return action
-    if origin.name is None:
-        return None
-    return "(" + " ".join([origin.name, *words[1 : 1 + origin.arity]]) + ")"
-
-
-def original_plan(origins: Mapping[str, ActionOrigin], plan: Iterable[str]) -> list[str]:
-    """A compiled plan in the task's own terms (goal actions left out)."""
-    steps = (original_action(origins, step) for step in plan)
-    return [step for step in steps if step is not None]
+def is_compound(expr: SExp) -> bool:
+    """Whether a goal expression is more than a literal (quantifier, disjunction, ...)."""
+    return (
+        isinstance(expr, list)
+        and bool(expr)
+        and expr[0] in ("exists", "forall", "or", "imply", "and")
+    )

@@ -125,6 +125,8 @@ def parse_goal(text: str, problem: Problem, source: str = "subgoal") -> Goal:
         exprs = exprs[0][1:]
     if not exprs:
         raise PDDLError("the goal is empty", source)
+    if any(adl.is_compound(expr) for expr in exprs):
+        return adl.ground_goal(exprs, problem, source)
     objects = problem.all_objects
     positive: set[Fact] = set()
     negative: set[Fact] = set()
