@@ -96,8 +96,12 @@ def needs_compilation(domain_body: list[SExp], problem_body: list[SExp]) -> bool
     for item in domain_body[2:]:
         if isinstance(item, list) and item and item[0] in (":functions", *_UNSUPPORTED_SECTIONS):
             return True
-        if _ADL_HEADS & set(_heads(item)) or "()" in set(_heads(item)):
+        if (_ADL_HEADS | _NUMERIC_HEADS) & set(_heads(item)):
             return True
+        if isinstance(item, list) and item[:1] == [":action"]:
+            parts = dict(zip(item[2::2], item[3::2], strict=False))  # type: ignore[arg-type]
+            if [] in (parts.get(":precondition"), parts.get(":effect")):
+                return True  # "()": AlfWorld's empty precondition
     for item in problem_body[2:]:
         if isinstance(item, list) and item and item[0] in (":metric",):
             return True
