@@ -247,6 +247,18 @@ class _Context:
     objects: dict[str, str]  # every object and constant -> its type
     source: _Source
     counter: itertools.count[int] = field(default_factory=itertools.count)
+    init: frozenset[Atom] = frozenset()
+    changing: set[str] | None = None
+    """Predicates some action changes; the others are static, so a ground literal of one
+    is decided by ``init`` (None: unknown yet, nothing is decided)."""
+
+    def static_truth(self, lit: _Lit) -> bool | None:
+        atom = lit.atom
+        if self.changing is None or atom[0] == "=" or atom[0] in self.changing:
+            return None
+        if any(t.startswith("?") for t in atom[1:]):
+            return None
+        return (atom in self.init) == lit.positive
 
     def objects_of(self, spec: TypeSpec) -> list[str]:
         return sorted(o for o, t in self.objects.items() if self.types.is_subtype(t, spec))
@@ -321,11 +333,21 @@ def _dnf(node: _Node, ctx: _Context) -> list[_Disjunct]:
         return [_Disjunct((node,), ())]
     if isinstance(node, _Junction):
         if node.kind == "or":
-            return [d for part in node.parts for d in _dnf(part, ctx)]
+            options: list[_Disjunct] = []
+            for part in node.parts:
+                for d in _dnf(part, ctx):
+                    simple = _simplify(d, ctx)
+                    if simple == _Disjunct((), ()):
+                        return [simple]  # one option always holds: so does the "or"
+                    if simple is not None and simple not in options:
+                        options.append(simple)
+            return options
         result = [_Disjunct((), ())]
         for part in node.parts:
             result = [_conjoin(a, b) for a in result for b in _dnf(part, ctx)]
-            result = [d for d in (_simplify(d) for d in result) if d is not None]
+            result = list(
+                dict.fromkeys(d for d in (_simplify(d, ctx) for d in result) if d is not None)
+            )
             if len(result) > MAX_VARIANTS:
                 raise ctx.source.error(
                     f"a formula has more than {MAX_VARIANTS} disjuncts after normalisation"
@@ -344,12 +366,20 @@ def _dnf(node: _Node, ctx: _Context) -> list[_Disjunct]:
     ]
 
 
-def _simplify(d: _Disjunct) -> _Disjunct | None:
-    """Drop duplicate and trivially true literals; None when the conjunction cannot hold."""
+def _simplify(d: _Disjunct, ctx: _Context) -> _Disjunct | None:
+    """Drop duplicate and trivially true literals; None when the conjunction cannot hold.
+
+    Ground literals of static predicates are decided by the initial state.
+    """
     seen: dict[Atom, bool] = {}
     kept: list[_Lit] = []
     for lit in d.literals:
         atom = lit.atom
+        decided = ctx.static_truth(lit)
+        if decided is not None:
+            if decided:
+                continue
+            return None
         if atom[0] == "=" and len(atom) == 3:
             a, b = atom[1], atom[2]
             if a == b:
@@ -511,11 +541,6 @@ def _compile_action(item: list[SExp], ctx: _Context) -> list[_Variant]:
 # ----------------------------------------------------------------- goals
 
 
-def _static_predicates(variants: Iterable[_Variant]) -> set[str]:
-    changed = {a[0] for v in variants for a in (*v.effect.add, *v.effect.delete)}
-    return changed
-
-
 def ground_disjuncts(
     disjuncts: Sequence[_Disjunct],
     ctx: _Context,
@@ -582,6 +607,33 @@ def _bind(
     return True
 
 
+def _check_atoms(
+    exprs: Sequence[SExp],
+    predicates: Mapping[str, tuple[str, ...]],
+    objects: Mapping[str, str],
+    source: str,
+) -> None:
+    """Unknown predicates, wrong arities and unknown objects, before anything is decided."""
+    for expr in exprs:
+        if not isinstance(expr, list) or not expr:
+            continue
+        head = expr[0]
+        if head in ("exists", "forall") and len(expr) == 3:
+            _check_atoms([expr[2]], predicates, objects, source)
+        elif head in ("and", "or", "not", "imply"):
+            _check_atoms(expr[1:], predicates, objects, source)
+        elif isinstance(head, str) and head != "=":
+            if head not in predicates:
+                raise PDDLError(f"unknown predicate '{head}'", source)
+            if len(expr) - 1 != len(predicates[head]):
+                arity = len(predicates[head])
+                raise PDDLError(f"'{head}' takes {arity} argument(s), got {len(expr) - 1}", source)
+        if isinstance(head, str) and head not in ("exists", "forall"):
+            for term in expr[1:]:
+                if isinstance(term, str) and not term.startswith("?") and term not in objects:
+                    raise PDDLError(f"unknown object '{term}' in {write_sexp(expr)}", source)
+
+
 def ground_goal(exprs: Sequence[SExp], problem: Problem, source: str) -> Goal:
     """A goal with quantifiers or disjunctions, grounded against ``problem`` (for subgoals).
 
@@ -591,24 +643,20 @@ def ground_goal(exprs: Sequence[SExp], problem: Problem, source: str) -> Goal:
     domain = problem.domain
     types = _Types({t: p for t, p in domain.types.items() if t != "object"})
     objects = problem.all_objects
-    ctx = _Context(types, dict(domain.predicates), dict(objects), _Source(None, source))
-    node = _parse_formula(["and", *exprs], ctx, "goal")
-    disjuncts = _dnf(node, ctx)
-    for disjunct in disjuncts:
-        bound = {v for v, _ in disjunct.parameters}
-        for lit in disjunct.literals:
-            predicate, *terms = lit.atom
-            if predicate != "=" and len(terms) != len(domain.predicates[predicate]):
-                arity = len(domain.predicates[predicate])
-                raise PDDLError(
-                    f"'{predicate}' takes {arity} argument(s), got {len(terms)}", source
-                )
-            for term in terms:
-                if term not in bound and term not in objects:
-                    raise PDDLError(f"unknown object '{term}' in {_lit_text(lit)}", source)
     changing = {
         a.predicate for schema in domain.actions.values() for a in (*schema.add, *schema.delete)
     }
+    ctx = _Context(
+        types,
+        dict(domain.predicates),
+        dict(objects),
+        _Source(None, source),
+        init=problem.init,
+        changing=changing,
+    )
+    _check_atoms(exprs, domain.predicates, objects, source)
+    node = _parse_formula(["and", *exprs], ctx, "goal")
+    disjuncts = _dnf(node, ctx)
     grounded = ground_disjuncts(disjuncts, ctx, problem.init, changing)
     if grounded is None or len(grounded) != 1:
         count = "too many" if grounded is None else str(len(grounded))
@@ -715,17 +763,7 @@ def compile_task(
         constants[name] = problem_objects.get(name, spec)
         objects[name] = str(constants[name])
 
-    ctx = _Context(types, predicates, objects, dsrc)
-    variants: list[_Variant] = []
-    for item in actions:
-        if len(item) < 2 or not isinstance(item[1], str):
-            raise dsrc.error("an action without a name", r"\(:action")
-        variants += _compile_action(item, ctx)
-    taken = {v.name for v in variants}
-    if len(taken) != len(variants):  # a "<name>-v<k>" that collides with another action
-        raise dsrc.error("compiled action names collide; rename the domain's '-v<k>' actions")
-
-    # the problem: initial atoms (numeric facts dropped) and the goal
+    # initial atoms (numeric facts dropped): they decide ground static literals
     init: set[Atom] = set()
     for fact in (section(problem_body, ":init") or [":init"])[1:]:
         if isinstance(fact, list) and fact and fact[0] == "=":
@@ -735,10 +773,27 @@ def compile_task(
         if not isinstance(fact, list) or not fact or not all(isinstance(t, str) for t in fact):
             raise psrc.error(f"unsupported initial fact {write_sexp(fact)}", r"\(:init")
         init.add(tuple(str(t) for t in fact))
+    changing = {
+        head
+        for item in actions
+        for part, value in zip(item[2::2], item[3::2], strict=False)
+        if part == ":effect"
+        for head in _heads(value)
+        if head in predicates
+    }  # over-approximated (when conditions included): fewer statics, still sound
+    ctx = _Context(types, predicates, objects, dsrc, init=frozenset(init), changing=changing)
+    variants: list[_Variant] = []
+    for item in actions:
+        if len(item) < 2 or not isinstance(item[1], str):
+            raise dsrc.error("an action without a name", r"\(:action")
+        variants += _compile_action(item, ctx)
+    taken = {v.name for v in variants}
+    if len(taken) != len(variants):  # a "<name>-v<k>" that collides with another action
+        raise dsrc.error("compiled action names collide; rename the domain's '-v<k>' actions")
+
     goal_expr = (section(problem_body, ":goal") or [":goal", []])[1:]
-    goal_ctx = _Context(types, predicates, objects, psrc, ctx.counter)
+    goal_ctx = _Context(types, predicates, objects, psrc, ctx.counter, ctx.init, changing)
     goal_node = _parse_formula(goal_expr[0] if goal_expr else [], goal_ctx, "goal")
-    changing = _static_predicates(variants)
     disjuncts = _dnf(goal_node, goal_ctx)
     grounded = ground_disjuncts(disjuncts, goal_ctx, frozenset(init), changing)
     goal_fact: str | None = None
