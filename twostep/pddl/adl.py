@@ -660,9 +660,10 @@ def ground_goal(exprs: Sequence[SExp], problem: Problem, source: str) -> Goal:
     grounded = ground_disjuncts(disjuncts, ctx, problem.init, changing)
     if grounded is None or len(grounded) != 1:
         count = "too many" if grounded is None else str(len(grounded))
+        text = " ".join(write_sexp(e) for e in exprs)
         raise PDDLError(
-            f"the goal can be met in {count} different ways (0 means never); "
-            "name the objects instead of quantifying over them",
+            f"not a ground literal conjunction: {text} can be met in {count} different ways "
+            "(0: never); name the objects instead of quantifying or choosing",
             source,
         )
     positive, negative = grounded[0]
