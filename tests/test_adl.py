@@ -263,6 +263,8 @@ def test_ambiguous_quantified_goal_becomes_a_goal_action() -> None:
     problem = kitchen(2).problem
     assert problem.goal.positive == {("goal-reached",)}
     assert problem.domain.origins["reach-goal"].name is None
+    # every action takes the agent, so the goal action does too (for the MA compilation)
+    assert problem.domain.actions["reach-goal"].parameters[-1] == ("?goal-agent", "agent")
     result = plan(problem, OPTIMAL)
     assert result.solved and result.plan is not None
     # egg2 is on the counter already: fetch it, heat it, bring it back (2+1+2+5+2+1 = 13)

@@ -813,12 +813,23 @@ def compile_task(
                 name = goal_name if len(disjuncts) == 1 else f"{goal_name}-v{k}"
                 name = _fresh(name, taken)
                 taken.add(name)
+                literals = disjunct.literals
+                if agent_parameter:
+                    # the agent that reaches the goal is the one the goal quantifies over,
+                    # so that a multi-agent plan gives the goal step to that agent
+                    agent_variable = agent_parameter[0][0]
+                    same = {v: agent_variable for v, t in typed if types.is_subtype(t, "agent")}
+                    typed = tuple((v, t) for v, t in typed if v not in same)
+                    literals = tuple(
+                        _Lit(lit.positive, tuple(same.get(x, x) for x in lit.atom))
+                        for lit in literals
+                    )
                 params = (*typed, *agent_parameter)
                 variants.append(
                     _Variant(
                         name,
                         params,
-                        disjunct.literals,
+                        literals,
                         _Effect(add=((goal_fact,),)),
                         ActionOrigin(None, 0),
                     )
