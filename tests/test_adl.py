@@ -422,3 +422,41 @@ def test_alfworld_own_domain_runs_sa_ma_twostep(tmp_path: Path) -> None:
     check_run(problem, twostep, agents)
     assert twostep.exec_length is not None and sa.exec_length is not None
     assert twostep.exec_length <= sa.exec_length
+
+
+def _model(problem):  # type: ignore[no-untyped-def]
+    actions = {
+        name: (
+            {str(a) for a in s.pre_positive},
+            {str(a) for a in s.pre_negative},
+            {str(a) for a in s.add},
+            {str(a) for a in s.delete},
+            s.equal,
+            s.not_equal,
+            tuple(t for _, t in s.parameters),
+        )
+        for name, s in problem.domain.actions.items()
+    }
+    domain = problem.domain
+    return (
+        problem.init,
+        problem.goal,
+        problem.all_objects,
+        domain.types,
+        domain.predicates,
+        actions,
+    )
+
+
+@pytest.mark.parametrize("folder", ["llmp_quirks/tyreworld", "data/blocksworld", "data/barman"])
+def test_strips_tasks_compile_to_the_same_model(folder: str, data_root: Path) -> None:
+    # Declaring :adl sends a STRIPS task through the compilation: it must change nothing.
+    base = ROOT.parent / folder if folder.startswith("llmp") else data_root / folder.split("/")[1]
+    domain_text = (base / "domain.pddl").read_text()
+    problem_text = (base / "p01.pddl").read_text()
+    as_adl = domain_text.replace("(:requirements", "(:requirements :adl", 1)
+    assert as_adl != domain_text
+    plain = parse_problem(domain_text, problem_text)
+    compiled = parse_problem(as_adl, problem_text)
+    assert set(compiled.domain.origins) == set(compiled.domain.actions)
+    assert _model(compiled) == _model(plain)
