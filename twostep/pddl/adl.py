@@ -16,7 +16,7 @@ preconditions and equality, and records how every compiled action maps back:
   (the conditions that hold, and the negations of the others, join the precondition);
 - ``(either a b)`` parameters split an action into one variant per type; predicates
   take the closest common supertype;
-- ``(increase (total-cost) n)`` becomes the variant's cost (:attr:`CompiledTask.costs`),
+- ``(increase (total-cost) n)`` becomes the variant's cost (:attr:`CompiledPDDL.costs`),
   written back as ``:action-costs`` for Fast Downward by :mod:`twostep.pddl.writer`;
 - a goal with quantifiers or disjunctions is grounded; when the static facts of the task
   leave exactly one conjunction of literals, that is the goal; otherwise a goal action
@@ -541,7 +541,7 @@ def _compile_action(item: list[SExp], ctx: _Context) -> list[_Variant]:
 # ----------------------------------------------------------------- goals
 
 
-def ground_disjuncts(
+def _ground_disjuncts(
     disjuncts: Sequence[_Disjunct],
     ctx: _Context,
     init: frozenset[Atom],
@@ -657,7 +657,7 @@ def ground_goal(exprs: Sequence[SExp], problem: Problem, source: str) -> Goal:
     _check_atoms(exprs, domain.predicates, objects, source)
     node = _parse_formula(["and", *exprs], ctx, "goal")
     disjuncts = _dnf(node, ctx)
-    grounded = ground_disjuncts(disjuncts, ctx, problem.init, changing)
+    grounded = _ground_disjuncts(disjuncts, ctx, problem.init, changing)
     if grounded is None or len(grounded) != 1:
         count = "too many" if grounded is None else str(len(grounded))
         text = " ".join(write_sexp(e) for e in exprs)
@@ -674,7 +674,7 @@ def ground_goal(exprs: Sequence[SExp], problem: Problem, source: str) -> Goal:
 
 
 @dataclass(frozen=True)
-class CompiledTask:
+class CompiledPDDL:
     """A domain and problem rewritten in typed STRIPS, with the way back."""
 
     domain_text: str
@@ -697,7 +697,7 @@ def compile_task(
     problem_text: str,
     domain_source: str | None = None,
     problem_source: str | None = None,
-) -> CompiledTask:
+) -> CompiledPDDL:
     """Compile a domain and problem beyond STRIPS into typed STRIPS PDDL text (see module doc)."""
     dsrc, psrc = _Source(domain_text, domain_source), _Source(problem_text, problem_source)
     domain_body = define_body(domain_text, "domain", domain_source)
@@ -796,7 +796,7 @@ def compile_task(
     goal_ctx = _Context(types, predicates, objects, psrc, ctx.counter, ctx.init, changing)
     goal_node = _parse_formula(goal_expr[0] if goal_expr else [], goal_ctx, "goal")
     disjuncts = _dnf(goal_node, goal_ctx)
-    grounded = ground_disjuncts(disjuncts, goal_ctx, frozenset(init), changing)
+    grounded = _ground_disjuncts(disjuncts, goal_ctx, frozenset(init), changing)
     goal_fact: str | None = None
     goal_literals: list[SExp]
     if grounded is not None and len(grounded) == 1:
@@ -853,7 +853,7 @@ def compile_task(
         init,
         goal_literals,
     )
-    return CompiledTask(
+    return CompiledPDDL(
         domain_out,
         problem_out,
         {v.name: v.origin for v in variants},
