@@ -5,6 +5,11 @@ agent-specific predicate gets an agent argument, and the agent-specific facts of
 initial state are duplicated for each agent. Agent-specific goal literals must hold for
 every agent (as in :mod:`twostep.execution`). A sequential plan of the compiled task is
 split per agent and written back in the single-agent task's own terms.
+
+Domains that already model the agent (AlfWorld: an ``agent`` type, and every action takes
+the acting agent as a parameter) are not given a second agent parameter: their one agent
+object is replaced by N agent objects, every fact that names it is duplicated for each of
+them, and a compiled plan is written back by naming the task's own agent object again.
 """
 
 from __future__ import annotations
@@ -16,6 +21,37 @@ from twostep.strips import parse_action
 
 AGENT_TYPE = "agent"
 AGENT_VARIABLE = "?agent"
+
+
+class AgentNames(list[str]):
+    """The agent objects of a compiled task, agent 0 first.
+
+    ``stands_for`` is the single-agent task's own agent object when the domain already
+    models agents (the compiled plan names one of these objects where the task names it);
+    None when the compilation added the agent parameter.
+    """
+
+    def __init__(self, names: Sequence[str], stands_for: str | None = None):
+        super().__init__(names)
+        self.stands_for = stands_for
+
+
+def _agent_typed(domain: Domain) -> bool:
+    """Whether ``domain`` already models agents: an ``agent`` type every action takes."""
+    if AGENT_TYPE not in domain.types or not domain.actions:
+        return False
+    agent_types = {t for t in domain.types if _is_subtype(domain, t, AGENT_TYPE)}
+    return all(any(t in agent_types for _, t in a.parameters) for a in domain.actions.values())
+
+
+def _is_subtype(domain: Domain, name: str | None, of: str) -> bool:
+    seen: set[str] = set()
+    while name is not None and name not in seen:
+        if name == of:
+            return True
+        seen.add(name)
+        name = domain.types.get(name)
+    return False
 
 
 def agent_names(agents: int, taken: Collection[str] = ()) -> list[str]:
@@ -59,12 +95,20 @@ def compile_multi_agent_domain(domain: Domain, agent_predicates: Collection[str]
             _lift(a.delete, agent_predicates),
             a.equal,
             a.not_equal,
+            a.cost,
         )
         for name, a in domain.actions.items()
     }
     requirements = tuple(sorted(set(domain.requirements) | {":typing"}))
     return Domain(
-        f"{domain.name}-ma", requirements, types, dict(domain.constants), predicates, actions, None
+        f"{domain.name}-ma",
+        requirements,
+        types,
+        dict(domain.constants),
+        predicates,
+        actions,
+        None,
+        dict(domain.origins),
     )
 
 
@@ -80,10 +124,47 @@ def _per_agent(
     return out
 
 
+def _replicate_agent(problem: Problem, agents: int) -> tuple[Problem, AgentNames]:
+    """The N-agent task of a domain that already models agents (see the module docstring)."""
+    domain = problem.domain
+    own = sorted(o for o, t in problem.objects.items() if _is_subtype(domain, t, AGENT_TYPE))
+    if len(own) != 1:
+        raise ValueError(
+            f"task {problem.name} has {len(own)} agent objects ({', '.join(own) or 'none'}); "
+            "the multi-agent compilation of an agent-typed domain needs exactly one"
+        )
+    (single,) = own
+    names = agent_names(agents, problem.all_objects)
+
+    def per_agent(facts: frozenset[Fact]) -> frozenset[Fact]:
+        out: set[Fact] = set()
+        for fact in facts:
+            if single in fact[1:]:
+                out.update(tuple(name if t == single else t for t in fact) for name in names)
+            else:
+                out.add(fact)
+        return frozenset(out)
+
+    objects = {n: t for n, t in problem.objects.items() if n != single}
+    objects.update({name: problem.objects[single] for name in names})
+    compiled = Problem(
+        f"{problem.name}-{agents}agents",
+        domain,
+        objects,
+        per_agent(problem.init),
+        Goal(per_agent(problem.goal.positive), per_agent(problem.goal.negative)),
+        None,
+    )
+    return compiled, AgentNames(names, stands_for=single)
+
+
 def compile_multi_agent_problem(
     problem: Problem, agents: int, agent_predicates: Collection[str]
 ) -> tuple[Problem, list[str]]:
     """The N-agent task and the names of its agents (agent0 first)."""
+    unknown = set(agent_predicates) - set(problem.domain.predicates)
+    if _agent_typed(problem.domain) and not unknown:
+        return _replicate_agent(problem, agents)
     domain = compile_multi_agent_domain(problem.domain, agent_predicates)
     names = agent_names(agents, problem.all_objects)
     objects = {n: (t if problem.domain.typed else "object") for n, t in problem.objects.items()}
@@ -104,11 +185,24 @@ def compile_multi_agent_problem(
 
 
 def split_plan(plan: Sequence[str], agent_names: Sequence[str]) -> list[list[str]]:
-    """Split a compiled sequential plan into per-agent plans in single-agent terms."""
+    """Split a compiled sequential plan into per-agent plans in single-agent terms.
+
+    With :class:`AgentNames` that stand for the task's own agent object, the agent is the
+    first argument that names an agent, and it is renamed back to that object; otherwise
+    the agent is the first argument, and it is dropped.
+    """
     index = {name: i for i, name in enumerate(agent_names)}
     plans: list[list[str]] = [[] for _ in agent_names]
+    stands_for = getattr(agent_names, "stands_for", None)
     for step in plan:
         name, args = parse_action(step)
+        if stands_for is not None:
+            acting = next((a for a in args if a in index), None)
+            if acting is None:
+                raise ValueError(f"multi-agent plan step {step} names no agent")
+            renamed = (stands_for if a in index else a for a in args)
+            plans[index[acting]].append("(" + " ".join((name, *renamed)) + ")")
+            continue
         if not args or args[0] not in index:
             raise ValueError(f"multi-agent plan step {step} does not start with an agent")
         plans[index[args[0]]].append("(" + " ".join((name, *args[1:])) + ")")

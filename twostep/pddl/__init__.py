@@ -13,20 +13,34 @@ One job per module:
 - :mod:`twostep.pddl.errors`   :class:`PDDLError`, with file and line
 - :mod:`twostep.pddl.sexp`     the s-expression reader and writer
 - :mod:`twostep.pddl.repairs`  repairs of real-world quirks on s-expressions
+- :mod:`twostep.pddl.adl`      ADL, action costs and ``either`` types compiled into the model
+- :mod:`twostep.pddl.origins`  compiled plans in the task's own terms, and back
 - :mod:`twostep.pddl.unified`  conversion from unified-planning's problem into the model
 - :mod:`twostep.pddl.reader`   ``parse_problem``, ``load_problem``, ``parse_goal``
 - :mod:`twostep.pddl.writer`   ``domain_to_pddl``, ``problem_to_pddl``
 
-Supported fragment: STRIPS with typing, constants, negative preconditions and equality.
+The model is STRIPS with typing, constants, negative preconditions and equality; ADL
+(``exists``, ``forall``, ``or``, ``imply``, ``when``), ``:action-costs`` and ``either`` types, as
+AlfWorld's ``alfred.pddl`` uses them, are compiled into it by :mod:`twostep.pddl.adl`.
 """
 
 from twostep.pddl.errors import PDDLError
-from twostep.pddl.model import ActionSchema, Atom, Domain, Fact, Goal, Problem, fact_to_pddl
+from twostep.pddl.model import (
+    ActionOrigin,
+    ActionSchema,
+    Atom,
+    Domain,
+    Fact,
+    Goal,
+    Problem,
+    fact_to_pddl,
+)
 from twostep.pddl.reader import load_problem, parse_goal, parse_problem
 from twostep.pddl.sexp import SExp, read_sexp, write_sexp
 from twostep.pddl.writer import domain_to_pddl, problem_to_pddl
 
 __all__ = [
+    "ActionOrigin",
     "ActionSchema",
     "Atom",
     "Domain",

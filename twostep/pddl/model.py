@@ -49,6 +49,19 @@ class ActionSchema:
     """``(increase (total-cost) N)``: N in a domain with ``:action-costs``, else None."""
 
 
+@dataclass(frozen=True)
+class ActionOrigin:
+    """Where a compiled action comes from (:mod:`twostep.pddl.adl`).
+
+    ``name`` is the task's own action name (None for a goal action the compilation added)
+    and ``arity`` its number of parameters: parameters after those were added for
+    ``exists`` and are dropped when a plan is written in the task's own terms.
+    """
+
+    name: str | None
+    arity: int
+
+
 @dataclass(frozen=True, eq=False)
 class Domain:
     """A planning domain: types, constants, predicates and action schemas."""
@@ -60,6 +73,8 @@ class Domain:
     predicates: dict[str, tuple[str, ...]]  # predicate -> parameter types
     actions: dict[str, ActionSchema]
     source: str | None = None
+    origins: dict[str, ActionOrigin] = field(default_factory=dict)
+    """Compiled action -> the task's own action; empty when the domain was STRIPS already."""
 
     @property
     def typed(self) -> bool:
@@ -69,6 +84,11 @@ class Domain:
     def has_action_costs(self) -> bool:
         """True when actions have costs (``:action-costs``): a plan's cost is their sum."""
         return any(a.cost is not None for a in self.actions.values())
+
+    @property
+    def action_costs(self) -> dict[str, int]:
+        """Action -> its non-zero cost (``:action-costs``); actions not listed cost 0."""
+        return {name: a.cost for name, a in self.actions.items() if a.cost}
 
 
 @dataclass(frozen=True)

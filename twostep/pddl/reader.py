@@ -1,14 +1,17 @@
 """Reading domains, problems and goals: the s-expression checks, the repairs, unified-planning.
 
-Supported fragment: STRIPS with typing, constants, negative preconditions and equality.
+The model is STRIPS with typing, constants, negative preconditions and equality; tasks
+beyond it (ADL, action costs, ``either`` types: AlfWorld's ``alfred.pddl``) are compiled into
+it first by :mod:`twostep.pddl.adl`.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from twostep.pddl import adl
 from twostep.pddl.errors import PDDLError
-from twostep.pddl.model import Domain, Fact, Goal, Problem
+from twostep.pddl.model import ActionOrigin, Domain, Fact, Goal, Problem
 from twostep.pddl.repairs import repair_undeclared_constants
 from twostep.pddl.sexp import define_body, read_sexp, section, typed_names, write_sexp
 from twostep.pddl.unified import (
@@ -29,10 +32,25 @@ def parse_problem(
     """Parse a domain and a problem given as PDDL text."""
     read_sexp(domain_text, domain_source, single=True)  # unbalanced parentheses: file and line
     read_sexp(problem_text, problem_source, single=True)
+    origins: dict[str, ActionOrigin] = {}
+    costs: dict[str, int] = {}
+    if adl.needs_compilation(
+        define_body(domain_text, "domain", domain_source),
+        define_body(problem_text, "problem", problem_source),
+    ):
+        compiled = adl.compile_task(domain_text, problem_text, domain_source, problem_source)
+        domain_text, problem_text = compiled.domain_text, compiled.problem_text
+        origins, costs = compiled.origins, compiled.costs
     domain_text, problem_text = repair_undeclared_constants(
         domain_text, problem_text, domain_source, problem_source
     )
-    up_problem = parse_with_up(domain_text, problem_text, domain_source, problem_source)
+    try:
+        up_problem = parse_with_up(domain_text, problem_text, domain_source, problem_source)
+    except PDDLError as error:
+        if not origins:
+            raise
+        # line numbers of the compiled text would mislead: name the files only
+        raise PDDLError(f"after compiling ADL: {error.message}", error.source) from None
     domain_body = define_body(domain_text, "domain", domain_source)
     domain_name_expr = domain_body[1]
     domain_name = (
@@ -53,9 +71,16 @@ def parse_problem(
     constants = {n: t for n, t in all_objects.items() if n in constant_names}
     objects = {n: t for n, t in all_objects.items() if n not in constant_names}
     predicates = {f.name: tuple(p.type.name for p in f.signature) for f in up_problem.fluents}
-    costs = action_costs(up_problem) or {}
-    actions = {a.name: schema_from_up(a, costs.get(a.name)) for a in up_problem.actions}
-    domain = Domain(domain_name, requirements, types, constants, predicates, actions, domain_source)
+    found = action_costs(up_problem)
+    if costs:  # compiled from ADL: every action has a cost, 0 where nothing is increased
+        found = {a.name: costs.get(a.name, 0) for a in up_problem.actions}
+    try:
+        actions = {a.name: schema_from_up(a, (found or {}).get(a.name)) for a in up_problem.actions}
+    except PDDLError as error:
+        raise PDDLError(error.message, error.source or domain_source, error.line) from None
+    domain = Domain(
+        domain_name, requirements, types, constants, predicates, actions, domain_source, origins
+    )
     init = frozenset(
         fact_from_up(k) for k, v in up_problem.explicit_initial_values.items() if v.is_true()
     )
@@ -101,6 +126,8 @@ def parse_goal(text: str, problem: Problem, source: str = "subgoal") -> Goal:
         exprs = exprs[0][1:]
     if not exprs:
         raise PDDLError("the goal is empty", source)
+    if any(adl.is_compound(expr) for expr in exprs):
+        return adl.ground_goal(exprs, problem, source)
     objects = problem.all_objects
     positive: set[Fact] = set()
     negative: set[Fact] = set()
