@@ -30,8 +30,9 @@ register()
 
 @hydra.main(config_path=CONF_DIR, config_name="config", version_base="1.3")
 def app(cfg: DictConfig) -> None:
+    from flows.progress import progress_line
     from flows.runner import execute_job
-    from flows.sweep import SweepState, progress_line, record_job
+    from flows.sweep_state import SweepState, record_job
     from flows.tracking import TrackingError
 
     hydra_cfg = HydraConfig.get()

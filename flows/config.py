@@ -89,7 +89,10 @@ class TaskRunner(enum.StrEnum):
 class OrchestrationConfig:
     """How jobs run: Prefect on or off, which server, task runner, caches, progress."""
 
-    prefect: bool = True  # false: call the library directly (no server, no task cache)
+    # null (auto): sweeps run jobs as Prefect flows; a single run does only when a server
+    # is already up (twostep-services up, prefect_api_url). true: always (a single run
+    # starts a temporary server if none is up). false: never (the library directly).
+    prefect: bool | None = None
     prefect_api_url: str | None = None  # an existing server; null: one per sweep (or run)
     prefect_home: str = "outputs/prefect"  # the started server's database and settings
     result_storage: str = "outputs/prefect/results"  # persisted task results (the task cache)

@@ -19,6 +19,7 @@ from typing import Any
 
 from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.base import Decomposer
+from twostep.identity import display_name
 from twostep.pddl import Problem
 from twostep.pipeline import (
     DIRECT,
@@ -188,9 +189,9 @@ def format_summary(result: RunResult | Mapping[str, Any]) -> str:
     """One line for the terminal (from a result or its result.json dict)."""
     r = result.to_dict() if isinstance(result, RunResult) else result
     if r.get("status") == "failed" and "error" in r:
-        return f"{_job_name(r)} | FAILED: {r['error']}"
+        return f"{display_name(r)} | FAILED: {r['error']}"
     parts = [
-        _job_name(r),
+        display_name(r),
         f"N={r.get('agents')}",
         "success" if r.get("success") else f"FAILED ({r.get('status')}: {r.get('message')})",
         f"exec_length={r.get('exec_length')}",
@@ -205,12 +206,6 @@ def format_summary(result: RunResult | Mapping[str, Any]) -> str:
     if r.get("fallback"):
         parts.append(f"fallback: {r['fallback']}")
     return " | ".join(parts)
-
-
-def _job_name(r: Mapping[str, Any]) -> str:
-    task = r.get("task")
-    task_text = f"p{task:02d}" if isinstance(task, int) else f"p{task}"
-    return f"{r.get('domain')} {task_text} {r.get('method')}"
 
 
 def _agent_number(agent: str) -> int:

@@ -30,9 +30,11 @@ from typing import Any
 
 from flows.artifacts import write_job_files
 from flows.job import JobError, StepStats, check_job, counting_steps, load_job_task, run_job
-from flows.store import JobStore, job_config, job_key
-from flows.sweep import SweepState, sweep_server, sweep_tracking
+from flows.store import JobStore, job_config, job_inputs, job_key
+from flows.sweep_services import sweep_server, sweep_tracking
+from flows.sweep_state import SweepState
 from twostep.benchmark import BenchmarkError, task_path
+from twostep.identity import job_name
 from twostep.pddl import PDDLError
 
 # Errors in what the user asked for: one line, no traceback.
@@ -53,15 +55,6 @@ class JobOutcome:
     input_error: bool = False  # the job's input was bad (unknown task, malformed PDDL)
     mlflow_run_id: str | None = None
     tracking_error: str | None = None  # logging failed; the result itself is safe
-
-
-def job_name(config: dict[str, Any]) -> str:
-    task = config.get("task")
-    task_text = f"{task:02d}" if isinstance(task, int) else str(task)
-    return (
-        f"{config['domain']['name']}-p{task_text}-{config['method']['name']}"
-        f"-n{config.get('agents')}-s{config.get('seed')}"
-    )
 
 
 def job_status(result: dict[str, Any]) -> tuple[str, str | None]:
@@ -99,41 +92,63 @@ def one_line(error: BaseException) -> str:
 # ----------------------------------------------------------------- computing
 
 
-def _prefect_api(cfg: Any, sweep: SweepState | None) -> tuple[Any, bool]:
+def prefect_target(cfg: Any, sweep: SweepState | None) -> tuple[bool, str | None]:
+    """Whether this job runs as a Prefect flow, and the API URL of a running server to
+    use (None: the sweep's server, or one of the job's own).
+
+    ``orchestration.prefect``: ``false`` never; ``true`` always (a single run starts a
+    temporary server if none is running); ``null`` (auto, the default) in sweeps, and in
+    single runs only when a server is already up (``twostep-services up``, or
+    ``orchestration.prefect_api_url``): a single run never waits for a server start.
+    """
+    mode = cfg.orchestration.prefect
+    if mode is False:
+        return False, None
+    if sweep is not None:
+        return bool(sweep.server or sweep.prefect_api_url), None
+    external = cfg.orchestration.prefect_api_url or os.environ.get("PREFECT_API_URL")
+    if external:
+        return True, str(external)
+    from flows.services import prefect_api_url
+
+    running = prefect_api_url(str(cfg.output.root))
+    if running:
+        return True, running
+    return mode is True, None
+
+
+def _prefect_api(cfg: Any, sweep: SweepState | None, external: str | None) -> tuple[Any, bool]:
     """The server this job uses (started now if the sweep has none yet) and whether
     this job owns it (a single run's own server, stopped when the job ends)."""
     from flows.server import ServerError, ServerInfo, ServerSettings, is_healthy, spawn_server
 
-    if sweep is not None and (sweep.server or sweep.prefect_api_url):
+    if sweep is not None:
         return sweep_server(sweep), False
-    external = cfg.orchestration.prefect_api_url or os.environ.get("PREFECT_API_URL")
     if external:
-        if not is_healthy(str(external), timeout_s=10):
+        if not is_healthy(external, timeout_s=10):
             raise ServerError(f"no Prefect server answers at {external}")
-        return ServerInfo(str(external), None, time.time(), 10.0), False
-    settings = ServerSettings(
-        home=str(cfg.orchestration.prefect_home),
-        host=str(cfg.orchestration.server_host),
-        startup_timeout_s=float(cfg.orchestration.server_startup_timeout_s),
-    )
+        return ServerInfo(external, None, time.time(), 10.0), False
+    settings = ServerSettings.from_config(cfg.orchestration)
     return spawn_server(settings, owner_pid=os.getpid()), True
 
 
 def _compute(
     cfg: Any, config: dict[str, Any], name: str, sweep: SweepState | None
-) -> tuple[dict[str, Any], StepStats, float]:
-    """Run the job; return its result dict, step stats and seconds waited for a server."""
+) -> tuple[dict[str, Any], StepStats, float, bool]:
+    """Run the job; return its result dict, step stats, seconds waited for a server and
+    whether it ran as a Prefect flow."""
     check_job(cfg)
     stats = StepStats()
-    if not cfg.orchestration.prefect:
+    use_prefect, external = prefect_target(cfg, sweep)
+    if not use_prefect:
         run = run_job(cfg, steps=counting_steps(stats), stats=stats)
-        return run.to_dict(), stats, 0.0
+        return run.to_dict(), stats, 0.0, False
     if sweep is None:
         load_job_task(cfg)  # bad input fails here, before a server starts for this run
     else:
         task_path(cfg.domain.name, int(cfg.task), Path(cfg.data.root))  # the flow parses it
     # Spawn the server (if it is this job's turn) before importing Prefect: they overlap.
-    server, owned = _prefect_api(cfg, sweep)
+    server, owned = _prefect_api(cfg, sweep, external)
     # Read by Prefect at import: the job's console shows warnings, not every API call.
     os.environ.setdefault("PREFECT_LOGGING_LEVEL", str(cfg.orchestration.prefect_log_level))
     from flows.flow import flush_to_server, run_flow
@@ -151,7 +166,7 @@ def _compute(
         if owned:
             flush_to_server()
             stop_server(server)
-    return result, stats, waited
+    return result, stats, waited, True
 
 
 def _flow_tags(config: dict[str, Any], sweep: SweepState | None) -> list[str]:
@@ -224,7 +239,7 @@ def execute_job(cfg: Any, job_dir: Path, sweep: SweepState | None = None) -> Job
     """
     start = time.perf_counter()
     config = job_config(cfg)
-    key = job_key(config)
+    key = job_key(config, job_inputs(config))
     name = job_name(config)
     tracking = bool(cfg.mlflow.enabled)
     if tracking and sweep is None:
@@ -234,17 +249,18 @@ def execute_job(cfg: Any, job_dir: Path, sweep: SweepState | None = None) -> Job
     store = JobStore(str(cfg.orchestration.job_store))
     stored = store.load(key) if cfg.orchestration.reuse_results else None
     stats, waited, error, details, input_error = StepStats(), 0.0, None, None, False
+    used_prefect = False
     if stored is not None:
         result = stored
     else:
         try:
-            result, stats, waited = _compute(cfg, config, name, sweep)
+            result, stats, waited, used_prefect = _compute(cfg, config, name, sweep)
         except INPUT_ERRORS as exc:
             error, input_error = one_line(exc), True
         except Exception as exc:
             error, details = one_line(exc), traceback.format_exc()
         if error is None:
-            store.save(key, config, result)
+            store.save(key, config, result)  # unless it did not finish (llm_error, error)
         else:
             result = failed_result(config, error)
     status, status_error = job_status(result)
@@ -264,7 +280,7 @@ def execute_job(cfg: Any, job_dir: Path, sweep: SweepState | None = None) -> Job
         "job_key": key,
         "orchestration": {
             "reused": outcome.reused,
-            "prefect": bool(cfg.orchestration.prefect),
+            "prefect": used_prefect,
             **stats.to_dict(),
             **{k: round(v, 4) for k, v in timings.items()},
         },
