@@ -30,6 +30,7 @@ from prefect.settings import (
     get_current_settings,
 )
 
+from flows.config import typed
 from flows.job import StepStats, run_job
 from flows.tasks import prefect_steps, route_llm_calls
 
@@ -38,7 +39,7 @@ from flows.tasks import prefect_steps, route_llm_calls
 def job_flow(job: dict[str, Any]) -> dict[str, Any]:
     from omegaconf import OmegaConf
 
-    cfg = OmegaConf.create(job)
+    cfg = typed(OmegaConf.create(job))
     stats = StepStats()
     orchestration = cfg.orchestration
     steps = prefect_steps(stats, submit=orchestration.task_runner == "dask")

@@ -29,7 +29,9 @@ from pathlib import Path
 from typing import Any
 
 from flows.artifacts import write_job_files
-from flows.job import JobError, StepStats, check_job, counting_steps, load_job_task, run_job
+from flows.build import JobError, check_job, load_job_task
+from flows.config import TwostepConfig, typed
+from flows.job import StepStats, counting_steps, run_job
 from flows.store import JobStore, job_config, job_inputs, job_key
 from flows.sweep_services import sweep_server, sweep_tracking
 from flows.sweep_state import SweepState
@@ -92,7 +94,7 @@ def one_line(error: BaseException) -> str:
 # ----------------------------------------------------------------- computing
 
 
-def prefect_target(cfg: Any, sweep: SweepState | None) -> tuple[bool, str | None]:
+def prefect_target(cfg: TwostepConfig, sweep: SweepState | None) -> tuple[bool, str | None]:
     """Whether this job runs as a Prefect flow, and the API URL of a running server to
     use (None: the sweep's server, or one of the job's own).
 
@@ -117,7 +119,9 @@ def prefect_target(cfg: Any, sweep: SweepState | None) -> tuple[bool, str | None
     return mode is True, None
 
 
-def _prefect_api(cfg: Any, sweep: SweepState | None, external: str | None) -> tuple[Any, bool]:
+def _prefect_api(
+    cfg: TwostepConfig, sweep: SweepState | None, external: str | None
+) -> tuple[Any, bool]:
     """The server this job uses (started now if the sweep has none yet) and whether
     this job owns it (a single run's own server, stopped when the job ends)."""
     from flows.server import ServerError, ServerInfo, ServerSettings, is_healthy, spawn_server
@@ -133,7 +137,7 @@ def _prefect_api(cfg: Any, sweep: SweepState | None, external: str | None) -> tu
 
 
 def _compute(
-    cfg: Any, config: dict[str, Any], name: str, sweep: SweepState | None
+    cfg: TwostepConfig, config: dict[str, Any], name: str, sweep: SweepState | None
 ) -> tuple[dict[str, Any], StepStats, float, bool]:
     """Run the job; return its result dict, step stats, seconds waited for a server and
     whether it ran as a Prefect flow."""
@@ -185,14 +189,14 @@ def _flow_tags(config: dict[str, Any], sweep: SweepState | None) -> list[str]:
 # ----------------------------------------------------------------- tracking
 
 
-def _experiment(cfg: Any, sweep: SweepState | None) -> str:
+def _experiment(cfg: TwostepConfig, sweep: SweepState | None) -> str:
     if sweep is not None and sweep.experiment:
         return sweep.experiment
     return str(cfg.mlflow.experiment or DEFAULT_EXPERIMENT)
 
 
 def _record_in_mlflow(
-    cfg: Any,
+    cfg: TwostepConfig,
     sweep: SweepState | None,
     outcome: JobOutcome,
     config: dict[str, Any],
@@ -231,7 +235,7 @@ def _record_in_mlflow(
     return run_id
 
 
-def execute_job(cfg: Any, job_dir: Path, sweep: SweepState | None = None) -> JobOutcome:
+def execute_job(cfg: object, job_dir: Path, sweep: SweepState | None = None) -> JobOutcome:
     """Run (or reuse) one job and record it; see the module docstring for the order.
 
     Raises :class:`~flows.tracking.TrackingError` when the MLflow store of a single run
@@ -240,6 +244,7 @@ def execute_job(cfg: Any, job_dir: Path, sweep: SweepState | None = None) -> Job
     start = time.perf_counter()
     config = job_config(cfg)
     key = job_key(config, job_inputs(config))
+    cfg = typed(cfg)
     name = job_name(config)
     tracking = bool(cfg.mlflow.enabled)
     if tracking and sweep is None:
