@@ -40,7 +40,7 @@ def app(cfg: DictConfig) -> None:
     multirun = hydra_cfg.mode == RunMode.MULTIRUN
     sweep = SweepState.load(Path(hydra_cfg.sweep.dir)) if multirun else None
     try:
-        outcome = execute_job(cfg, job_dir, sweep)
+        outcome = execute_job(cfg, job_dir, sweep, tracking_worker=not multirun)
     except TrackingError as error:
         print(f"error: {error}", file=sys.stderr, flush=True)
         if not multirun:

@@ -138,23 +138,24 @@ def _prefect_api(
 
 def _compute(
     cfg: TwostepConfig, config: dict[str, Any], name: str, sweep: SweepState | None
-) -> tuple[dict[str, Any], StepStats, float, bool]:
-    """Run the job; return its result dict, step stats, seconds waited for a server and
-    whether it ran as a Prefect flow."""
+) -> tuple[dict[str, Any], StepStats, dict[str, float]]:
+    """Run the job; return its result dict, step stats and timings (``server_wait_s``;
+    for a flow, ``flow_wall_s``: importing Prefect, waiting, the flow run)."""
     check_job(cfg)
     stats = StepStats()
     use_prefect, external = prefect_target(cfg, sweep)
     if not use_prefect:
         run = run_job(cfg, steps=counting_steps(stats), stats=stats)
-        return run.to_dict(), stats, 0.0, False
-    if sweep is None:
+        return run.to_dict(), stats, {"server_wait_s": 0.0}
+    if sweep is None and external is None:
         load_job_task(cfg)  # bad input fails here, before a server starts for this run
-    else:
-        task_path(cfg.domain.name, int(cfg.task), Path(cfg.data.root))  # the flow parses it
+    else:  # the server runs already: the flow parses the task (once)
+        task_path(cfg.domain.name, int(cfg.task), Path(cfg.data.root))
     # Spawn the server (if it is this job's turn) before importing Prefect: they overlap.
     server, owned = _prefect_api(cfg, sweep, external)
     # Read by Prefect at import: the job's console shows warnings, not every API call.
     os.environ.setdefault("PREFECT_LOGGING_LEVEL", str(cfg.orchestration.prefect_log_level))
+    flow_start = time.perf_counter()
     from flows.flow import flush_to_server, run_flow
     from flows.server import stop_server, wait_until_healthy
 
@@ -170,7 +171,7 @@ def _compute(
         if owned:
             flush_to_server()
             stop_server(server)
-    return result, stats, waited, True
+    return result, stats, {"server_wait_s": waited, "flow_wall_s": time.perf_counter() - flow_start}
 
 
 def _flow_tags(config: dict[str, Any], sweep: SweepState | None) -> list[str]:
@@ -195,14 +196,27 @@ def _experiment(cfg: TwostepConfig, sweep: SweepState | None) -> str:
     return str(cfg.mlflow.experiment or DEFAULT_EXPERIMENT)
 
 
-def _record_in_mlflow(
-    cfg: TwostepConfig,
-    sweep: SweepState | None,
-    outcome: JobOutcome,
-    config: dict[str, Any],
-    files: list[tuple[Path, str | None]],
-) -> str:
-    from flows.tracking import ERROR, REUSED, SCRIPTED, STATUS, Tracker, job_metrics, job_params
+def _job_record(
+    outcome: JobOutcome, config: dict[str, Any], files: list[tuple[Path, str | None]]
+) -> dict[str, Any]:
+    """What :func:`flows.tracking.log_job_run` logs for this job, as plain data."""
+    from flows.tracking import job_metrics, job_params
+
+    return {
+        "key": outcome.key,
+        "name": outcome.name,
+        "status": outcome.status,
+        "error": outcome.error,
+        "reused": outcome.reused,
+        "scripted": bool(outcome.result.get("scripted_llm")),
+        "params": job_params(config),
+        "metrics": job_metrics(outcome.result, outcome.timings),
+        "files": [[str(path), folder] for path, folder in files],
+    }
+
+
+def _record_in_mlflow(cfg: TwostepConfig, sweep: SweepState | None, record: dict[str, Any]) -> str:
+    from flows.tracking import Tracker, log_job_run
 
     uri = str(cfg.mlflow.tracking_uri)
     parent: str | None = None
@@ -211,35 +225,20 @@ def _record_in_mlflow(
     else:
         tracker = Tracker(uri, cfg.mlflow.artifact_location)
         experiment_id = tracker.experiment_id(_experiment(cfg, sweep))
-    run_id, found = tracker.job_run(experiment_id, outcome.key, outcome.name, parent)
-    if found is not None and found.data.tags.get(STATUS) in ("success", "timeout"):
-        # Recorded completely before (same job key: same result). Logging again would
-        # only append a second point to every metric's history.
-        return run_id
-    tags = {
-        STATUS: outcome.status,
-        SCRIPTED: "true" if outcome.result.get("scripted_llm") else "false",
-        REUSED: "true" if outcome.reused else "false",
-    }
-    if outcome.error:
-        tags[ERROR] = outcome.error
-    tracker.log_job(
-        run_id,
-        job_params(config),
-        job_metrics(outcome.result, outcome.timings),
-        tags,
-        files,
-        existing_params=dict(found.data.params) if found is not None else None,
-        terminated="FAILED" if outcome.status == "failed" else "FINISHED",
-    )
-    return run_id
+    return log_job_run(tracker, experiment_id, parent, record)
 
 
-def execute_job(cfg: object, job_dir: Path, sweep: SweepState | None = None) -> JobOutcome:
+def execute_job(
+    cfg: object, job_dir: Path, sweep: SweepState | None = None, tracking_worker: bool = False
+) -> JobOutcome:
     """Run (or reuse) one job and record it; see the module docstring for the order.
 
     Raises :class:`~flows.tracking.TrackingError` when the MLflow store of a single run
     cannot be used, before any planning; every other error is a ``failed`` outcome.
+
+    ``tracking_worker`` (single runs of the command): MLflow logging goes through a
+    process started now (:mod:`flows.tracking_worker`), which imports MLflow and opens
+    its store while this one runs the job; the job still returns after its run is logged.
     """
     start = time.perf_counter()
     config = job_config(cfg)
@@ -253,13 +252,21 @@ def execute_job(cfg: object, job_dir: Path, sweep: SweepState | None = None) -> 
         check_store(str(cfg.mlflow.tracking_uri), float(cfg.mlflow.connect_timeout_s))
     store = JobStore(str(cfg.orchestration.job_store))
     stored = store.load(key) if cfg.orchestration.reuse_results else None
-    stats, waited, error, details, input_error = StepStats(), 0.0, None, None, False
-    used_prefect = False
+    experiment = _experiment(cfg, sweep)
+    uri = str(cfg.mlflow.tracking_uri)
+    logged = stored is not None and f"{uri} {experiment}" in store.logged_to(key)
+    worker = None
+    if tracking and tracking_worker and sweep is None and not logged:
+        from flows.tracking_worker import TrackingWorker
+
+        worker = TrackingWorker.start(uri, cfg.mlflow.artifact_location, experiment)
+    stats, error, details, input_error = StepStats(), None, None, False
+    compute_timings: dict[str, float] = {"server_wait_s": 0.0}
     if stored is not None:
         result = stored
     else:
         try:
-            result, stats, waited, used_prefect = _compute(cfg, config, name, sweep)
+            result, stats, compute_timings = _compute(cfg, config, name, sweep)
         except INPUT_ERRORS as exc:
             error, input_error = one_line(exc), True
         except Exception as exc:
@@ -270,10 +277,10 @@ def execute_job(cfg: object, job_dir: Path, sweep: SweepState | None = None) -> 
             result = failed_result(config, error)
     status, status_error = job_status(result)
     job_wall = time.perf_counter() - start
-    work = waited + stats.planner_wall_s + stats.llm_wall_s
+    work = compute_timings["server_wait_s"] + stats.planner_wall_s + stats.llm_wall_s
     timings = {
         "job_wall_time_s": job_wall,
-        "server_wait_s": waited,
+        **compute_timings,
         "orchestration_overhead_s": max(0.0, job_wall - work),
     }
     outcome = JobOutcome(
@@ -285,7 +292,7 @@ def execute_job(cfg: object, job_dir: Path, sweep: SweepState | None = None) -> 
         "job_key": key,
         "orchestration": {
             "reused": outcome.reused,
-            "prefect": used_prefect,
+            "prefect": "flow_wall_s" in compute_timings,
             **stats.to_dict(),
             **{k: round(v, 4) for k, v in timings.items()},
         },
@@ -293,18 +300,24 @@ def execute_job(cfg: object, job_dir: Path, sweep: SweepState | None = None) -> 
     files = write_job_files(job_dir, outcome.result)
     if details:
         (job_dir / "error.txt").write_text(details)
-    experiment = _experiment(cfg, sweep)
-    uri = str(cfg.mlflow.tracking_uri)
-    if tracking and not (outcome.reused and f"{uri} {experiment}" in store.logged_to(key)):
+    tracking_start = time.perf_counter()
+    if tracking and not logged:
         try:
-            outcome.mlflow_run_id = _record_in_mlflow(cfg, sweep, outcome, config, files)
+            record = _job_record(outcome, config, files)
+            if worker is not None:
+                outcome.mlflow_run_id = worker.log(record)
+            else:
+                outcome.mlflow_run_id = _record_in_mlflow(cfg, sweep, record)
             store.mark_logged(key, uri, experiment, outcome.mlflow_run_id)
         except Exception as exc:  # the result is stored; the next run logs it again
             outcome.tracking_error = one_line(exc)
             print(
                 f"warning: {name}: not logged to MLflow: {outcome.tracking_error}", file=sys.stderr
             )
+    if worker is not None:
+        worker.close()
     # With MLflow logging: what the job cost end to end (the progress record, the bench).
+    outcome.timings["tracking_s"] = time.perf_counter() - tracking_start
     outcome.timings["job_wall_time_s"] = job_wall = time.perf_counter() - start
     outcome.timings["orchestration_overhead_s"] = max(0.0, job_wall - work)
     return outcome

@@ -152,3 +152,30 @@ def test_default_single_run_starts_no_prefect_server(tmp_path: Path) -> None:
     assert not (out / "prefect").exists()  # no server database was created
     (result,) = out.glob("runs/*/*/result.json")
     assert json.loads(result.read_text())["orchestration"]["prefect"] is False
+
+
+def test_single_run_logs_to_mlflow_through_its_worker(tmp_path: Path) -> None:
+    """The command's MLflow logging runs in a helper process: the run is there when the
+    command returns, found again (not duplicated) by a second run that reuses the job."""
+    data, out = make_data(tmp_path / "data"), tmp_path / "out"
+    argv = [f"data.root={data}", f"output.root={out}", "domain=blocksworld", "task=1"]
+    argv += ["method=sa", "orchestration.prefect=false"]
+    for _ in range(2):
+        done = subprocess.run(
+            [sys.executable, "-m", "flows.cli", *argv],
+            capture_output=True, text=True, cwd=REPO, timeout=240,
+        )  # fmt: skip
+        assert done.returncode == 0, done.stdout + done.stderr
+        assert "warning" not in done.stderr
+    from mlflow.tracking import MlflowClient
+
+    client = MlflowClient(f"sqlite:///{out}/mlflow.db")
+    experiment = client.get_experiment_by_name("twostep")
+    assert experiment is not None
+    (run,) = client.search_runs([experiment.experiment_id])
+    results = sorted(out.glob("runs/*/*/result.json"))
+    first = json.loads(results[0].read_text())
+    assert run.data.tags["twostep.job_key"] == first["job_key"]
+    assert run.data.tags["twostep.status"] == "success"
+    assert run.data.metrics["exec_length"] == first["exec_length"]
+    assert {a.path for a in client.list_artifacts(run.info.run_id)} >= {"result.json"}
