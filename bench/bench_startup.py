@@ -46,11 +46,12 @@ from flows.runner import execute_job
 with initialize_config_dir(config_dir=sys.argv[1], version_base="1.3"):
     cfg = compose("config", overrides=sys.argv[3:])
 composed = time.perf_counter()
-outcome = execute_job(cfg, __import__("pathlib").Path(sys.argv[2]))
+outcome = execute_job(cfg, __import__("pathlib").Path(sys.argv[2]), tracking_worker=True)
 done = time.perf_counter()
 print(json.dumps({"imports": imported - start, "config": composed - imported,
                   "job": done - composed, "total": done - start, "status": outcome.status,
-                  "timings": outcome.timings, "stats": outcome.stats.to_dict()}))
+                  "timings": outcome.timings, "stats": outcome.stats.to_dict()}), flush=True)
+import os; os._exit(0)  # as the twostep command ends a single run (flows.cli._fast_exit)
 """
 
 
@@ -107,7 +108,7 @@ def breakdown(data: dict[str, Any]) -> dict[str, float]:
     mlflow = float(timings.get("tracking_s", 0.0))
     prefect = max(0.0, float(timings.get("flow_wall_s", 0.0)) - planner - task)
     parts = {
-        "python start": data["wall"] - data["total"],
+        "python start + exit": data["wall"] - data["total"],
         "imports (app)": data["imports"],
         "config (compose)": data["config"],
         "task load": task,
