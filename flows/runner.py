@@ -6,9 +6,11 @@ and in each job of a sweep (any launcher):
 1. check the MLflow store (single run; a sweep's callback checked it already):
    :class:`~flows.tracking.TrackingError` before any work;
 2. a job whose key is in the job store is read back, not recomputed (``reused``);
-3. otherwise run it: as the Prefect flow on the sweep's server (started on demand by
-   the first job that needs it, then waited for), or on a server of its own for a
-   single run, or the library directly (``orchestration.prefect=false``);
+3. otherwise run it (:func:`prefect_target`): as the Prefect flow on the sweep's server
+   (started on demand by the first job that needs it, then waited for); a single run as
+   a flow on a running server (``twostep-services up``) or, with
+   ``orchestration.prefect=true``, on a temporary server of its own; otherwise (a single
+   run by default, ``orchestration.prefect=false``) the library directly;
 4. write result.json and the other files to the job's Hydra directory;
 5. log params, metrics, artifacts and status to the job's MLflow run, found again by
    ``twostep.job_key`` (a re-run adds no duplicate), child of the sweep's parent run;

@@ -174,6 +174,12 @@ def spawn_server(settings: ServerSettings, owner_pid: int | None, ui: bool = Fal
 
 
 def is_healthy(api_url: str, timeout_s: float = 2.0) -> bool:
+    """Whether ``GET <api_url>/health`` answers 200 (Prefect's API and MLflow's server).
+
+    A plain HTTP probe on purpose: it runs before Prefect is imported (2 s), e.g. in
+    every single run looking for the services. Everything else goes through Prefect's
+    client (:func:`flows.sweep_services.count_flow_runs`).
+    """
     try:
         with urllib.request.urlopen(f"{api_url}/health", timeout=timeout_s) as response:
             return bool(response.status == 200)
