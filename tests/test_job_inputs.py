@@ -135,10 +135,15 @@ def test_default_single_run_starts_no_prefect_server(tmp_path: Path) -> None:
     """orchestration.prefect is left at its default (auto) and no services are up."""
     data, out = make_data(tmp_path / "data"), tmp_path / "out"
     script = (
-        "import sys\n"
-        "from flows.cli import main\n"
-        "main()\n"
-        "print('prefect imported:', 'prefect' in sys.modules)\n"
+        "import os, sys\n"
+        "import flows.cli\n"
+        "def report(code):\n"  # the command ends a single run with os._exit: look first
+        "    print('prefect imported:', 'prefect' in sys.modules)\n"
+        "    print('litellm imported:', 'litellm' in sys.modules)\n"
+        "    sys.stdout.flush()\n"
+        "    os._exit(code)\n"
+        "flows.cli._fast_exit = report\n"
+        "flows.cli.main()\n"
     )
     argv = [f"data.root={data}", f"output.root={out}", "domain=blocksworld", "task=1"]
     argv += ["method=sa", "mlflow.enabled=false"]
@@ -149,6 +154,7 @@ def test_default_single_run_starts_no_prefect_server(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stdout + done.stderr
     assert "blocksworld p01 sa" in done.stdout and "success" in done.stdout
     assert "prefect imported: False" in done.stdout
+    assert "litellm imported: False" in done.stdout
     assert not (out / "prefect").exists()  # no server database was created
     (result,) = out.glob("runs/*/*/result.json")
     assert json.loads(result.read_text())["orchestration"]["prefect"] is False
