@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from flows.job import format_schedule
-from flows.store import write_json_atomic
+from twostep.files import write_json_atomic
 
 
 def write_job_files(job_dir: Path, result: Mapping[str, Any]) -> list[tuple[Path, str | None]]:

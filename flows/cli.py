@@ -27,11 +27,16 @@ CONF_DIR = str(Path(__file__).resolve().parent.parent / "conf")
 quiet_defaults()
 register()
 
+# Set by a single run once its job is recorded: the process may then end without
+# tearing down every imported module (about a second for MLflow + unified-planning).
+_SINGLE_RUN_DONE = False
+
 
 @hydra.main(config_path=CONF_DIR, config_name="config", version_base="1.3")
 def app(cfg: DictConfig) -> None:
+    from flows.progress import progress_line
     from flows.runner import execute_job
-    from flows.sweep import SweepState, progress_line, record_job
+    from flows.sweep_state import SweepState, record_job
     from flows.tracking import TrackingError
 
     hydra_cfg = HydraConfig.get()
@@ -39,7 +44,7 @@ def app(cfg: DictConfig) -> None:
     multirun = hydra_cfg.mode == RunMode.MULTIRUN
     sweep = SweepState.load(Path(hydra_cfg.sweep.dir)) if multirun else None
     try:
-        outcome = execute_job(cfg, job_dir, sweep)
+        outcome = execute_job(cfg, job_dir, sweep, tracking_worker=not multirun)
     except TrackingError as error:
         print(f"error: {error}", file=sys.stderr, flush=True)
         if not multirun:
@@ -52,6 +57,8 @@ def app(cfg: DictConfig) -> None:
         }
         record_job(Path(hydra_cfg.sweep.dir), hydra_cfg.job.num, record)
         return
+    global _SINGLE_RUN_DONE
+    _SINGLE_RUN_DONE = not multirun
     line = format_summary(outcome.result)
     if outcome.reused:
         line += " | reused (job store)"
@@ -90,7 +97,34 @@ def app(cfg: DictConfig) -> None:
 
 
 def main() -> None:
-    app()
+    try:
+        app()
+    except SystemExit as stop:
+        code = stop.code
+    else:
+        code = 0
+    if _SINGLE_RUN_DONE:
+        _fast_exit(code if isinstance(code, int) else 1)
+    sys.exit(code)
+
+
+def _fast_exit(code: int) -> None:
+    """End a finished single run: flush what is still buffered, skip module teardown.
+
+    Everything the run writes is on disk already (result.json, the job store, the MLflow
+    run); log handlers are flushed, and Prefect's queued logs and events are sent.
+    """
+    import logging
+    import os
+
+    if "flows.flow" in sys.modules:
+        from flows.flow import flush_to_server
+
+        flush_to_server()
+    logging.shutdown()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
 
 
 if __name__ == "__main__":

@@ -5,16 +5,24 @@ of ``conf/config.yaml``'s defaults list, so a typo in an override (``tsak=3``,
 ``orchestration.task_runer=dask``) or a value of the wrong type (``agents=two``,
 ``orchestration.task_runner=spark``) fails at once with Hydra's message naming the key.
 
-Values live in ``conf/``; the defaults here only give each key its type.
+Values live in ``conf/``; the defaults here only give each key its type. Where a key
+is a library setting, its default is the library dataclass's default (one default per
+setting); the one place that turns a config into library objects is :mod:`flows.build`.
 """
 
 from __future__ import annotations
 
 import enum
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 from hydra.core.config_store import ConfigStore
+
+from twostep.llm.client import LLMSettings
+from twostep.planner import PlannerSettings
+
+_LLM = LLMSettings()
+_PLANNER = PlannerSettings()
 
 
 @dataclass
@@ -36,27 +44,32 @@ class DecomposerConfig:
 
 @dataclass
 class LLMConfig:
-    model: str = "openai/gpt-4o"
-    temperature: float = 0.0
-    top_p: float | None = 1.0  # null: not sent (models that refuse temperature and top_p)
-    max_tokens: int = 512
-    api_base: str | None = None
-    api_key_env: str | None = None  # the variable's NAME; the key itself is never in config
-    mode: str = "live"  # live | replay | scripted
-    cache_dir: str = "outputs/llm-cache"
+    """:class:`twostep.llm.LLMSettings` (same names, same defaults; built by flows.build)."""
+
+    model: str = _LLM.model
+    temperature: float = _LLM.temperature
+    top_p: float | None = _LLM.top_p  # null: not sent (models that refuse temperature and top_p)
+    max_tokens: int = _LLM.max_tokens
+    api_base: str | None = _LLM.api_base
+    api_key_env: str | None = _LLM.api_key_env  # the variable's NAME; never the key itself
+    mode: str = _LLM.mode  # live | replay | scripted
+    cache_dir: str = str(_LLM.cache_dir)
     script: str | None = None
-    max_retries: int = 4
-    backoff_s: float = 1.0
-    timeout_s: float = 60.0
-    use_cache: bool = True
-    local: bool = False  # llm=local: serve the model from an in-process llama.cpp server
+    max_retries: int = _LLM.max_retries
+    backoff_s: float = _LLM.backoff_s
+    timeout_s: float = _LLM.timeout_s
+    use_cache: bool = _LLM.use_cache
+    local: bool = _LLM.local  # llm=local: serve the model from an in-process llama.cpp server
 
 
 @dataclass
 class PlannerConfig:
-    alias: str = "lama-first"  # lama (anytime, paper) | lama-first
-    time_limit_s: float = 60.0  # CPU search limit for SA/MA; divided by N per agent in TwoStep
-    memory_limit_mb: int | None = None
+    """:class:`twostep.planner.PlannerSettings`; ``time_limit_s`` is its
+    ``search_time_limit_s`` (CPU search limit for SA/MA; divided by N per agent in TwoStep)."""
+
+    alias: str = _PLANNER.alias  # lama (anytime, paper) | lama-first
+    time_limit_s: float = _PLANNER.search_time_limit_s
+    memory_limit_mb: int | None = _PLANNER.memory_limit_mb
 
 
 @dataclass
@@ -89,7 +102,10 @@ class TaskRunner(enum.StrEnum):
 class OrchestrationConfig:
     """How jobs run: Prefect on or off, which server, task runner, caches, progress."""
 
-    prefect: bool = True  # false: call the library directly (no server, no task cache)
+    # null (auto): sweeps run jobs as Prefect flows; a single run does only when a server
+    # is already up (twostep-services up, prefect_api_url). true: always (a single run
+    # starts a temporary server if none is up). false: never (the library directly).
+    prefect: bool | None = None
     prefect_api_url: str | None = None  # an existing server; null: one per sweep (or run)
     prefect_home: str = "outputs/prefect"  # the started server's database and settings
     result_storage: str = "outputs/prefect/results"  # persisted task results (the task cache)
@@ -127,3 +143,9 @@ class TwostepConfig:
 
 def register() -> None:
     ConfigStore.instance().store(name="twostep_schema", node=TwostepConfig)
+
+
+def typed(cfg: object) -> TwostepConfig:
+    """A job's config, composed over this schema (Hydra's DictConfig, validated by
+    OmegaConf on every assignment), seen as what it is: a :class:`TwostepConfig`."""
+    return cast(TwostepConfig, cfg)

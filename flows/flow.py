@@ -30,6 +30,7 @@ from prefect.settings import (
     get_current_settings,
 )
 
+from flows.config import typed
 from flows.job import StepStats, run_job
 from flows.tasks import prefect_steps
 
@@ -38,7 +39,7 @@ from flows.tasks import prefect_steps
 def job_flow(job: dict[str, Any]) -> dict[str, Any]:
     from omegaconf import OmegaConf
 
-    cfg = OmegaConf.create(job)
+    cfg = typed(OmegaConf.create(job))
     stats = StepStats()
     orchestration = cfg.orchestration
     # The steps, the LLM calls among them, as task runs; the library keeps the control flow.

@@ -11,14 +11,15 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields
-from pathlib import Path
 from typing import Any
 
-from twostep.benchmark import BenchmarkTask, load_task
+from flows.build import check_job, load_job_task, open_decomposer, planner_settings
+from flows.config import TwostepConfig
+from twostep.benchmark import BenchmarkTask
 from twostep.decomposers.base import Decomposer
+from twostep.identity import display_name
 from twostep.pddl import Problem
 from twostep.pipeline import (
     DIRECT,
@@ -31,65 +32,8 @@ from twostep.pipeline import (
 from twostep.planner import PlannerSettings, PlanResult, plan
 
 
-class JobError(Exception):
-    """A config that names something that does not exist or does not fit together."""
-
-
-METHODS = ("sa", "ma", "twostep")
-DECOMPOSERS = ("goal-split", "expert", "llm")
-
-
-def planner_settings(cfg: Any) -> PlannerSettings:
-    return PlannerSettings(
-        alias=cfg.planner.alias,
-        search_time_limit_s=float(cfg.planner.time_limit_s),
-        memory_limit_mb=cfg.planner.memory_limit_mb,
-    )
-
-
-@contextmanager
-def open_decomposer(cfg: Any) -> Iterator[Decomposer]:
-    """The decomposer the config names, for the duration of one job.
-
-    A context manager because the LLM decomposer owns a client (``llm=local`` runs a
-    model server for the job's lifetime: :func:`flows.llm.llm_decomposer`).
-    """
-    name = cfg.decomposer.name
-    agent_predicates = list(cfg.domain.agent_predicates)
-    if name == "goal-split":
-        from twostep.decomposers.goal_split import GoalSplitDecomposer
-
-        yield GoalSplitDecomposer(agent_predicates, cfg.decomposer.link_degree)
-    elif name == "expert":
-        from twostep.decomposers.expert import ExpertDecomposer
-
-        yield ExpertDecomposer()
-    elif name == "llm":
-        from flows.llm import llm_decomposer
-
-        with llm_decomposer(cfg) as decomposer:
-            yield decomposer
-    else:
-        raise JobError(f"unknown decomposer '{name}' (known: {', '.join(DECOMPOSERS)})")
-
-
-def load_job_task(cfg: Any) -> BenchmarkTask:
-    return load_task(cfg.domain.name, int(cfg.task), Path(cfg.data.root))
-
-
-def check_job(cfg: Any) -> None:
-    """Reject a config that cannot run, before any work (and before any server starts)."""
-    if cfg.method.name not in METHODS:
-        raise JobError(f"unknown method '{cfg.method.name}' (known: {', '.join(METHODS)})")
-    if int(cfg.agents) < 1:
-        raise JobError(f"agents must be at least 1, got {cfg.agents}")
-    if cfg.method.name == "twostep" and cfg.decomposer.name not in DECOMPOSERS:
-        known = ", ".join(DECOMPOSERS)
-        raise JobError(f"unknown decomposer '{cfg.decomposer.name}' (known: {known})")
-
-
 def run_job(
-    cfg: Any,
+    cfg: TwostepConfig,
     task: BenchmarkTask | None = None,
     steps: Steps = DIRECT,
     prepare_decomposer: Callable[[Decomposer], object] | None = None,
@@ -188,9 +132,9 @@ def format_summary(result: RunResult | Mapping[str, Any]) -> str:
     """One line for the terminal (from a result or its result.json dict)."""
     r = result.to_dict() if isinstance(result, RunResult) else result
     if r.get("status") == "failed" and "error" in r:
-        return f"{_job_name(r)} | FAILED: {r['error']}"
+        return f"{display_name(r)} | FAILED: {r['error']}"
     parts = [
-        _job_name(r),
+        display_name(r),
         f"N={r.get('agents')}",
         "success" if r.get("success") else f"FAILED ({r.get('status')}: {r.get('message')})",
         f"exec_length={r.get('exec_length')}",
@@ -205,12 +149,6 @@ def format_summary(result: RunResult | Mapping[str, Any]) -> str:
     if r.get("fallback"):
         parts.append(f"fallback: {r['fallback']}")
     return " | ".join(parts)
-
-
-def _job_name(r: Mapping[str, Any]) -> str:
-    task = r.get("task")
-    task_text = f"p{task:02d}" if isinstance(task, int) else f"p{task}"
-    return f"{r.get('domain')} {task_text} {r.get('method')}"
 
 
 def _agent_number(agent: str) -> int:

@@ -6,9 +6,11 @@ and in each job of a sweep (any launcher):
 1. check the MLflow store (single run; a sweep's callback checked it already):
    :class:`~flows.tracking.TrackingError` before any work;
 2. a job whose key is in the job store is read back, not recomputed (``reused``);
-3. otherwise run it: as the Prefect flow on the sweep's server (started on demand by
-   the first job that needs it, then waited for), or on a server of its own for a
-   single run, or the library directly (``orchestration.prefect=false``);
+3. otherwise run it (:func:`prefect_target`): as the Prefect flow on the sweep's server
+   (started on demand by the first job that needs it, then waited for); a single run as
+   a flow on a running server (``twostep-services up``) or, with
+   ``orchestration.prefect=true``, on a temporary server of its own; otherwise (a single
+   run by default, ``orchestration.prefect=false``) the library directly;
 4. write result.json and the other files to the job's Hydra directory;
 5. log params, metrics, artifacts and status to the job's MLflow run, found again by
    ``twostep.job_key`` (a re-run adds no duplicate), child of the sweep's parent run;
@@ -29,10 +31,14 @@ from pathlib import Path
 from typing import Any
 
 from flows.artifacts import write_job_files
-from flows.job import JobError, StepStats, check_job, counting_steps, load_job_task, run_job
-from flows.store import JobStore, job_config, job_key
-from flows.sweep import SweepState, sweep_server, sweep_tracking
+from flows.build import JobError, check_job, load_job_task
+from flows.config import TwostepConfig, typed
+from flows.job import StepStats, counting_steps, run_job
+from flows.store import JobStore, job_config, job_inputs, job_key
+from flows.sweep_services import sweep_server, sweep_tracking
+from flows.sweep_state import SweepState
 from twostep.benchmark import BenchmarkError, task_path
+from twostep.identity import job_name
 from twostep.pddl import PDDLError
 
 # Errors in what the user asked for: one line, no traceback.
@@ -53,15 +59,6 @@ class JobOutcome:
     input_error: bool = False  # the job's input was bad (unknown task, malformed PDDL)
     mlflow_run_id: str | None = None
     tracking_error: str | None = None  # logging failed; the result itself is safe
-
-
-def job_name(config: dict[str, Any]) -> str:
-    task = config.get("task")
-    task_text = f"{task:02d}" if isinstance(task, int) else str(task)
-    return (
-        f"{config['domain']['name']}-p{task_text}-{config['method']['name']}"
-        f"-n{config.get('agents')}-s{config.get('seed')}"
-    )
 
 
 def job_status(result: dict[str, Any]) -> tuple[str, str | None]:
@@ -99,43 +96,68 @@ def one_line(error: BaseException) -> str:
 # ----------------------------------------------------------------- computing
 
 
-def _prefect_api(cfg: Any, sweep: SweepState | None) -> tuple[Any, bool]:
+def prefect_target(cfg: TwostepConfig, sweep: SweepState | None) -> tuple[bool, str | None]:
+    """Whether this job runs as a Prefect flow, and the API URL of a running server to
+    use (None: the sweep's server, or one of the job's own).
+
+    ``orchestration.prefect``: ``false`` never; ``true`` always (a single run starts a
+    temporary server if none is running); ``null`` (auto, the default) in sweeps, and in
+    single runs only when a server is already up (``twostep-services up``, or
+    ``orchestration.prefect_api_url``): a single run never waits for a server start.
+    """
+    mode = cfg.orchestration.prefect
+    if mode is False:
+        return False, None
+    if sweep is not None:
+        return bool(sweep.server or sweep.prefect_api_url), None
+    external = cfg.orchestration.prefect_api_url or os.environ.get("PREFECT_API_URL")
+    if external:
+        return True, str(external)
+    from flows.services import prefect_api_url
+
+    running = prefect_api_url(str(cfg.output.root))
+    if running:
+        return True, running
+    return mode is True, None
+
+
+def _prefect_api(
+    cfg: TwostepConfig, sweep: SweepState | None, external: str | None
+) -> tuple[Any, bool]:
     """The server this job uses (started now if the sweep has none yet) and whether
     this job owns it (a single run's own server, stopped when the job ends)."""
     from flows.server import ServerError, ServerInfo, ServerSettings, is_healthy, spawn_server
 
-    if sweep is not None and (sweep.server or sweep.prefect_api_url):
+    if sweep is not None:
         return sweep_server(sweep), False
-    external = cfg.orchestration.prefect_api_url or os.environ.get("PREFECT_API_URL")
     if external:
-        if not is_healthy(str(external), timeout_s=10):
+        if not is_healthy(external, timeout_s=10):
             raise ServerError(f"no Prefect server answers at {external}")
-        return ServerInfo(str(external), None, time.time(), 10.0), False
-    settings = ServerSettings(
-        home=str(cfg.orchestration.prefect_home),
-        host=str(cfg.orchestration.server_host),
-        startup_timeout_s=float(cfg.orchestration.server_startup_timeout_s),
-    )
+        return ServerInfo(external, None, time.time(), 10.0), False
+    settings = ServerSettings.from_config(cfg.orchestration)
     return spawn_server(settings, owner_pid=os.getpid()), True
 
 
 def _compute(
-    cfg: Any, config: dict[str, Any], name: str, sweep: SweepState | None
-) -> tuple[dict[str, Any], StepStats, float]:
-    """Run the job; return its result dict, step stats and seconds waited for a server."""
+    cfg: TwostepConfig, config: dict[str, Any], name: str, sweep: SweepState | None
+) -> tuple[dict[str, Any], StepStats, dict[str, float]]:
+    """Run the job; return its result dict, step stats and timings (``server_wait_s``;
+    for a flow, ``flow_wall_s``: importing Prefect, waiting, the flow run)."""
     check_job(cfg)
     stats = StepStats()
-    if not cfg.orchestration.prefect:
+    use_prefect, external = prefect_target(cfg, sweep)
+    if not use_prefect:
         run = run_job(cfg, steps=counting_steps(stats), stats=stats)
-        return run.to_dict(), stats, 0.0
-    if sweep is None:
+        return run.to_dict(), stats, {"server_wait_s": 0.0}
+    if sweep is None and external is None:
         load_job_task(cfg)  # bad input fails here, before a server starts for this run
-    else:
-        task_path(cfg.domain.name, int(cfg.task), Path(cfg.data.root))  # the flow parses it
+    else:  # the server runs already: the flow parses the task (once)
+        task_path(cfg.domain.name, int(cfg.task), Path(cfg.data.root))
     # Spawn the server (if it is this job's turn) before importing Prefect: they overlap.
-    server, owned = _prefect_api(cfg, sweep)
+    server, owned = _prefect_api(cfg, sweep, external)
     # Read by Prefect at import: the job's console shows warnings, not every API call.
     os.environ.setdefault("PREFECT_LOGGING_LEVEL", str(cfg.orchestration.prefect_log_level))
+    flow_start = time.perf_counter()
     from flows.flow import flush_to_server, run_flow
     from flows.server import stop_server, wait_until_healthy
 
@@ -151,7 +173,7 @@ def _compute(
         if owned:
             flush_to_server()
             stop_server(server)
-    return result, stats, waited
+    return result, stats, {"server_wait_s": waited, "flow_wall_s": time.perf_counter() - flow_start}
 
 
 def _flow_tags(config: dict[str, Any], sweep: SweepState | None) -> list[str]:
@@ -170,20 +192,33 @@ def _flow_tags(config: dict[str, Any], sweep: SweepState | None) -> list[str]:
 # ----------------------------------------------------------------- tracking
 
 
-def _experiment(cfg: Any, sweep: SweepState | None) -> str:
+def _experiment(cfg: TwostepConfig, sweep: SweepState | None) -> str:
     if sweep is not None and sweep.experiment:
         return sweep.experiment
     return str(cfg.mlflow.experiment or DEFAULT_EXPERIMENT)
 
 
-def _record_in_mlflow(
-    cfg: Any,
-    sweep: SweepState | None,
-    outcome: JobOutcome,
-    config: dict[str, Any],
-    files: list[tuple[Path, str | None]],
-) -> str:
-    from flows.tracking import ERROR, REUSED, SCRIPTED, STATUS, Tracker, job_metrics, job_params
+def _job_record(
+    outcome: JobOutcome, config: dict[str, Any], files: list[tuple[Path, str | None]]
+) -> dict[str, Any]:
+    """What :func:`flows.tracking.log_job_run` logs for this job, as plain data."""
+    from flows.tracking import job_metrics, job_params
+
+    return {
+        "key": outcome.key,
+        "name": outcome.name,
+        "status": outcome.status,
+        "error": outcome.error,
+        "reused": outcome.reused,
+        "scripted": bool(outcome.result.get("scripted_llm")),
+        "params": job_params(config),
+        "metrics": job_metrics(outcome.result, outcome.timings),
+        "files": [[str(path), folder] for path, folder in files],
+    }
+
+
+def _record_in_mlflow(cfg: TwostepConfig, sweep: SweepState | None, record: dict[str, Any]) -> str:
+    from flows.tracking import Tracker, log_job_run
 
     uri = str(cfg.mlflow.tracking_uri)
     parent: str | None = None
@@ -192,39 +227,25 @@ def _record_in_mlflow(
     else:
         tracker = Tracker(uri, cfg.mlflow.artifact_location)
         experiment_id = tracker.experiment_id(_experiment(cfg, sweep))
-    run_id, found = tracker.job_run(experiment_id, outcome.key, outcome.name, parent)
-    if found is not None and found.data.tags.get(STATUS) in ("success", "timeout"):
-        # Recorded completely before (same job key: same result). Logging again would
-        # only append a second point to every metric's history.
-        return run_id
-    tags = {
-        STATUS: outcome.status,
-        SCRIPTED: "true" if outcome.result.get("scripted_llm") else "false",
-        REUSED: "true" if outcome.reused else "false",
-    }
-    if outcome.error:
-        tags[ERROR] = outcome.error
-    tracker.log_job(
-        run_id,
-        job_params(config),
-        job_metrics(outcome.result, outcome.timings),
-        tags,
-        files,
-        existing_params=dict(found.data.params) if found is not None else None,
-        terminated="FAILED" if outcome.status == "failed" else "FINISHED",
-    )
-    return run_id
+    return log_job_run(tracker, experiment_id, parent, record)
 
 
-def execute_job(cfg: Any, job_dir: Path, sweep: SweepState | None = None) -> JobOutcome:
+def execute_job(
+    cfg: object, job_dir: Path, sweep: SweepState | None = None, tracking_worker: bool = False
+) -> JobOutcome:
     """Run (or reuse) one job and record it; see the module docstring for the order.
 
     Raises :class:`~flows.tracking.TrackingError` when the MLflow store of a single run
     cannot be used, before any planning; every other error is a ``failed`` outcome.
+
+    ``tracking_worker`` (single runs of the command): MLflow logging goes through a
+    process started now (:mod:`flows.tracking_worker`), which imports MLflow and opens
+    its store while this one runs the job; the job still returns after its run is logged.
     """
     start = time.perf_counter()
     config = job_config(cfg)
-    key = job_key(config)
+    key = job_key(config, job_inputs(config))
+    cfg = typed(cfg)
     name = job_name(config)
     tracking = bool(cfg.mlflow.enabled)
     if tracking and sweep is None:
@@ -233,26 +254,35 @@ def execute_job(cfg: Any, job_dir: Path, sweep: SweepState | None = None) -> Job
         check_store(str(cfg.mlflow.tracking_uri), float(cfg.mlflow.connect_timeout_s))
     store = JobStore(str(cfg.orchestration.job_store))
     stored = store.load(key) if cfg.orchestration.reuse_results else None
-    stats, waited, error, details, input_error = StepStats(), 0.0, None, None, False
+    experiment = _experiment(cfg, sweep)
+    uri = str(cfg.mlflow.tracking_uri)
+    logged = stored is not None and f"{uri} {experiment}" in store.logged_to(key)
+    worker = None
+    if tracking and tracking_worker and sweep is None and not logged:
+        from flows.tracking_worker import TrackingWorker
+
+        worker = TrackingWorker.start(uri, cfg.mlflow.artifact_location, experiment)
+    stats, error, details, input_error = StepStats(), None, None, False
+    compute_timings: dict[str, float] = {"server_wait_s": 0.0}
     if stored is not None:
         result = stored
     else:
         try:
-            result, stats, waited = _compute(cfg, config, name, sweep)
+            result, stats, compute_timings = _compute(cfg, config, name, sweep)
         except INPUT_ERRORS as exc:
             error, input_error = one_line(exc), True
         except Exception as exc:
             error, details = one_line(exc), traceback.format_exc()
         if error is None:
-            store.save(key, config, result)
+            store.save(key, config, result)  # unless it did not finish (llm_error, error)
         else:
             result = failed_result(config, error)
     status, status_error = job_status(result)
     job_wall = time.perf_counter() - start
-    work = waited + stats.planner_wall_s + stats.llm_wall_s
+    work = compute_timings["server_wait_s"] + stats.planner_wall_s + stats.llm_wall_s
     timings = {
         "job_wall_time_s": job_wall,
-        "server_wait_s": waited,
+        **compute_timings,
         "orchestration_overhead_s": max(0.0, job_wall - work),
     }
     outcome = JobOutcome(
@@ -264,7 +294,7 @@ def execute_job(cfg: Any, job_dir: Path, sweep: SweepState | None = None) -> Job
         "job_key": key,
         "orchestration": {
             "reused": outcome.reused,
-            "prefect": bool(cfg.orchestration.prefect),
+            "prefect": "flow_wall_s" in compute_timings,
             **stats.to_dict(),
             **{k: round(v, 4) for k, v in timings.items()},
         },
@@ -272,18 +302,24 @@ def execute_job(cfg: Any, job_dir: Path, sweep: SweepState | None = None) -> Job
     files = write_job_files(job_dir, outcome.result)
     if details:
         (job_dir / "error.txt").write_text(details)
-    experiment = _experiment(cfg, sweep)
-    uri = str(cfg.mlflow.tracking_uri)
-    if tracking and not (outcome.reused and f"{uri} {experiment}" in store.logged_to(key)):
+    tracking_start = time.perf_counter()
+    if tracking and not logged:
         try:
-            outcome.mlflow_run_id = _record_in_mlflow(cfg, sweep, outcome, config, files)
+            record = _job_record(outcome, config, files)
+            if worker is not None:
+                outcome.mlflow_run_id = worker.log(record)
+            else:
+                outcome.mlflow_run_id = _record_in_mlflow(cfg, sweep, record)
             store.mark_logged(key, uri, experiment, outcome.mlflow_run_id)
         except Exception as exc:  # the result is stored; the next run logs it again
             outcome.tracking_error = one_line(exc)
             print(
                 f"warning: {name}: not logged to MLflow: {outcome.tracking_error}", file=sys.stderr
             )
+    if worker is not None:
+        worker.close()
     # With MLflow logging: what the job cost end to end (the progress record, the bench).
+    outcome.timings["tracking_s"] = time.perf_counter() - tracking_start
     outcome.timings["job_wall_time_s"] = job_wall = time.perf_counter() - start
     outcome.timings["orchestration_overhead_s"] = max(0.0, job_wall - work)
     return outcome

@@ -33,10 +33,12 @@ import sys
 import time
 import urllib.error
 import urllib.request
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
+
+from twostep.files import write_json_atomic
 
 # Server-side services a sweep does not use: schedules, deployments, work pools, pauses.
 # The task run recorder and event persister stay on: they make task runs visible.
@@ -80,6 +82,15 @@ class ServerSettings:
     host: str = "127.0.0.1"
     startup_timeout_s: float = 180.0
 
+    @classmethod
+    def from_config(cls, orchestration: Any) -> ServerSettings:
+        """The settings of a server we start, from the config's ``orchestration`` node."""
+        return cls(
+            home=str(orchestration.prefect_home),
+            host=str(orchestration.server_host),
+            startup_timeout_s=float(orchestration.server_startup_timeout_s),
+        )
+
 
 def free_port(host: str = "127.0.0.1") -> int:
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
@@ -87,15 +98,15 @@ def free_port(host: str = "127.0.0.1") -> int:
         return int(sock.getsockname()[1])
 
 
-def server_environment(home: Path) -> dict[str, str]:
+def server_environment(home: Path, ui: bool = False) -> dict[str, str]:
     """Environment of the server process: its database under ``home``, no telemetry."""
     env = dict(os.environ)
     env.update(
         PREFECT_HOME=str(home),
         PREFECT_SERVER_ANALYTICS_ENABLED="false",
         # The UI copies its files at start-up; a sweep's server is for its jobs. To watch
-        # runs in the UI, start a server yourself and set orchestration.prefect_api_url.
-        PREFECT_SERVER_UI_ENABLED="false",
+        # runs in the UI, start the long-lived services (``twostep-services up``).
+        PREFECT_SERVER_UI_ENABLED="true" if ui else "false",
         PREFECT_LOGGING_LEVEL="WARNING",
         DO_NOT_TRACK="1",
     )
@@ -113,28 +124,49 @@ def _die_with_parent() -> None:  # pragma: no cover - runs in the child before e
             libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG: the watchdog died
 
 
-def spawn_server(settings: ServerSettings, owner_pid: int) -> ServerInfo:
-    """Start a watched ``prefect server start`` on a free port; return without waiting."""
-    home = Path(settings.home)
-    home.mkdir(parents=True, exist_ok=True)
-    port = free_port(settings.host)
-    log_path = home / f"server-{port}.log"
-    command = [sys.executable, "-m", "flows.server", "--owner", str(owner_pid), "--"]
-    command += [sys.executable, "-m", "prefect", "server", "start"]
-    command += ["--host", settings.host, "--port", str(port)]
+def spawn(
+    command: Sequence[str], env: Mapping[str, str], log_path: Path, owner_pid: int | None
+) -> int:
+    """Start ``command`` in a session of its own, output to ``log_path``; return its PID.
+
+    With ``owner_pid`` it runs under the watchdog (stopped when that process is gone);
+    without, it runs until stopped by PID (its process group: :func:`stop_process`).
+    """
+    full = list(command)
+    if owner_pid is not None:
+        full = [sys.executable, "-m", "flows.server", "--owner", str(owner_pid), "--", *full]
     with open(log_path, "wb") as log:
         process = subprocess.Popen(
-            command,
-            env=server_environment(home),
+            full,
+            env=dict(env),
             stdin=subprocess.DEVNULL,
             stdout=log,
             stderr=subprocess.STDOUT,
             start_new_session=True,  # Ctrl-C in the terminal must not stop it under the jobs
         )
-    host = f"[{settings.host}]" if ":" in settings.host else settings.host
+    return process.pid
+
+
+def url_host(host: str) -> str:
+    return f"[{host}]" if ":" in host else host
+
+
+def spawn_server(settings: ServerSettings, owner_pid: int | None, ui: bool = False) -> ServerInfo:
+    """Start ``prefect server start`` on a free port; return without waiting.
+
+    ``owner_pid``: the process whose exit stops the server (a sweep's launcher, a single
+    run); ``None`` for a long-lived server (``twostep-services``).
+    """
+    home = Path(settings.home)
+    home.mkdir(parents=True, exist_ok=True)
+    port = free_port(settings.host)
+    log_path = home / f"server-{port}.log"
+    command = [sys.executable, "-m", "prefect", "server", "start"]
+    command += ["--host", settings.host, "--port", str(port)]
+    pid = spawn(command, server_environment(home, ui), log_path, owner_pid)
     return ServerInfo(
-        api_url=f"http://{host}:{port}/api",
-        pid=process.pid,
+        api_url=f"http://{url_host(settings.host)}:{port}/api",
+        pid=pid,
         started_at=time.time(),
         startup_timeout_s=settings.startup_timeout_s,
         log_path=str(log_path),
@@ -142,6 +174,12 @@ def spawn_server(settings: ServerSettings, owner_pid: int) -> ServerInfo:
 
 
 def is_healthy(api_url: str, timeout_s: float = 2.0) -> bool:
+    """Whether ``GET <api_url>/health`` answers 200 (Prefect's API and MLflow's server).
+
+    A plain HTTP probe on purpose: it runs before Prefect is imported (2 s), e.g. in
+    every single run looking for the services. Everything else goes through Prefect's
+    client (:func:`flows.sweep_services.count_flow_runs`).
+    """
     try:
         with urllib.request.urlopen(f"{api_url}/health", timeout=timeout_s) as response:
             return bool(response.status == 200)
@@ -197,16 +235,29 @@ def _log_tail(info: ServerInfo) -> str:
 
 def stop_server(info: ServerInfo | None, grace_s: float = 20.0) -> None:
     """Stop a server we started: SIGTERM to its watchdog, SIGKILL after ``grace_s``."""
-    if info is None or info.pid is None or not pid_alive(info.pid):
+    if info is None or info.pid is None:
         return
-    with contextlib.suppress(ProcessLookupError):
-        os.kill(info.pid, signal.SIGTERM)
+    stop_process(info.pid, grace_s, group=False)
+
+
+def stop_process(pid: int, grace_s: float = 20.0, group: bool = True) -> bool:
+    """Stop a process we started in its own session: SIGTERM (to its whole process group
+    with ``group``; a watchdog stops its child itself), SIGKILL to the group after
+    ``grace_s``. False if it was not running."""
+    if not pid_alive(pid):
+        return False
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        if group:
+            os.killpg(pid, signal.SIGTERM)
+        else:
+            os.kill(pid, signal.SIGTERM)
     deadline = time.monotonic() + grace_s
-    while pid_alive(info.pid) and time.monotonic() < deadline:
+    while pid_alive(pid) and time.monotonic() < deadline:
         time.sleep(0.1)
-    if pid_alive(info.pid):
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(info.pid, signal.SIGKILL)  # the watchdog leads the server's session
+    if pid_alive(pid):
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(pid, signal.SIGKILL)  # the process leads its own session
+    return True
 
 
 # ----------------------------------------------------------------- on demand, shared
@@ -238,9 +289,7 @@ def shared_server(info_path: Path, settings: ServerSettings, owner_pid: int) -> 
         if info is not None and info.pid is not None and pid_alive(info.pid):
             return info
         info = spawn_server(settings, owner_pid)
-        tmp = info_path.with_name(f".{info_path.name}.{os.getpid()}.tmp")
-        tmp.write_text(json.dumps(info.to_dict()))
-        os.replace(tmp, info_path)
+        write_json_atomic(info_path, info.to_dict())
         return info
 
 

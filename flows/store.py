@@ -1,27 +1,22 @@
 """Finished jobs, stored by job key, so that no finished job is ever computed twice.
 
-The job key is a hash of the job's resolved config without the keys that only say
-*where* or *how* a job runs (``hydra``, ``output``, ``mlflow``, ``orchestration``,
-``llm.cache_dir``), plus :data:`JOB_VERSION`. The same job in another sweep, with another
-launcher, or after a ``kill -9`` has the same key. Its result is written once, atomically,
-to ``<orchestration.job_store>/<key>/result.json`` after the job finished; a job that
-raised is not stored (a re-run tries it again).
+What goes into the key (the identity config and the content of every input file) and
+which results are kept is decided by :mod:`twostep.identity`; this module reads the
+config and the files, and owns ``<orchestration.job_store>/<key>/``. A result is written
+once, atomically, after the job finished; a job that raised, or whose result says it did
+not finish (``llm_error``, ``error``), is not stored: a re-run tries it again.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
-import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-# Bump when a change to the pipeline makes stored results stale.
-JOB_VERSION = "job-1"
-
-# Top-level keys (or dotted paths) that do not change what a job computes.
-NOT_IN_KEY = ("hydra", "output", "mlflow", "orchestration", "experiment", "llm.cache_dir")
+from twostep import identity
+from twostep.benchmark import BenchmarkError, task_path
+from twostep.files import write_json_atomic
 
 
 def job_config(cfg: Any) -> dict[str, Any]:
@@ -37,33 +32,20 @@ def job_config(cfg: Any) -> dict[str, Any]:
     return {str(k): v for k, v in data.items()}
 
 
-def _without(data: Mapping[str, Any], dotted: str) -> dict[str, Any]:
-    head, _, rest = dotted.partition(".")
-    out = dict(data)
-    if head not in out:
-        return out
-    if not rest:
-        del out[head]
-    elif isinstance(out[head], Mapping):
-        out[head] = _without(out[head], rest)
-    return out
+def job_inputs(config: Mapping[str, Any]) -> dict[str, str]:
+    """Digest of every file the job reads, by role (an unknown task: no problem file)."""
+    try:
+        problem: Path | None = task_path(
+            str(config["domain"]["name"]), int(config["task"]), Path(str(config["data"]["root"]))
+        )
+    except (BenchmarkError, KeyError, TypeError, ValueError):
+        problem = None  # the job fails on its input; it is not stored either
+    return identity.input_digests(identity.job_input_files(config, problem))
 
 
-def job_key(config: Mapping[str, Any]) -> str:
-    """Stable hash of what the job computes (``twostep.job_key`` in MLflow)."""
-    identity: dict[str, Any] = dict(config)
-    for dotted in NOT_IN_KEY:
-        identity = _without(identity, dotted)
-    blob = json.dumps({"version": JOB_VERSION, "config": identity}, sort_keys=True, default=str)
-    return hashlib.sha256(blob.encode()).hexdigest()[:32]
-
-
-def write_json_atomic(path: Path, data: Any) -> None:
-    """Write JSON so that a reader (or a ``kill -9``) never sees half a file."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(data, indent=2, default=str) + "\n")
-    os.replace(tmp, path)
+def job_key(config: Mapping[str, Any], inputs: Mapping[str, str] | None = None) -> str:
+    """The job's key (:func:`twostep.identity.job_key`); ``inputs``: :func:`job_inputs`."""
+    return identity.job_key(config, inputs)
 
 
 class JobStore:
@@ -87,10 +69,15 @@ class JobStore:
             return None
         return data if isinstance(data, dict) else None
 
-    def save(self, key: str, config: Mapping[str, Any], result: Mapping[str, Any]) -> None:
+    def save(self, key: str, config: Mapping[str, Any], result: Mapping[str, Any]) -> bool:
+        """Store a finished job's result; False (nothing written) for one that did not
+        finish its work (:func:`twostep.identity.is_storable`)."""
+        if not identity.is_storable(result):
+            return False
         # config first: a stored result always has its config beside it.
         write_json_atomic(self.root / key / "config.json", dict(config))
         write_json_atomic(self.path(key), dict(result))
+        return True
 
     def logged_to(self, key: str) -> dict[str, str]:
         """``"<tracking uri> <experiment>" -> run id`` for the runs holding this job."""

@@ -293,6 +293,37 @@ def _clip(text: str, limit: int) -> str:
 # ----------------------------------------------------------------- params / metrics
 
 
+def log_job_run(
+    tracker: Tracker, experiment_id: str, parent: str | None, record: Mapping[str, Any]
+) -> str:
+    """Log one job (``record``: plain data, see ``flows.runner._job_record``) to its run,
+    found again by job key; return the run id.
+
+    A run recorded completely before (same job key: same result) is left as it is:
+    logging again would only append a second point to every metric's history.
+    """
+    run_id, found = tracker.job_run(experiment_id, record["key"], record["name"], parent)
+    if found is not None and found.data.tags.get(STATUS) in ("success", "timeout"):
+        return run_id
+    tags = {
+        STATUS: str(record["status"]),
+        SCRIPTED: "true" if record["scripted"] else "false",
+        REUSED: "true" if record["reused"] else "false",
+    }
+    if record["error"]:
+        tags[ERROR] = str(record["error"])
+    tracker.log_job(
+        run_id,
+        record["params"],
+        record["metrics"],
+        tags,
+        [(Path(path), folder) for path, folder in record["files"]],
+        existing_params=dict(found.data.params) if found is not None else None,
+        terminated="FAILED" if record["status"] == "failed" else "FINISHED",
+    )
+    return run_id
+
+
 def job_params(config: Mapping[str, Any]) -> dict[str, str]:
     """The flattened resolved config as params; secret-looking keys are left out.
 

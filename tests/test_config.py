@@ -14,7 +14,7 @@ from hydra.errors import ConfigCompositionException
 from omegaconf import DictConfig, OmegaConf
 
 from flows.config import TaskRunner, register
-from flows.sweep import count_jobs, sweep_overrides
+from flows.sweep_state import count_jobs, sweep_overrides
 
 CONF = Path(__file__).resolve().parent.parent / "conf"
 PLACES = ["output.root=/tmp/twostep-out", "data.root=/tmp/twostep-data"]
@@ -47,7 +47,8 @@ def test_defaults() -> None:
     assert cfg.orchestration.result_storage == "/tmp/twostep-out/prefect/results"
     assert cfg.orchestration.job_store == "/tmp/twostep-out/jobs"
     assert cfg.orchestration.task_runner == TaskRunner.default
-    assert cfg.orchestration.prefect is True and cfg.mlflow.enabled is True
+    # Prefect "auto" (null): sweeps use it, a single run only when a server is up.
+    assert cfg.orchestration.prefect is None and cfg.mlflow.enabled is True
 
 
 def test_overrides_reach_their_keys() -> None:

@@ -28,10 +28,11 @@ from flows import runner
 from flows.artifacts import write_job_files
 from flows.config import register
 from flows.job import format_summary
+from flows.progress import progress_line
 from flows.runner import execute_job
 from flows.server import pid_alive, stop_server
 from flows.store import JobStore, job_config, job_key
-from flows.sweep import SweepState, progress_line, record_job
+from flows.sweep_state import SweepState, record_job
 from flows.tracking import TrackingError, job_metrics, job_params
 from tests.conftest import blocks_problem
 from tests.test_prompts import make_blocksworld_data

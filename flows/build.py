@@ -1,0 +1,77 @@
+"""Config to library objects, in one place: the task, the planner settings and the
+decomposer a job's config names, and the check that they exist and fit together.
+
+Each library setting has one name in the config (``flows/config.py``, whose defaults
+are the library dataclasses' defaults) and is mapped here once; ``planner.time_limit_s``
+is the planner's ``search_time_limit_s``. The LLM settings are built by
+:func:`flows.llm.llm_settings` (the LLM client's own module), reached through
+:func:`open_decomposer`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from flows.config import TwostepConfig
+from twostep.benchmark import BenchmarkTask, load_task
+from twostep.decomposers.base import Decomposer
+from twostep.planner import PlannerSettings
+
+
+class JobError(Exception):
+    """A config that names something that does not exist or does not fit together."""
+
+
+METHODS = ("sa", "ma", "twostep")
+DECOMPOSERS = ("goal-split", "expert", "llm")
+
+
+def planner_settings(cfg: TwostepConfig) -> PlannerSettings:
+    return PlannerSettings(
+        alias=cfg.planner.alias,
+        search_time_limit_s=float(cfg.planner.time_limit_s),
+        memory_limit_mb=cfg.planner.memory_limit_mb,
+    )
+
+
+@contextmanager
+def open_decomposer(cfg: TwostepConfig) -> Iterator[Decomposer]:
+    """The decomposer the config names, for the duration of one job.
+
+    A context manager because the LLM decomposer owns a client (``llm=local`` runs a
+    model server for the job's lifetime: :func:`flows.llm.llm_decomposer`).
+    """
+    name = cfg.decomposer.name
+    agent_predicates = list(cfg.domain.agent_predicates)
+    if name == "goal-split":
+        from twostep.decomposers.goal_split import GoalSplitDecomposer
+
+        yield GoalSplitDecomposer(agent_predicates, cfg.decomposer.link_degree)
+    elif name == "expert":
+        from twostep.decomposers.expert import ExpertDecomposer
+
+        yield ExpertDecomposer()
+    elif name == "llm":
+        from flows.llm import llm_decomposer
+
+        with llm_decomposer(cfg) as decomposer:
+            yield decomposer
+    else:
+        raise JobError(f"unknown decomposer '{name}' (known: {', '.join(DECOMPOSERS)})")
+
+
+def load_job_task(cfg: TwostepConfig) -> BenchmarkTask:
+    return load_task(cfg.domain.name, int(cfg.task), Path(cfg.data.root))
+
+
+def check_job(cfg: TwostepConfig) -> None:
+    """Reject a config that cannot run, before any work (and before any server starts)."""
+    if cfg.method.name not in METHODS:
+        raise JobError(f"unknown method '{cfg.method.name}' (known: {', '.join(METHODS)})")
+    if int(cfg.agents) < 1:
+        raise JobError(f"agents must be at least 1, got {cfg.agents}")
+    if cfg.method.name == "twostep" and cfg.decomposer.name not in DECOMPOSERS:
+        known = ", ".join(DECOMPOSERS)
+        raise JobError(f"unknown decomposer '{cfg.decomposer.name}' (known: {known})")

@@ -1,0 +1,131 @@
+"""What the jobs of one sweep share on disk: the sweep's state, its identity, job records.
+
+The launching process (:class:`flows.sweep.SweepCallback`) writes
+``<sweep dir>/.twostep/sweep.json``; every job reads it. Jobs report to
+``.twostep/jobs/<num>.json`` (one file each: nothing to lock between joblib or submitit
+workers); the progress line and the summary are computed from those files.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import math
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from omegaconf import DictConfig
+
+from twostep.files import write_json_atomic
+from twostep.identity import is_sweep_identity_key
+
+STATE_DIR = ".twostep"
+
+
+@dataclass
+class SweepState:
+    """What the launching process tells every job of the sweep."""
+
+    sweep_dir: str
+    started_at: float
+    main_pid: int
+    hostname: str = ""
+    total_jobs: int | None = None
+    sweep_key: str = ""
+    overrides: list[str] = field(default_factory=list)
+    tracking_uri: str | None = None  # None: MLflow off
+    artifact_location: str | None = None
+    experiment: str | None = None
+    server: dict[str, Any] | None = None  # ServerSettings for an on-demand server
+    prefect_api_url: str | None = None  # a server the user runs (not ours to start or stop)
+    dask_address: str | None = None
+
+    @property
+    def folder(self) -> Path:
+        return Path(self.sweep_dir) / STATE_DIR
+
+    @staticmethod
+    def path(sweep_dir: Path) -> Path:
+        return Path(sweep_dir) / STATE_DIR / "sweep.json"
+
+    def save(self) -> None:
+        write_json_atomic(self.path(Path(self.sweep_dir)), asdict(self))
+
+    @classmethod
+    def load(cls, sweep_dir: Path) -> SweepState | None:
+        try:
+            return cls(**json.loads(cls.path(sweep_dir).read_text()))
+        except (OSError, ValueError, TypeError):
+            return None
+
+    @property
+    def run_tag(self) -> str:
+        """Prefect tag of this multirun's flow runs (a resumed sweep gets a new one)."""
+        folder = Path(self.sweep_dir)
+        return f"multirun:{folder.parent.name}_{folder.name}"
+
+    @property
+    def sweep_tag(self) -> str:
+        """Prefect tag shared by every attempt of the same sweep."""
+        return f"sweep:{self.sweep_key[:12]}"
+
+
+# ----------------------------------------------------------------- sweep identity
+
+
+def sweep_overrides(config: DictConfig) -> list[str]:
+    """The sweep's command-line overrides that define what it computes, sorted.
+
+    An experiment's grid is named by the command line that selects it
+    (``experiment=paper``), not by the grid it expands to.
+    """
+    chosen: dict[str, str] = {}
+    for item in config.hydra.overrides.task:
+        key, _, value = str(item).partition("=")
+        chosen[key] = value
+    return sorted(f"{key}={value}" for key, value in chosen.items() if is_sweep_identity_key(key))
+
+
+def sweep_key(overrides: list[str]) -> str:
+    return hashlib.sha256("\n".join(overrides).encode()).hexdigest()[:32]
+
+
+def count_jobs(config: DictConfig) -> int | None:
+    """How many jobs the basic sweeper will launch (None if it cannot be told).
+
+    The sweeper's parameters, then the command line (a later value of a key replaces an
+    earlier one, as in the sweeper), parsed with Hydra's public override parser; the
+    grid is the product of the number of values of every key.
+    """
+    try:
+        from hydra.core.override_parser.overrides_parser import OverridesParser
+
+        params = config.hydra.sweeper.get("params") or {}
+        arguments = [f"{k}={v}" for k, v in params.items()]
+        arguments += [str(o) for o in config.hydra.overrides.task]
+        values: dict[str, int] = {}
+        for override in OverridesParser.create().parse_overrides(arguments):
+            key = override.get_key_element()
+            sweep = override.is_sweep_override()
+            values[key] = len(list(override.sweep_iterator())) if sweep else 1
+        return math.prod(values.values())
+    except Exception:  # another sweeper's syntax: progress shows "?"
+        return None
+
+
+# ----------------------------------------------------------------- job records
+
+
+def record_job(sweep_dir: Path, num: int, record: Mapping[str, Any]) -> None:
+    write_json_atomic(Path(sweep_dir) / STATE_DIR / "jobs" / f"{num}.json", dict(record))
+
+
+def job_records(sweep_dir: Path) -> list[dict[str, Any]]:
+    records = []
+    for path in sorted((Path(sweep_dir) / STATE_DIR / "jobs").glob("*.json")):
+        with contextlib.suppress(OSError, ValueError):
+            records.append(json.loads(path.read_text()))
+    return records

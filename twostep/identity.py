@@ -1,0 +1,201 @@
+"""Job identity: which config keys say *what* a job computes, its key, its names, and
+which results are kept.
+
+The one owner of these rules. The job store (``flows/store.py``), the sweep's identity
+(``flows/sweep.py``), the job names on the console and in MLflow, and the report's
+grouping of runs (``twostep/report``) all ask this module.
+
+* A config key is **not identity** when it only says where or how a job runs
+  (:data:`NOT_IDENTITY_GROUPS`, :data:`NOT_IDENTITY_KEYS`), or when the job's method
+  never reads it (:func:`is_relevant`: ``decomposer.*`` only matters to TwoStep,
+  ``llm.*`` only to TwoStep with the LLM decomposer).
+* The **job key** hashes the identity config, :data:`JOB_VERSION` and the content of
+  every file the job reads (:func:`job_input_files`): editing a problem file, an expert
+  subgoal file, an LLM script or a prompt gives a new key, so the job is computed again;
+  a re-run with unchanged inputs finds the stored result.
+* A result is **stored** (reused by later runs) unless its status says the job did not
+  finish its work (:func:`is_storable`): a re-run tries those again.
+
+Plain data in, plain data out; the only I/O is reading the input files' bytes.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Mapping
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+# Bump when a change to the pipeline makes stored results stale.
+JOB_VERSION = "job-2"
+
+# Config groups (top-level keys) that say where or how a job runs. ``experiment`` only
+# selects values for other keys, which are in the config themselves.
+NOT_IDENTITY_GROUPS: tuple[str, ...] = ("hydra", "output", "mlflow", "orchestration", "experiment")
+
+# Single keys that change how an answer is obtained, never which answer.
+NOT_IDENTITY_KEYS: frozenset[str] = frozenset(
+    {"llm.cache_dir", "llm.max_retries", "llm.backoff_s", "llm.api_key_env"}
+)
+
+# Results with these statuses did not finish their work: never stored, retried by a re-run.
+UNFINISHED_STATUSES: frozenset[str] = frozenset({"error", "llm_error", "failed"})
+
+_PROMPTS = Path(__file__).resolve().parent / "prompts"
+
+
+def is_identity_key(name: str) -> bool:
+    """Whether the dotted config key (or command-line override key) can change a result.
+
+    ``hydra/launcher`` (a group override), ``+orchestration.x`` and ``~mlflow.y`` are
+    understood as well.
+    """
+    name = name.lstrip("+~")
+    head = name.replace("/", ".").split(".", 1)[0]
+    return head not in NOT_IDENTITY_GROUPS and name not in NOT_IDENTITY_KEYS
+
+
+def is_sweep_identity_key(name: str) -> bool:
+    """Whether a sweep's override names what the sweep computes (its MLflow experiment
+    and parent run). Unlike a job, a sweep is named by the experiment that selects its
+    grid (``experiment=paper``), not by the grid it expands to."""
+    return name.lstrip("+~").replace("/", ".").split(".", 1)[0] == "experiment" or (
+        is_identity_key(name)
+    )
+
+
+def is_relevant(name: str, method: str | None, decomposer: str | None) -> bool:
+    """Whether a job of ``method`` (and ``decomposer``) reads the dotted key ``name``.
+
+    ``None`` means unknown: everything is relevant.
+    """
+    if method is None:
+        return True
+    if name.startswith("decomposer."):
+        return method == "twostep"
+    if name.startswith("llm."):
+        return method == "twostep" and decomposer in (None, "llm")
+    return True
+
+
+def _method_of(config: Mapping[str, Any]) -> tuple[str | None, str | None]:
+    method, decomposer = config.get("method"), config.get("decomposer")
+    method_name = method.get("name") if isinstance(method, Mapping) else method
+    decomposer_name = decomposer.get("name") if isinstance(decomposer, Mapping) else decomposer
+    return (
+        None if method_name is None else str(method_name),
+        None if decomposer_name is None else str(decomposer_name),
+    )
+
+
+def identity_config(config: Mapping[str, Any]) -> dict[str, Any]:
+    """The part of a resolved config that decides what the job computes."""
+    method, decomposer = _method_of(config)
+
+    def keep(data: Mapping[str, Any], prefix: str) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for key, value in data.items():
+            name = f"{prefix}{key}"
+            if not is_identity_key(name) or not is_relevant(name + ".", method, decomposer):
+                continue
+            out[str(key)] = keep(value, f"{name}.") if isinstance(value, Mapping) else value
+        return out
+
+    return keep(config, "")
+
+
+def job_input_files(config: Mapping[str, Any], problem_path: Path | None) -> dict[str, Path]:
+    """Every file the job reads, by role: the job key hashes their content.
+
+    ``problem_path`` is the task's problem file (``None``: unknown, e.g. no such task).
+    """
+    method, decomposer = _method_of(config)
+    data = config.get("data")
+    root = Path(str(data.get("root", "data"))) if isinstance(data, Mapping) else Path("data")
+    domain = config.get("domain")
+    domain_name = str(domain.get("name", "")) if isinstance(domain, Mapping) else str(domain)
+    folder = root / domain_name
+    files: dict[str, Path] = {"domain": folder / "domain.pddl"}
+    if problem_path is not None:
+        files["problem"] = problem_path
+    if method == "twostep" and decomposer == "expert":
+        files["expert"] = folder / "expert.yaml"
+    if method == "twostep" and decomposer == "llm":
+        # The prompts show the task and the domain's example in English.
+        if problem_path is not None:
+            files["problem_nl"] = problem_path.with_suffix(".nl")
+        for name in ("domain.nl", "p_example.nl", "p_example.pddl", "p_example.sol"):
+            files[name] = folder / name
+        llm = config.get("llm")
+        script = llm.get("script") if isinstance(llm, Mapping) else None
+        if script:
+            files["llm_script"] = Path(str(script))
+        for prompt in sorted(_PROMPTS.glob("*.txt")):
+            files[f"prompt:{prompt.name}"] = prompt
+    return files
+
+
+def file_digest(path: Path) -> str:
+    """SHA-256 of a file's bytes; ``"missing"`` for a file that cannot be read."""
+    try:
+        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    except OSError:
+        return "missing"
+
+
+def code_version() -> str:
+    """The installed package version (part of every job key)."""
+    try:
+        return metadata.version("twostep")
+    except metadata.PackageNotFoundError:
+        return "unknown"
+
+
+def job_key(config: Mapping[str, Any], inputs: Mapping[str, str] | None = None) -> str:
+    """Stable hash of what the job computes (``twostep.job_key`` in MLflow).
+
+    ``inputs``: digest of each input file by role (:func:`input_digests`).
+    """
+    blob = json.dumps(
+        {
+            "version": JOB_VERSION,
+            "code": code_version(),
+            "config": identity_config(config),
+            "inputs": dict(sorted((inputs or {}).items())),
+        },
+        sort_keys=True,
+        default=str,
+    )
+    return hashlib.sha256(blob.encode()).hexdigest()[:32]
+
+
+def input_digests(files: Mapping[str, Path]) -> dict[str, str]:
+    return {role: file_digest(path) for role, path in files.items()}
+
+
+def is_storable(result: Mapping[str, Any]) -> bool:
+    """Whether a finished job's result may be reused by later runs."""
+    return str(result.get("status")) not in UNFINISHED_STATUSES and "error" not in result
+
+
+def _task_text(task: Any) -> str:
+    return f"{task:02d}" if isinstance(task, int) else str(task)
+
+
+def job_name(config: Mapping[str, Any]) -> str:
+    """The job's name for run directories, MLflow runs and flow runs:
+    ``grippers-p09-sa-n2-s0``."""
+    domain, method = config.get("domain"), config.get("method")
+    domain_name = domain.get("name") if isinstance(domain, Mapping) else domain
+    method_name = method.get("name") if isinstance(method, Mapping) else method
+    return (
+        f"{domain_name}-p{_task_text(config.get('task'))}-{method_name}"
+        f"-n{config.get('agents')}-s{config.get('seed')}"
+    )
+
+
+def display_name(result: Mapping[str, Any]) -> str:
+    """The job's name on the console, from a result dict: ``grippers p09 sa``."""
+    return f"{result.get('domain')} p{_task_text(result.get('task'))} {result.get('method')}"
