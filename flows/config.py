@@ -117,8 +117,6 @@ class OrchestrationConfig:
     dask_workers: int = 2  # LocalCluster size when task_runner=dask and no address
     job_store: str = "outputs/jobs"  # finished jobs by job key: never recomputed
     reuse_results: bool = True
-    llm_task_retries: int = 2  # on top of the LLM client's own retries
-    llm_task_retry_delay_s: float = 5.0  # first delay; doubles per retry
     progress: bool = True  # one line per finished job of a sweep
 
 

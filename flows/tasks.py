@@ -52,7 +52,7 @@ from twostep.pipeline import Steps
 from twostep.planner import PlannerSettings, PlanResult, Status
 
 # Bump when a change in the library makes cached task results stale.
-PLAN_VERSION = "plan-1"
+PLAN_VERSION = "plan-2"  # PlanResult gained cost and the incomplete status
 # The state name of an LLM task whose call failed (see _llm_call_outcome).
 LLM_ERROR_STATE = "LLMError"
 LLMStepResult = tuple[str | None, dict[str, Any]]

@@ -1,37 +1,27 @@
 """Series: which runs form one line of Fig. 3, and which config params split them.
 
-The rule "which config params are not part of a job's identity" lives here in two small
-functions, :func:`is_bookkeeping_param` and :func:`param_applies`; everything else in the
-report asks them.
+Which config params are not part of a job's identity, and which a method never reads, is
+decided by :mod:`twostep.identity` (the one owner, shared with the job store and sweeps);
+:func:`is_bookkeeping_param` and :func:`param_applies` are the report's names for it.
 """
 
 from __future__ import annotations
 
 import pandas as pd
 
+from twostep.identity import is_identity_key, is_relevant
 from twostep.report.model import SERIES_COLUMNS
 from twostep.report.runs import KEY_COLUMNS, PARAM_PREFIX
 
-#: Bookkeeping params that never make results different: where outputs, stores and
-#: caches live, how jobs are orchestrated and tracked, how LLM calls are retried.
-IGNORED_PARAMS: frozenset[str] = frozenset(
-    {"llm.cache_dir", "llm.max_retries", "llm.backoff_s", "llm.api_key_env"}
-)
-IGNORED_PARAM_PREFIXES: tuple[str, ...] = ("output.", "orchestration.", "mlflow.", "hydra.")
-
 
 def is_bookkeeping_param(name: str) -> bool:
-    """True for params that never split series (see :data:`IGNORED_PARAMS`)."""
-    return name in IGNORED_PARAMS or name.startswith(IGNORED_PARAM_PREFIXES)
+    """True for params that never split series: not part of a job's identity."""
+    return not is_identity_key(name)
 
 
 def param_applies(param: str, method: str, decomposer: str) -> bool:
     """Whether runs of ``method`` (and ``decomposer``) read ``param`` at all."""
-    if param.startswith("decomposer."):
-        return method == "twostep"
-    if param.startswith("llm."):
-        return method == "twostep" and decomposer == "llm"
-    return True
+    return is_relevant(param, method, decomposer)
 
 
 def _relevance_mask(runs: pd.DataFrame, param: str) -> pd.Series:
