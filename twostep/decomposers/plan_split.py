@@ -184,17 +184,20 @@ def split_plan(
     agent_edges: set[tuple[int, int]] = set()
     for p, piece in enumerate(pieces):
         ready = max((finish[q] for q in preds[p]), default=0)
-        best: tuple[int, int, int] | None = None
+        # key: earliest finish, then fewest hand-offs from other agents, then the idlest agent
+        best: tuple[int, int, int, int] | None = None
         for a in range(max(agents, 1)):
             new = {(agent_of[q], a) for q in preds[p] if agent_of[q] != a}
             if new - agent_edges and _cyclic(agent_edges | new, len(free_at)):
                 continue
             start = max(ready, free_at[a])
-            key = (start + len(piece), free_at[a], a)
+            crossing = sum(agent_of[q] != a for q in preds[p])
+            key = (start + len(piece), crossing, free_at[a], a)
             if best is None or key < best:
                 best = key
-        assert best is not None  # the agent of the latest predecessor never makes a cycle
-        a = best[2]
+        # never None: the agent that comes last among the predecessors' agents closes no cycle
+        assert best is not None
+        a = best[3]
         agent_edges |= {(agent_of[q], a) for q in preds[p] if agent_of[q] != a}
         agent_of.append(a)
         finish.append(best[0])
