@@ -189,6 +189,9 @@ def test_barman_three_shakers(tmp_path: Path, data_root: Path) -> None:
     split = split_plan(problem, BARMAN_PLAN, 3, BARMAN)
     assert [len(r) for r in split.pieces] == [8, 4] * 3
     assert split.owner == [0, 0, 1, 1, 2, 2] and split.makespan == 12
+    # the same pieces when cut by what is held: no hand holds two things at once here
+    held = split_plan(problem, BARMAN_PLAN, 3, BARMAN, cut="holding")
+    assert held.pieces == split.pieces and held.subgoals == split.subgoals
     hands = "(handempty left) (handempty right)"
     assert split.subgoals == [
         goal(problem, f"(and (contains shot1 cocktail1) {hands})"),
@@ -220,6 +223,13 @@ def test_termes_tower_helper_builds_the_ramp(tmp_path: Path, data_root: Path) ->
     assert [list(r) for r in split.pieces] == [[0, 1, 2], [3], [4, 5], [6, 7, 8], [9], [10, 11]]
     assert split.owner == [1, 0, 0, 1, 0, 1] and split.makespan == 8
     assert split.subgoals == [goal(problem, "(and (height p1 n1) (not (has-block)))")]
+    # Cut by what the agent holds: a piece is a block's way from creation to placement
+    # (or removal to destruction); walking is left to the planner and counted as travel
+    # of the next piece, so every piece takes 3 steps. Same helper, same subgoal.
+    held = split_plan(problem, TERMES_PLAN, 2, TERMES, cut="holding")
+    assert held.pieces == [[0, 2], [4, 5], [6, 8], [10, 11]]
+    assert held.owner == [1, 0, 1, 1] and held.makespan == 9
+    assert held.subgoals == split.subgoals
     # lama-first's main plan after the ramp is not the shortest (it dismantles the ramp
     # for the base): the joint schedule is valid, and the fallback keeps it from costing.
     run = run_twostep(

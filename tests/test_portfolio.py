@@ -60,18 +60,22 @@ def test_portfolio_keeps_the_shortest_candidate(tmp_path: Path) -> None:
 def test_portfolio_finds_partial_progress_and_fewer_agents(tmp_path: Path) -> None:
     # The tall tower with the hand-written SA plan of test_plan_split (10 actions):
     # goal-split sees one component (no helper: the SA plan), plan-split lets a helper
-    # clear b (the same subgoal for 3 agents as for 2). The candidates are plan-split and
-    # goal-split with 3 agents, then with 2; the repeats are recognised, not planned again.
+    # clear b (the same subgoal for 3 agents as for 2). The candidates are the members with
+    # 3 agents, then with 2; the repeats are recognised, not planned again.
     task = _blocks(tmp_path, TALL_TOWER)
     sa = sa_result(TALL_TOWER_PLAN)
     run = run_twostep(task, 3, Portfolio(BW), BW, FAST, sa_plan=sa)
     rows = run.extra["candidates"]
+    members = ["plan-split", "plan-split-holding", "plan-split-holding-goal", "goal-split"]
     assert [(r["decomposer"], r["agents"]) for r in rows] == [
-        ("plan-split", 3), ("goal-split", 3), ("plan-split", 2), ("goal-split", 2),
-    ]  # fmt: skip
+        (m, n) for n in (3, 2) for m in members
+    ]
     assert rows[0]["accepted"] == 1 and rows[0]["exec_length"] < 10
-    assert rows[1]["fallback"] == "no helper subgoal proposed" and rows[1]["exec_length"] == 10
-    assert rows[2]["same_as"] == 0 and rows[3]["same_as"] == 1
+    assert rows[1]["same_as"] == 0  # blocksworld: the same pieces either way
+    # goal literals only: clearing b achieves none, so no helper and the SA plan
+    assert rows[2]["fallback"] == "no helper subgoal proposed" and rows[2]["exec_length"] == 10
+    assert rows[3]["same_as"] == 2  # goal-split: one component, no helper either
+    assert [r["same_as"] for r in rows[4:]] == [0, 0, 2, 2]
     assert run.exec_length == rows[0]["exec_length"] and run.extra["agents_used"] == 2
     assert run.subgoals[0]["pddl"] == "(and (arm-empty) (clear b))"
     _check(task.problem, run, BW)

@@ -52,7 +52,11 @@ class _Fixed:
 
 
 class Portfolio:
-    """The candidates for N agents: plan-split and goal-split with N, N-1, ..., 2 agents."""
+    """The candidates for N agents: each member with N, N-1, ..., 2 agents.
+
+    Default members: plan-split cut at free states, plan-split cut by what the agent holds
+    (with partial progress, and with goal literals only), and goal-split.
+    """
 
     name = "portfolio"
     needs_sa_plan = True
@@ -65,6 +69,8 @@ class Portfolio:
     ):
         self.members: list[Decomposer] = list(members or ()) or [
             PlanSplitDecomposer(agent_predicates),
+            PlanSplitDecomposer(agent_predicates, cut="holding"),
+            PlanSplitDecomposer(agent_predicates, cut="holding", keep="goal"),
             GoalSplitDecomposer(agent_predicates, link_degree),
         ]
 

@@ -45,6 +45,7 @@ decomposer says :attr:`PlanSplitDecomposer.needs_sa_plan`).
 
 from __future__ import annotations
 
+import heapq
 import itertools
 from collections import defaultdict
 from collections.abc import Collection, Sequence
@@ -133,11 +134,88 @@ def free_states(
     return result
 
 
+def holding_pieces(
+    problem: Problem, plan: Sequence[GroundAction], agent_predicates: Collection[str]
+) -> list[list[int]]:
+    """Step 2, ``cut="holding"``: actions tied together by what the agent holds.
+
+    Two actions are tied when one gives the other an agent fact that a fresh agent does
+    not have (``holding h c``, ``has-block``, ``carry b g``), the latest such producer as
+    in step 1. Facts a fresh agent has (its initial non-positional facts: empty hands) and
+    positional facts (where it stands: it can walk) tie nothing. So a barman agent's shot
+    and shaker are separate pieces even where the SA plan held one while using the other.
+    """
+    positional = positional_predicates(problem.domain)
+    own = {f for f in problem.init if f[0] in agent_predicates}
+    parent = list(range(len(plan)))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    latest: dict[Fact, int] = {}
+    for j, action in enumerate(plan):
+        for fact in action.pre_positive | action.delete:
+            tying = fact[0] in agent_predicates and fact[0] not in positional
+            if tying and fact not in own and fact in latest:
+                parent[find(j)] = find(latest[fact])
+        for fact in action.delete:
+            latest.pop(fact, None)
+        for fact in action.add:
+            latest[fact] = j
+    groups: dict[int, list[int]] = defaultdict(list)
+    for i in range(len(plan)):
+        groups[find(i)].append(i)
+    return sorted(groups.values())
+
+
+def _merge_cycles(pieces: list[list[int]], edges: set[tuple[int, int]]) -> list[list[int]]:
+    """Merge pieces that must interleave (a cycle between them in the order of step 1)."""
+    piece_of = {i: p for p, members in enumerate(pieces) for i in members}
+    succ: dict[int, set[int]] = defaultdict(set)
+    for i, j in edges:
+        if piece_of[i] != piece_of[j]:
+            succ[piece_of[i]].add(piece_of[j])
+    index: dict[int, int] = {}
+    low: dict[int, int] = {}
+    stack: list[int] = []
+    on_stack: set[int] = set()
+    components: list[list[int]] = []
+
+    def strongconnect(v: int) -> None:  # Tarjan; pieces are few (tens to hundreds)
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in succ[v]:
+            if w not in index:
+                strongconnect(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            components.append(component)
+
+    for v in range(len(pieces)):
+        if v not in index:
+            strongconnect(v)
+    merged = [sorted(i for p in component for i in pieces[p]) for component in components]
+    return sorted(merged)
+
+
 @dataclass
 class Split:
     """What the algorithm decided, for tests and reports: pieces, owners, subgoals."""
 
-    pieces: list[range]  # action indices of each piece, in plan order
+    pieces: list[list[int]]  # action indices of each piece, in the order scheduled
     owner: list[int]  # per piece: its agent's position in the hand-off order
     makespan: int  # the list schedule's estimated length, in actions
     subgoals: list[Goal] = field(default_factory=list)  # per helper, in hand-off order
@@ -161,19 +239,56 @@ def _cyclic(edges: set[tuple[int, int]], nodes: int) -> bool:
 
 
 def split_plan(
-    problem: Problem, plan: Sequence[str], agents: int, agent_predicates: Collection[str]
+    problem: Problem,
+    plan: Sequence[str],
+    agents: int,
+    agent_predicates: Collection[str],
+    cut: str = "free",
+    keep: str = "links",
 ) -> Split:
-    """Steps 1-4 for one SA plan and ``agents`` agents."""
+    """Steps 1-4 for one SA plan and ``agents`` agents.
+
+    ``cut="free"`` cuts the plan at free states (step 2); ``cut="holding"`` ties actions by
+    what the agent holds (:func:`holding_pieces`): finer pieces, not contiguous in the
+    plan, with actions that change no environment fact (walking) left to the agents'
+    own planners and counted as travel time of the next piece. ``keep="goal"`` keeps only
+    the goal literals in the subgoals (no partial progress).
+    """
     grounded = Grounder(problem).ground_plan(plan)
     edges, links = plan_order(problem, grounded, agent_predicates)
-    cuts = free_states(problem, grounded, agent_predicates)
-    if not any(f[0] in agent_predicates for a in grounded for f in a.facts):
-        cuts = list(range(len(grounded) + 1))  # no agent state at all: every action alone
-    pieces = [range(a, b) for a, b in itertools.pairwise(cuts) if b > a]
-    piece_of = {i: p for p, r in enumerate(pieces) for i in r}
+    durations: dict[int, int] = defaultdict(int)  # by first action of a piece
+    if cut == "holding":
+        free_states(problem, grounded, agent_predicates)  # the plan must be applicable
+        pieces = _merge_cycles(holding_pieces(problem, grounded, agent_predicates), edges)
+        acting = [
+            members
+            for members in pieces
+            if any(
+                _environment(grounded[i].add | grounded[i].delete, agent_predicates)
+                for i in members
+            )
+        ]
+        acting_piece = {i: members[0] for members in acting for i in members}
+        for members in acting:
+            durations[members[0]] = len(members)
+        for i in range(len(grounded)):  # walking counts towards the next action that acts
+            if i not in acting_piece:
+                after = [j for j in sorted(acting_piece) if j > i]
+                if after:
+                    durations[acting_piece[after[0]]] += 1
+        pieces = acting
+    else:
+        cuts = free_states(problem, grounded, agent_predicates)
+        if not any(f[0] in agent_predicates for a in grounded for f in a.facts):
+            cuts = list(range(len(grounded) + 1))  # no agent state at all: every action alone
+        pieces = [list(range(a, b)) for a, b in itertools.pairwise(cuts) if b > a]
+        for members in pieces:
+            durations[members[0]] = len(members)
+    pieces = _topological_pieces(pieces, edges)
+    piece_of = {i: p for p, members in enumerate(pieces) for i in members}
     preds: list[set[int]] = [set() for _ in pieces]
     for i, j in edges:
-        if piece_of[i] != piece_of[j]:
+        if i in piece_of and j in piece_of and piece_of[i] != piece_of[j]:
             preds[piece_of[j]].add(piece_of[i])
 
     # 3. list scheduling under the hand-off constraint
@@ -183,6 +298,7 @@ def split_plan(
     first_start = [len(grounded) + 1] * max(agents, 1)
     agent_edges: set[tuple[int, int]] = set()
     for p, piece in enumerate(pieces):
+        length = durations[piece[0]]
         ready = max((finish[q] for q in preds[p]), default=0)
         # key: earliest finish, then fewest hand-offs from other agents, then the idlest agent
         best: tuple[int, int, int, int] | None = None
@@ -192,7 +308,7 @@ def split_plan(
                 continue
             start = max(ready, free_at[a])
             crossing = sum(agent_of[q] != a for q in preds[p])
-            key = (start + len(piece), crossing, free_at[a], a)
+            key = (start + length, crossing, free_at[a], a)
             if best is None or key < best:
                 best = key
         # never None: the agent that comes last among the predecessors' agents closes no cycle
@@ -201,9 +317,9 @@ def split_plan(
         agent_edges |= {(agent_of[q], a) for q in preds[p] if agent_of[q] != a}
         agent_of.append(a)
         finish.append(best[0])
-        first_start[a] = min(first_start[a], best[0] - len(piece))
+        first_start[a] = min(first_start[a], best[0] - length)
         free_at[a] = best[0]
-    used = sorted({a for a in agent_of}, key=lambda a: (first_start[a], a))
+    used = sorted(set(agent_of), key=lambda a: (first_start[a], a))
     order = _topological(used, agent_edges, first_start)
     position = {a: k for k, a in enumerate(order)}
     split = Split(pieces, [position[a] for a in agent_of], max(finish, default=0))
@@ -213,7 +329,7 @@ def split_plan(
     goal_facts = _environment(problem.goal.positive, agent_predicates)
     env = _environment(problem.init, agent_predicates)
     for k in range(len(order) - 1):
-        mine = [i for p, r in enumerate(pieces) if split.owner[p] == k for i in r]
+        mine = sorted(i for p, members in enumerate(pieces) if split.owner[p] == k for i in members)
         before = env
         added: set[Fact] = set()
         for i in mine:
@@ -221,18 +337,47 @@ def split_plan(
                 grounded[i].add, agent_predicates
             )
             added |= _environment(grounded[i].add, agent_predicates)
-        later = {
+        later: set[Fact] = {
             link.fact
             for link in links
             if link.producer in mine
-            and (link.consumer >= len(grounded) or split.owner[piece_of[link.consumer]] > k)
+            and (
+                link.consumer >= len(grounded)
+                or (link.consumer in piece_of and split.owner[piece_of[link.consumer]] > k)
+            )
         }
+        if keep == "goal":
+            later = set()
         wanted = frozenset(
             f for f in added & env if f not in before and (f in goal_facts or f in later)
         )
         if wanted:
             split.subgoals.append(Goal(wanted | release.positive, release.negative))
     return split
+
+
+def _topological_pieces(pieces: list[list[int]], edges: set[tuple[int, int]]) -> list[list[int]]:
+    """The pieces in an order their edges allow; among ready pieces, the earliest in the plan."""
+    piece_of = {i: p for p, members in enumerate(pieces) for i in members}
+    succ: dict[int, set[int]] = defaultdict(set)
+    indegree = [0] * len(pieces)
+    for i, j in edges:
+        if i not in piece_of or j not in piece_of or piece_of[i] == piece_of[j]:
+            continue
+        if piece_of[j] not in succ[piece_of[i]]:
+            succ[piece_of[i]].add(piece_of[j])
+            indegree[piece_of[j]] += 1
+    ready = [(pieces[p][0], p) for p in range(len(pieces)) if indegree[p] == 0]
+    heapq.heapify(ready)
+    order: list[list[int]] = []
+    while ready:
+        _, p = heapq.heappop(ready)
+        order.append(pieces[p])
+        for q in succ[p]:
+            indegree[q] -= 1
+            if indegree[q] == 0:
+                heapq.heappush(ready, (pieces[q][0], q))
+    return order
 
 
 def _topological(
@@ -259,17 +404,24 @@ def _topological(
 class PlanSplitDecomposer:
     """Decomposer protocol wrapper around :func:`split_plan` (needs the SA plan)."""
 
-    name = "plan-split"
     needs_sa_plan = True
 
-    def __init__(self, agent_predicates: Collection[str]):
+    def __init__(self, agent_predicates: Collection[str], cut: str = "free", keep: str = "links"):
         self.agent_predicates = frozenset(agent_predicates)
+        self.cut, self.keep = cut, keep
+        suffix = "".join(f"-{x}" for x, default in ((cut, "free"), (keep, "links")) if x != default)
+        self.name = f"plan-split{suffix}"
 
     def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]:
         if request.agents < 2 or not request.sa_plan:
             return []
         split = split_plan(
-            request.task.problem, request.sa_plan, request.agents, self.agent_predicates
+            request.task.problem,
+            request.sa_plan,
+            request.agents,
+            self.agent_predicates,
+            self.cut,
+            self.keep,
         )
         return [
             SubgoalProposal(helper=i, pddl=goal.to_pddl())
