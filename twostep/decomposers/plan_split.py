@@ -21,7 +21,11 @@ agents:
    left out, as in goal-split. A piece runs from one free state to the next, so it can be
    handed to another agent whole. Piece P precedes piece Q when an edge of step 1 goes
    from an action of P to an action of Q. A plan with no agent facts (tyreworld) is cut
-   after every action.
+   after every action. Variant ``cut="holding"`` (:func:`holding_pieces`): a piece is the
+   actions tied together by what the agent holds (a shot from grasp to leave), so the
+   pieces need not be contiguous; where they must interleave (a cycle in the order of
+   step 1) they are merged, and actions that change no environment fact (walking) are
+   left to the agents' planners and counted as travel time of the next piece.
 3. *Assignment* (list scheduling). Pieces, in plan order, go one by one to the agent on
    which they would finish earliest: a piece of k actions starts when its agent is free
    and its predecessor pieces have finished. The agents also have to be planned one after
@@ -36,7 +40,8 @@ agents:
    link to a later agent (partial progress: a tower's lower levels, a cleared block), plus
    goal-split's release conditions (:func:`~twostep.decomposers.goal_split.release_literals`:
    hands empty, nothing carried). A helper whose pieces leave nothing of that kind gets no
-   subgoal.
+   subgoal. Variant ``keep="goal"``: goal literals only (no partial progress), for tasks
+   where the SA plan's intermediate facts tie helpers to one reused tool (barman's shot).
 
 The result is deterministic given the SA plan. The pipeline passes that plan in
 :attr:`~twostep.decomposers.base.DecompositionRequest.sa_plan` (it plans SA first when the
