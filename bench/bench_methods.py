@@ -132,6 +132,9 @@ def main() -> int:
     parser.add_argument("--alias", default="lama-first")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", default="outputs/bench/methods.json")
+    parser.add_argument(
+        "--reuse", help="rows JSON of an earlier run: its rows of methods not run now (e.g. MA)"
+    )
     args = parser.parse_args()
     domains = args.domains or list_domains(Path(args.data))
     jobs = [(d, t) for d in domains for t in task_ids(args.tasks, list_tasks(d, Path(args.data)))]
@@ -146,12 +149,24 @@ def main() -> int:
             rows += future.result()
             print(f"\r{done}/{len(jobs)} tasks", end="", file=sys.stderr, flush=True)
     print(file=sys.stderr)
+    methods = list(args.methods)
+    if args.reuse:
+        ran = {(r["domain"], r["task"]) for r in rows}
+        old = [
+            r for r in json.loads(Path(args.reuse).read_text()) if (r["domain"], r["task"]) in ran
+        ]
+        rows += [r for r in old if r["method"] not in ("sa", *methods)]
+        methods = [m for m in METHODS if m in methods or any(r["method"] == m for r in old)]
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps(rows, indent=1))
     print(f"# {' '.join(sys.argv)}")
     print(f"# planner {args.alias}, search time limit {args.time_limit:g} s (TwoStep: limit/N per "
           f"agent); fallback_if_longer={not args.no_fallback}; tasks {args.tasks}\n")  # fmt: skip
-    print(report(rows, domains, sorted(set(args.agents)), args.methods))
+    if args.reuse:
+        print(
+            f"# rows of {', '.join(m for m in methods if m not in args.methods)} from {args.reuse}\n"
+        )
+    print(report(rows, domains, sorted(set(args.agents)), methods))
     invalid_total = sum(not r["valid"] for r in rows)
     print(f"\nrows: {len(rows)}, not valid (failed or invalid schedule): {invalid_total}")
     return 1 if invalid_total else 0

@@ -170,6 +170,15 @@ def test_one_tall_tower_gives_partial_progress(tmp_path: Path) -> None:
     assert [list(r) for r in split.pieces] == [[0, 1], [2, 3], [4, 5], [6, 7], [8, 9]]
     assert split.owner == [1, 0, 1, 1, 1] and split.makespan == 8
     assert split.subgoals == [goal(problem, "(and (clear b) (arm-empty))")]
+    # Consecutive stretches for 3 agents (10 actions, a third each by the pieces' middles):
+    # P1 P2 | P3 | P4 P5. The first agent leaves what later stretches use and it made
+    # true (clear c and clear d held initially), the second the goal literal c on d.
+    chunks = split_plan(problem, TALL_TOWER_PLAN, 3, BW, assign="chunks")
+    assert chunks.owner == [0, 0, 1, 2, 2]
+    assert chunks.subgoals == [
+        goal(problem, "(and (clear a) (clear b) (on-table c) (arm-empty))"),
+        goal(problem, "(and (on c d) (arm-empty))"),
+    ]
     run = run_twostep(
         task, 2, PlanSplitDecomposer(BW), BW, FAST, sa_plan=sa_result(TALL_TOWER_PLAN)
     )

@@ -55,7 +55,8 @@ class Portfolio:
     """The candidates for N agents: each member with N, N-1, ..., 2 agents.
 
     Default members: plan-split cut at free states, plan-split cut by what the agent holds
-    (with partial progress, and with goal literals only), and goal-split.
+    (with partial progress, and with goal literals only), goal-split, and the three
+    plan-splits again with consecutive stretches instead of the list schedule.
     """
 
     name = "portfolio"
@@ -72,6 +73,9 @@ class Portfolio:
             PlanSplitDecomposer(agent_predicates, cut="holding"),
             PlanSplitDecomposer(agent_predicates, cut="holding", keep="goal"),
             GoalSplitDecomposer(agent_predicates, link_degree),
+            PlanSplitDecomposer(agent_predicates, assign="chunks"),
+            PlanSplitDecomposer(agent_predicates, cut="holding", assign="chunks"),
+            PlanSplitDecomposer(agent_predicates, cut="holding", keep="goal", assign="chunks"),
         ]
 
     def candidates(self, agents: int) -> list[Candidate]:

@@ -250,6 +250,7 @@ def split_plan(
     agent_predicates: Collection[str],
     cut: str = "free",
     keep: str = "links",
+    assign: str = "list",
 ) -> Split:
     """Steps 1-4 for one SA plan and ``agents`` agents.
 
@@ -257,7 +258,9 @@ def split_plan(
     what the agent holds (:func:`holding_pieces`): finer pieces, not contiguous in the
     plan, with actions that change no environment fact (walking) left to the agents'
     own planners and counted as travel time of the next piece. ``keep="goal"`` keeps only
-    the goal literals in the subgoals (no partial progress).
+    the goal literals in the subgoals (no partial progress). ``assign="chunks"`` replaces the
+    list schedule by N consecutive stretches of equal length in the pieces' order: the
+    agents then mostly follow one another, and each plans a shorter stretch of the task.
     """
     grounded = Grounder(problem).ground_plan(plan)
     edges, links = plan_order(problem, grounded, agent_predicates)
@@ -302,8 +305,20 @@ def split_plan(
     free_at = [0] * max(agents, 1)
     first_start = [len(grounded) + 1] * max(agents, 1)
     agent_edges: set[tuple[int, int]] = set()
+    total = sum(durations[piece[0]] for piece in pieces)
+    done = 0
     for p, piece in enumerate(pieces):
         length = durations[piece[0]]
+        if assign == "chunks":  # the stretch the middle of this piece falls in
+            a = min(int((done + length / 2) * max(agents, 1) / max(total, 1)), agents - 1)
+            done += length
+            ready = max((finish[q] for q in preds[p]), default=0)
+            agent_edges |= {(agent_of[q], a) for q in preds[p] if agent_of[q] != a}
+            agent_of.append(a)
+            finish.append(max(ready, free_at[a]) + length)
+            first_start[a] = min(first_start[a], finish[-1] - length)
+            free_at[a] = finish[-1]
+            continue
         ready = max((finish[q] for q in preds[p]), default=0)
         # key: earliest finish, then fewest hand-offs from other agents, then the idlest agent
         best: tuple[int, int, int, int] | None = None
@@ -411,10 +426,17 @@ class PlanSplitDecomposer:
 
     needs_sa_plan = True
 
-    def __init__(self, agent_predicates: Collection[str], cut: str = "free", keep: str = "links"):
+    def __init__(
+        self,
+        agent_predicates: Collection[str],
+        cut: str = "free",
+        keep: str = "links",
+        assign: str = "list",
+    ):
         self.agent_predicates = frozenset(agent_predicates)
-        self.cut, self.keep = cut, keep
-        suffix = "".join(f"-{x}" for x, default in ((cut, "free"), (keep, "links")) if x != default)
+        self.cut, self.keep, self.assign = cut, keep, assign
+        options = ((cut, "free"), (keep, "links"), (assign, "list"))
+        suffix = "".join(f"-{x}" for x, default in options if x != default)
         self.name = f"plan-split{suffix}"
 
     def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]:
@@ -427,6 +449,7 @@ class PlanSplitDecomposer:
             self.agent_predicates,
             self.cut,
             self.keep,
+            self.assign,
         )
         return [
             SubgoalProposal(helper=i, pddl=goal.to_pddl())
