@@ -103,3 +103,6 @@ def test_portfolio_falls_back_to_sa_when_every_candidate_is_longer(tmp_path: Pat
     kept = run_twostep(task, 2, portfolio, BW, FAST, fallback_if_longer=False)
     assert kept.exec_length == row["exec_length"] and kept.fallback is None
     _check(task.problem, kept, BW)
+    one = run_twostep(task, 1, portfolio, BW, FAST)
+    assert one.extra["candidates"] == [] and one.exec_length == 4
+    assert one.fallback == "no candidate (one agent)"

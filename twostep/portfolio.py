@@ -162,7 +162,7 @@ def run_portfolio(
         chosen = best
         best = _sa_run(task, agents, seed, sa_length, sa_plan)
         best.fallback = (
-            "no candidate solved"
+            ("no candidate solved" if rows else "no candidate (one agent)")
             if chosen is None
             else f"joint schedule longer than SA ({chosen.exec_length} > {len(sa_steps or ())})"
         )
