@@ -135,10 +135,26 @@ def main() -> int:
     parser.add_argument(
         "--reuse", help="rows JSON of an earlier run: its rows of methods not run now (e.g. MA)"
     )
+    parser.add_argument(
+        "--report", nargs="*", help="print the tables of these rows JSON files, run nothing"
+    )
     args = parser.parse_args()
     domains = args.domains or list_domains(Path(args.data))
-    jobs = [(d, t) for d in domains for t in task_ids(args.tasks, list_tasks(d, Path(args.data)))]
+    if args.report:
+        rows = [r for f in args.report for r in json.loads(Path(f).read_text())]
+        done = {(r["domain"], r["task"]) for r in rows if r["method"] == "sa"}
+        rows = [r for r in rows if (r["domain"], r["task"]) in done]
+        methods = [m for m in METHODS if any(r["method"] == m for r in rows)]
+        print(f"# {' '.join(sys.argv)}\n# {len(done)} tasks\n")
+        print(report(rows, domains, sorted({r["agents"] for r in rows}), methods))
+        return 0
+    # task-major order: a run stopped early still covers every domain
+    jobs = sorted(
+        ((d, t) for d in domains for t in task_ids(args.tasks, list_tasks(d, Path(args.data)))),
+        key=lambda job: (job[1], job[0]),
+    )
     rows: list[dict[str, Any]] = []
+    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     with ProcessPoolExecutor(args.workers) as pool:
         futures = [
             pool.submit(job, args.data, d, t, args.agents, args.time_limit, args.alias,
@@ -147,6 +163,7 @@ def main() -> int:
         ]  # fmt: skip
         for done, future in enumerate(as_completed(futures), start=1):
             rows += future.result()
+            Path(args.out).write_text(json.dumps(rows, indent=1))  # partial results survive
             print(f"\r{done}/{len(jobs)} tasks", end="", file=sys.stderr, flush=True)
     print(file=sys.stderr)
     methods = list(args.methods)
