@@ -26,14 +26,16 @@ agents:
    pieces need not be contiguous; where they must interleave (a cycle in the order of
    step 1) they are merged, and actions that change no environment fact (walking) are
    left to the agents' planners and counted as travel time of the next piece.
-3. *Assignment* (list scheduling). Pieces, in plan order, go one by one to the agent on
-   which they would finish earliest: a piece of k actions starts when its agent is free
+3. *Assignment* (list scheduling). Pieces, in an order the edges allow (earliest first
+   action first), go one by one to the agent on which they would finish earliest: a piece of k actions starts when its agent is free
    and its predecessor pieces have finished. The agents also have to be planned one after
    the other (TwoStep's hand-off): an agent whose piece needs another agent's piece must
    come later in that order, so an assignment that would make the agents' dependencies
    cyclic is skipped. The hand-off order is then a topological order of the agents (ties:
    whoever starts first goes first) and the last agent is the main agent, which always
-   plans for the full goal.
+   plans for the full goal. Variant ``assign="chunks"``: N consecutive stretches of equal
+   length in that order instead; the agents then mostly follow one another, but each
+   plans a shorter part of the task, which on long chains (termes) gives shorter plans.
 4. *Subgoals.* Simulating the environment effects of the pieces of the first k agents
    gives the state helper k leaves behind. Its subgoal is the environment facts its own
    pieces added that still hold there and that are goal literals or the source of a causal
@@ -59,11 +61,8 @@ from dataclasses import dataclass, field
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import positional_predicates, release_literals
 from twostep.pddl import Fact, Goal, Problem
+from twostep.progression import environment_part
 from twostep.strips import GroundAction, Grounder, simulate
-
-
-def _environment(facts: frozenset[Fact], agent_predicates: Collection[str]) -> frozenset[Fact]:
-    return frozenset(f for f in facts if f[0] not in agent_predicates)
 
 
 @dataclass(frozen=True)
@@ -81,8 +80,8 @@ def plan_order(
 ) -> tuple[set[tuple[int, int]], list[CausalLink]]:
     """Step 1: the order edges (i, j), i < j, the plan needs, and its causal links."""
     n = len(plan)
-    adds = [_environment(a.add, agent_predicates) for a in plan]
-    dels = [_environment(a.delete, agent_predicates) for a in plan]
+    adds = [environment_part(a.add, agent_predicates) for a in plan]
+    dels = [environment_part(a.delete, agent_predicates) for a in plan]
     deleters: dict[Fact, list[int]] = defaultdict(list)
     writers: dict[Fact, list[int]] = defaultdict(list)
     for k in range(n):
@@ -91,12 +90,12 @@ def plan_order(
         for fact in adds[k] | dels[k]:
             writers[fact].append(k)
     links: list[CausalLink] = []
-    latest: dict[Fact, int] = {f: -1 for f in _environment(problem.init, agent_predicates)}
+    latest: dict[Fact, int] = {f: -1 for f in environment_part(problem.init, agent_predicates)}
     edges: set[tuple[int, int]] = set()
     for j, action in enumerate(plan):
-        for fact in sorted(_environment(action.pre_positive, agent_predicates)):
+        for fact in sorted(environment_part(action.pre_positive, agent_predicates)):
             links.append(CausalLink(latest.get(fact, -1), fact, j))
-        for fact in _environment(action.pre_negative, agent_predicates):
+        for fact in environment_part(action.pre_negative, agent_predicates):
             for k in writers[fact]:
                 if k != j:
                     edges.add((min(j, k), max(j, k)))
@@ -105,7 +104,7 @@ def plan_order(
             latest.pop(fact, None)
         for fact in adds[j]:
             latest[fact] = j
-    for fact in sorted(_environment(problem.goal.positive, agent_predicates)):
+    for fact in sorted(environment_part(problem.goal.positive, agent_predicates)):
         links.append(CausalLink(latest.get(fact, -1), fact, n))
     for link in links:
         if link.producer >= 0 and link.consumer < n:
@@ -272,7 +271,7 @@ def split_plan(
             members
             for members in pieces
             if any(
-                _environment(grounded[i].add | grounded[i].delete, agent_predicates)
+                environment_part(grounded[i].add | grounded[i].delete, agent_predicates)
                 for i in members
             )
         ]
@@ -346,17 +345,17 @@ def split_plan(
 
     # 4. subgoals of every agent but the last (the main agent)
     release = release_literals(problem, agent_predicates)
-    goal_facts = _environment(problem.goal.positive, agent_predicates)
-    env = _environment(problem.init, agent_predicates)
+    goal_facts = environment_part(problem.goal.positive, agent_predicates)
+    env = environment_part(problem.init, agent_predicates)
     for k in range(len(order) - 1):
         mine = sorted(i for p, members in enumerate(pieces) if split.owner[p] == k for i in members)
         before = env
         added: set[Fact] = set()
         for i in mine:
-            env = (env - _environment(grounded[i].delete, agent_predicates)) | _environment(
+            env = (env - environment_part(grounded[i].delete, agent_predicates)) | environment_part(
                 grounded[i].add, agent_predicates
             )
-            added |= _environment(grounded[i].add, agent_predicates)
+            added |= environment_part(grounded[i].add, agent_predicates)
         later: set[Fact] = {
             link.fact
             for link in links
