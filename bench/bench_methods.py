@@ -144,7 +144,7 @@ def main() -> int:
         rows = [r for f in args.report for r in json.loads(Path(f).read_text())]
         done = {(r["domain"], r["task"]) for r in rows if r["method"] == "sa"}
         rows = [r for r in rows if (r["domain"], r["task"]) in done]
-        methods = [m for m in METHODS if any(r["method"] == m for r in rows)]
+        methods = [m for m in args.methods if any(r["method"] == m for r in rows)]
         print(f"# {' '.join(sys.argv)}\n# {len(done)} tasks\n")
         print(report(rows, domains, sorted({r["agents"] for r in rows}), methods))
         return 0
