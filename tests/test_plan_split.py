@@ -306,6 +306,7 @@ def test_fallback_if_longer(tmp_path: Path) -> None:
     _check(task.problem, back, BW)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("agents", [2, 3])
 def test_real_sa_plans_revalidate(tmp_path: Path, data_root: Path, agents: int) -> None:
     """On a real barman and termes task the schedules re-validate both ways."""
