@@ -302,6 +302,8 @@ def run_twostep(
     seed: int = 0,
     sa_length: int | None = None,
     steps: Steps = DIRECT,
+    sa_plan: PlanResult | None = None,
+    fallback_if_longer: bool = True,
 ) -> RunResult:
     """TwoStep (the paper's Fig. 2): helpers on subgoals, then the main agent on the goal.
 
@@ -309,15 +311,47 @@ def run_twostep(
     predecessors left; discarded subgoals are recorded with the reason. If no subgoal
     survives, or the main agent cannot finish after the helpers, the result is the
     single-agent plan (success is guaranteed whenever SA succeeds).
+
+    ``sa_plan`` is the SA planner result when the caller already has it (it is planned
+    here when the decomposer sets ``needs_sa_plan``). With ``fallback_if_longer`` and an SA
+    plan at hand, a joint schedule longer than SA gives way to the SA plan (``fallback``
+    says so). Whenever the run uses the SA plan, its planner time counts in planning time
+    (``extra["sa_time_included_s"]``). A :class:`~twostep.portfolio.Portfolio` decomposer
+    runs :func:`~twostep.portfolio.run_portfolio` instead.
     """
+    from twostep.portfolio import Portfolio, run_portfolio  # it calls this function
+
+    if isinstance(decomposer, Portfolio):
+        return run_portfolio(
+            task,
+            agents,
+            decomposer,
+            agent_predicates,
+            settings,
+            mode,
+            seed,
+            sa_length,
+            steps,
+            sa_plan,
+            fallback_if_longer,
+        )
     start = time.perf_counter()
     problem = task.problem
     run = RunResult(task.domain_name, task.task_id, "twostep", agents, seed, sa_length=sa_length)
     run.decomposer = decomposer.name
     per_agent_settings = settings.with_time_limit(settings.search_time_limit_s / max(agents, 1))
+    planner_time = 0.0
+    if sa_plan is None and getattr(decomposer, "needs_sa_plan", False) and agents > 1:
+        sa_plan = steps.plan(problem, settings)
+    sa_steps: tuple[str, ...] | None = None
+    if sa_plan is not None and sa_plan.solved and sa_plan.plan is not None:
+        sa_steps = tuple(sa_plan.plan)
+    sa_used = getattr(decomposer, "needs_sa_plan", False) and sa_steps is not None
+    if run.sa_length is None and sa_steps is not None:
+        run.sa_length = len(sa_steps)
 
     # 1-2. generate + translate (the decomposer)
-    request = DecompositionRequest(task, agents, seed)
+    request = DecompositionRequest(task, agents, seed, sa_plan=sa_steps)
     try:
         proposals = steps.propose(decomposer, request, steps.generate, steps.translate)
     except DecomposerError as error:  # no answer at all: the run fails, no SA fallback
@@ -332,7 +366,6 @@ def run_twostep(
     environment = environment_part(problem.init, agent_predicates)
     helper_plans: list[list[str]] = []
     accepted_goals: dict[int, Goal] = {}
-    planner_time = 0.0
     editing_time = 0.0
     for proposal in proposals:
         goal = check_proposal(proposal, problem, environment, agent_predicates, accepted_goals)
@@ -384,6 +417,11 @@ def run_twostep(
         except (ScheduleError, PlanError) as error:
             run.fallback = f"joint schedule invalid: {error}"
         run.score_time_s = time.perf_counter() - score_start
+    if execution is not None and fallback_if_longer and sa_steps is not None:
+        sa_used = True  # the SA plan decided
+        if execution.length > len(sa_steps):
+            run.fallback = f"joint schedule longer than SA ({execution.length} > {len(sa_steps)})"
+            execution = None
     if execution is not None:
         names = [f"agent{p.helper}" for p in accepted] + ["agent0"]
         run.agent_order = names
@@ -400,10 +438,16 @@ def run_twostep(
             )
         for proposal in accepted:  # their plans are not used
             proposal.status, proposal.reason = SubgoalStatus.UNUSED, run.fallback
-        result = steps.plan(problem, settings)
-        planner_time += result.planner_time_s
+        if sa_plan is not None:
+            result, sa_used = sa_plan, True
+        else:
+            result = steps.plan(problem, settings)
+            planner_time += result.planner_time_s
         run.planner_calls.append(AgentPlan("agent0", "single", problem.goal.to_pddl(), result))
         _use_single_agent_plan(run, result)
+    if sa_used and sa_plan is not None:
+        planner_time += sa_plan.planner_time_s
+        run.extra["sa_time_included_s"] = round(sa_plan.planner_time_s, 4)
     _record_proposals(run, proposals)
     run.state_editing_time_s = editing_time
     run.planning_time_s = run.llm_time_s + planner_time + editing_time

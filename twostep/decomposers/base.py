@@ -53,6 +53,9 @@ class DecompositionRequest:
     task: BenchmarkTask
     agents: int
     seed: int = 0
+    # The single-agent plan, for decomposers that read it (plan-split); the pipeline fills
+    # it in when the decomposer sets ``needs_sa_plan = True``.
+    sa_plan: tuple[str, ...] | None = None
 
 
 class Decomposer(Protocol):
