@@ -1,4 +1,4 @@
-"""Lower bounds for the A* search: the longest remaining plan and exact pair projections."""
+"""Lower bounds for the A* search: longest remaining plan, fact contention, pair projections."""
 
 from __future__ import annotations
 
@@ -118,20 +118,89 @@ def interacting_pairs(task: CompiledTask) -> list[PairProjection]:
     return pairs
 
 
+class ContentionBound:
+    """Agents that consume the same exclusive fact must take turns: a makespan bound.
+
+    A *consumer* of environment fact f needs f and deletes it (and does not add it back),
+    like entering a cell that must be free. Two consumers of f cannot share a step (one
+    deletes what the other needs), and after one runs f is false until some action adds it
+    again in a later step, which cannot be the step of the next consumer either (adding and
+    deleting f interfere). So consumers of f run at least two steps apart, whichever agents
+    they belong to and whoever adds f back. For a consumer that is action k of an agent at
+    index i with n actions, it runs no earlier than step k - i + 1 from now (step 2 if f is
+    false now) and leaves n - k - 1 actions after it. For any set S of remaining consumers
+    of f, the last of them runs no earlier than min release + 2 (|S| - 1), and its agent
+    still has at least min tail to do: the bound is the maximum of that over S (the sets
+    of consumers with release at least r and tail at least q suffice). This is the
+    single-machine "heads and tails" bound with every job taking two steps.
+
+    Consistent: releases drop by at most one per step, and when a member of the best set
+    is consumed now (release 1), the rest now have release at least 2 while the set lost
+    one member, so the value drops by at most one (a lone member falls back on its tail,
+    which the longest-remaining-plan bound covers).
+    """
+
+    def __init__(self, task: CompiledTask):
+        self.lengths = task.lengths
+        consumers: dict[int, list[tuple[int, tuple[int, ...]]]] = {}
+        for agent, plan in enumerate(task.steps):
+            by_fact: dict[int, list[int]] = {}
+            for k, step in enumerate(plan):
+                consumed = step.pre_positive & step.delete & ~step.add
+                while consumed:
+                    bit = consumed & -consumed
+                    consumed ^= bit
+                    by_fact.setdefault(bit, []).append(k)
+            for bit, ks in by_fact.items():
+                consumers.setdefault(bit, []).append((agent, tuple(ks)))
+        self.facts = [
+            (bit, agents)
+            for bit, agents in consumers.items()
+            if sum(len(ks) for _, ks in agents) >= 2
+        ]
+
+    def __call__(self, indices: Sequence[int], state: int) -> int:
+        lengths = self.lengths
+        best = 0
+        for bit, agents in self.facts:
+            earliest = 1 if state & bit else 2
+            events: list[tuple[int, int]] = []
+            for agent, ks in agents:
+                index = indices[agent]
+                for k in ks:
+                    if k >= index:
+                        events.append((max(k - index + 1, earliest), lengths[agent] - k - 1))
+            if len(events) < 2:
+                continue
+            events.sort()
+            for first, (release, _) in enumerate(events):
+                if first and release == events[first - 1][0]:
+                    continue
+                tails = sorted((tail for _, tail in events[first:]), reverse=True)
+                for later, tail in enumerate(tails):
+                    best = max(best, release + 2 * later + tail)
+        return best
+
+
 class LowerBound:
     """An admissible, consistent lower bound on the steps left from a search node.
 
     The maximum of the longest remaining plan (each step advances an agent by at most one
-    action) and the pair projections of :class:`PairProjection`; None for a dead end.
-    Each part drops by at most one per real step, so the maximum is consistent too.
+    action), the contention bound of :class:`ContentionBound` and the pair projections of
+    :class:`PairProjection`; None for a dead end. Each part drops by at most one per real
+    step, so the maximum is consistent too. ``pairs=False`` skips the projections (cheap
+    to build, no dead-end detection), ``contention=False`` the contention bound.
     """
 
-    def __init__(self, task: CompiledTask, pairs: bool = True):
+    def __init__(self, task: CompiledTask, pairs: bool = True, contention: bool = True):
         self.lengths = task.lengths
+        self.contention = ContentionBound(task) if contention else None
         self.pairs = interacting_pairs(task) if pairs else []
 
     def __call__(self, indices: Sequence[int], state: int) -> int | None:
         bound = max((n - i for n, i in zip(self.lengths, indices, strict=True)), default=0)
+        if self.contention is not None:
+            bound = max(bound, self.contention(indices, state))
         for pair in self.pairs:
             steps = pair(indices, state)
             if steps is None:
