@@ -125,38 +125,67 @@ class ContentionBound:
     like entering a cell that must be free. Two consumers of f cannot share a step (one
     deletes what the other needs), and after one runs f is false until some action adds it
     again in a later step, which cannot be the step of the next consumer either (adding and
-    deleting f interfere). So consumers of f run at least two steps apart, whichever agents
-    they belong to and whoever adds f back. For a consumer that is action k of an agent at
-    index i with n actions, it runs no earlier than step k - i + 1 from now (step 2 if f is
-    false now) and leaves n - k - 1 actions after it. For any set S of remaining consumers
-    of f, the last of them runs no earlier than min release + 2 (|S| - 1), and its agent
-    still has at least min tail to do: the bound is the maximum of that over S (the sets
-    of consumers with release at least r and tail at least q suffice). This is the
-    single-machine "heads and tails" bound with every job taking two steps.
+    deleting f interfere). So consumers of f run at least p = 2 steps apart, whichever
+    agents they belong to and whoever adds f back.
 
-    Consistent: releases drop by at most one per step, and when a member of the best set
-    is consumed now (release 1), the rest now have release at least 2 while the set lost
-    one member, so the value drops by at most one (a lone member falls back on its tail,
-    which the longest-remaining-plan bound covers).
+    Holds: when every action that adds f is a *release*, preceded in its own plan by a
+    consumer of f with no other adder in between, f works as a lock. Invariant: holders
+    (agents past a consumer and before its release) plus [f true] is at most 1; a consumer
+    needs f true, so no one holds, and a release is run by its holder. So the next
+    consumer runs only after the current holder's release: p = release - consume + 1
+    steps apart. While an agent holds f, no other consumer runs before the step after its
+    release.
+
+    For a remaining consumption of an agent at index i, action k (n actions), the release
+    r = k - i + 1 is the earliest step it can run (later when f is false or held), and
+    q = n - k - 1 actions follow it. For any set S of them, in any order, the last runs no
+    earlier than min r + (sum of p over S) - its own p, and its agent then still has q to
+    do, so the makespan is at least min r + sum p + min (q - p) over S; the maximum over
+    the sets with r and q - p above thresholds is taken (single-machine "heads and tails").
+
+    Consistent: releases drop by at most one per step; when a member of the best set is
+    consumed now (release 1, hold p), the others now wait at least p steps for it, so the
+    value of the rest drops by at most one (a lone member falls back on its tail, which the
+    longest-remaining-plan bound covers).
     """
 
     def __init__(self, task: CompiledTask):
         self.lengths = task.lengths
-        consumers: dict[int, list[tuple[int, tuple[int, ...]]]] = {}
-        for agent, plan in enumerate(task.steps):
-            by_fact: dict[int, list[int]] = {}
+        adders = 0
+        for plan in task.steps:
+            for step in plan:
+                adders |= step.add
+        # fact -> [(agent, ((consume index, hold p, release index or -1), ...))]
+        events: dict[int, list[tuple[int, tuple[tuple[int, int, int], ...]]]] = {}
+        locks = adders  # facts still possibly locks; cleared on a non-release adder
+        per_agent: list[dict[int, list[list[int]]]] = []
+        for plan in task.steps:
+            by_fact: dict[int, list[list[int]]] = {}
             for k, step in enumerate(plan):
                 consumed = step.pre_positive & step.delete & ~step.add
+                added = step.add & adders
+                while added:
+                    bit = added & -added
+                    added ^= bit
+                    open_holds = by_fact.get(bit)
+                    if open_holds and open_holds[-1][2] < 0:
+                        open_holds[-1][2] = k
+                    else:
+                        locks &= ~bit
                 while consumed:
                     bit = consumed & -consumed
                     consumed ^= bit
-                    by_fact.setdefault(bit, []).append(k)
-            for bit, ks in by_fact.items():
-                consumers.setdefault(bit, []).append((agent, tuple(ks)))
+                    by_fact.setdefault(bit, []).append([k, 2, -1])
+            per_agent.append(by_fact)
+        for agent, by_fact in enumerate(per_agent):
+            for bit, holds in by_fact.items():
+                entries = []
+                for k, _, release in holds:
+                    lock = bool(locks & bit) and release >= 0
+                    entries.append((k, release - k + 1 if lock else 2, release if lock else -1))
+                events.setdefault(bit, []).append((agent, tuple(entries)))
         self.facts = [
-            (bit, agents)
-            for bit, agents in consumers.items()
-            if sum(len(ks) for _, ks in agents) >= 2
+            (bit, agents) for bit, agents in events.items() if sum(len(e) for _, e in agents) >= 2
         ]
 
     def __call__(self, indices: Sequence[int], state: int) -> int:
@@ -164,21 +193,28 @@ class ContentionBound:
         best = 0
         for bit, agents in self.facts:
             earliest = 1 if state & bit else 2
-            events: list[tuple[int, int]] = []
-            for agent, ks in agents:
+            for agent, entries in agents:
                 index = indices[agent]
-                for k in ks:
+                for k, _, release in entries:
+                    if k < index <= release:  # this agent holds the lock now
+                        earliest = max(earliest, release - index + 2)
+            events: list[tuple[int, int, int]] = []
+            for agent, entries in agents:
+                index = indices[agent]
+                for k, hold, _ in entries:
                     if k >= index:
-                        events.append((max(k - index + 1, earliest), lengths[agent] - k - 1))
+                        release_at = max(k - index + 1, earliest)
+                        events.append((release_at, hold, lengths[agent] - k - 1 - hold))
             if len(events) < 2:
                 continue
             events.sort()
-            for first, (release, _) in enumerate(events):
-                if first and release == events[first - 1][0]:
+            for first, (release_at, _, _) in enumerate(events):
+                if first and release_at == events[first - 1][0]:
                     continue
-                tails = sorted((tail for _, tail in events[first:]), reverse=True)
-                for later, tail in enumerate(tails):
-                    best = max(best, release + 2 * later + tail)
+                total = 0
+                for _, hold, slack in sorted(events[first:], key=lambda e: -e[2]):
+                    total += hold
+                    best = max(best, release_at + total + slack)
         return best
 
 
