@@ -27,7 +27,7 @@ from tests.test_independent_checks import _brute_force, cases
 from twostep.execution import ScheduleError, check_schedule, parallel_length
 from twostep.execution.bounds import ContentionBound, LowerBound
 from twostep.execution.compiled import compile_task
-from twostep.execution.search import greedy_schedule
+from twostep.execution.search import bound_dive, greedy_schedule
 
 ROOMS = """
 (define (domain rooms)
@@ -138,8 +138,8 @@ def test_bounds_and_budget_bracket_the_brute_force_optimum(case) -> None:
     assert exact.exact and exact.length == exact.lower_bound == expected
     _bounds_along(plans, init, goal, predicates, expected, exact.steps)
     task = compile_task(plans, init, goal, predicates)
-    greedy = greedy_schedule(task, "exact")
-    assert greedy is None or len(greedy) >= expected
+    for upper in (greedy_schedule(task, "exact"), bound_dive(task, "exact", LowerBound(task), 99)):
+        assert upper is None or len(upper) >= expected
     for budget in (0, 1, 3):
         found = parallel_length(plans, init, goal, predicates, max_nodes=budget)
         check_schedule(found.steps, plans, init, goal, predicates)

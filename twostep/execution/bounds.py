@@ -29,7 +29,10 @@ class PairProjection:
     fact only a helper adds, or must not run before a helper's action it would disable.
     """
 
-    def __init__(self, task: CompiledTask, first: int, second: int):
+    def __init__(
+        self, task: CompiledTask, first: int, second: int, limit: int | None = None
+    ) -> None:
+        """Raises :class:`ProjectionTooLarge` past ``limit`` explored nodes (None: no limit)."""
         self.first, self.second = first, second
         others = 0
         for agent, written in enumerate(task.writes_from):
@@ -67,6 +70,8 @@ class PairProjection:
                 continue
             k, m, state = node
             children[node] = []
+            if limit is not None and len(children) > limit:
+                raise ProjectionTooLarge
             # Past the last point of contact the pair needs no search: both just run on.
             if not (writes[0][k] & (reads[1][m] | writes[1][m]) or writes[1][m] & reads[0][k]):
                 settled[node] = alone(k, m, state)
@@ -107,14 +112,37 @@ class PairProjection:
         return steps
 
 
-def interacting_pairs(task: CompiledTask) -> list[PairProjection]:
-    """Projections for the pairs of agents whose plans share a fact one of them writes."""
+class ProjectionTooLarge(Exception):
+    """A pair projection would explore more nodes than its budget allows."""
+
+
+PAIR_NODE_BUDGET = 20_000
+"""Projection nodes explored over all pairs before the rest are left out (many agents
+sharing cells give N (N - 1) / 2 projections of thousands of nodes each: seconds)."""
+
+
+def interacting_pairs(
+    task: CompiledTask, node_budget: int | None = PAIR_NODE_BUDGET
+) -> list[PairProjection]:
+    """Projections for the pairs of agents whose plans share a fact one of them writes.
+
+    Pairs are built in order until ``node_budget`` projection nodes are explored; the
+    rest are left out, which keeps the bound admissible (each pair only raises it) but
+    gives up their dead-end detection.
+    """
     pairs = []
+    left = node_budget
     for i, j in itertools.combinations(range(len(task.steps)), 2):
         reads_i, writes_i = task.reads_from[i][0], task.writes_from[i][0]
         reads_j, writes_j = task.reads_from[j][0], task.writes_from[j][0]
         if writes_i & (reads_j | writes_j) or writes_j & reads_i:
-            pairs.append(PairProjection(task, i, j))
+            try:
+                pair = PairProjection(task, i, j, left)
+            except ProjectionTooLarge:
+                break
+            pairs.append(pair)
+            if left is not None:
+                left -= len(pair.explored)
     return pairs
 
 

@@ -134,6 +134,34 @@ def greedy_schedule(task: CompiledTask, mode: str) -> list[tuple[int, ...]] | No
     return [(agent,) for agent, n in enumerate(lengths) for _ in range(n)]
 
 
+def bound_dive(
+    task: CompiledTask, mode: str, bound: LowerBound, limit: int
+) -> list[tuple[int, ...]] | None:
+    """A schedule by always taking the successor with the smallest lower bound.
+
+    Ties go to more agents acting. Unlike list scheduling it can hold an agent back for
+    one with more work behind the same shared fact. None when stuck, when it misses the
+    goal, or after ``limit`` steps.
+    """
+    lengths = task.lengths
+    node: Node = (tuple(0 for _ in lengths), task.initial)
+    sets: list[tuple[int, ...]] = []
+    while any(i < n for i, n in zip(node[0], lengths, strict=True)):
+        if len(sets) >= limit:
+            return None
+        best: tuple[int, int, tuple[int, ...], Node] | None = None
+        for chosen in successor_sets(task, *node, mode, prune=True):
+            child = advance(task, *node, chosen)
+            h = bound(*child)
+            if h is not None and (best is None or (h, -len(chosen)) < best[:2]):
+                best = (h, -len(chosen), chosen, child)
+        if best is None:
+            return None
+        sets.append(best[2])
+        node = best[3]
+    return sets if goal_holds(task, node[1]) else None
+
+
 def goal_holds(task: CompiledTask, state: int) -> bool:
     return task.goal_positive & state == task.goal_positive and not task.goal_negative & state
 
@@ -175,9 +203,9 @@ def search(
 ) -> SearchResult:
     """A* over (plan indices, environment state) with an anytime stop.
 
-    First a greedy schedule (:func:`greedy_schedule`) gives an upper bound; when the cheap
-    bounds (longest remaining plan, contention) already meet it at the start, it is
-    optimal and no search runs. Otherwise A* runs with the pair projections too and stops
+    First a greedy schedule (:func:`greedy_schedule`, then :func:`bound_dive` when that is
+    not proven optimal) gives an upper bound; when the cheap bounds (longest remaining
+    plan, contention) already meet it at the start, it is optimal and no search runs. Otherwise A* runs with the pair projections too and stops
     at the first goal node (optimal), when the smallest f on the frontier reaches the
     greedy length (the greedy schedule is optimal), or after ``max_nodes`` expansions: then
     the greedy schedule is returned with ``exact=False`` and the smallest f on the frontier
@@ -194,10 +222,17 @@ def search(
     expanded = 0
     if incumbent is not None:
         expanded = len(incumbent) + 1  # the greedy run visited one node per step
-        cheap = LowerBound(task, pairs=False)(*start)
+        cheap_bound = LowerBound(task, pairs=False)
+        cheap = cheap_bound(*start)
         assert cheap is not None
         if cheap >= len(incumbent):
             return SearchResult(incumbent, expanded, True, len(incumbent))
+        dive = bound_dive(task, mode, cheap_bound, len(incumbent) - 1)
+        if dive is not None:
+            expanded += len(dive) + 1
+            incumbent = dive
+            if cheap >= len(incumbent):
+                return SearchResult(incumbent, expanded, True, len(incumbent))
     bound = LowerBound(task, pairs=not plain, contention=not plain)
     h0 = bound(*start)
     if h0 is None:
