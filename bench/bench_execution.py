@@ -1,6 +1,12 @@
-"""Benchmark: parallel execution length for N = 4 agents with 60-step plans.
+"""Benchmark: parallel execution length for N = 4 agents with 60-step plans, and its scaling.
 
     .venv/bin/python bench/bench_execution.py [--repeats 5] [--budget 30]
+    .venv/bin/python bench/bench_execution.py --scaling [--max-nodes 20000]
+
+``--scaling`` prints only the scaling table: exact mode for N = 2..16 agents and 30, 60
+and 100 steps per agent, on the ``shared`` case (every track crosses one hub, pairs of
+tracks cross further on) and on ``staggered`` (two shared cells at positions that differ
+by cart), with time, nodes, length, proven lower bound, exact yes/no and the gap.
 
 Measures :func:`twostep.execution.parallel_length` (bit-set states, A* with the pair-
 projection bound and dominance pruning) against a straightforward implementation: A*
@@ -40,6 +46,7 @@ from typing import Any
 
 from twostep.execution import ParallelExecution, parallel_length
 from twostep.execution.parallel import _parallel_length
+from twostep.execution.search import DEFAULT_MAX_NODES
 from twostep.pddl import parse_problem
 from twostep.strips import Grounder
 
@@ -90,6 +97,16 @@ CASES = (
 )
 
 
+def shared_case(agents: int) -> Case:
+    """The ``shared`` case for any N: every track crosses the hub a third of the way,
+    and carts 2p, 2p+1 share a crossing at 2/3 (p even) or 3/4 (p odd) of their tracks."""
+    cells: dict[str, dict[int, float]] = {"hub": dict.fromkeys(range(agents), 1 / 3)}
+    for first in range(0, agents - 1, 2):
+        at = 2 / 3 if first % 4 == 0 else 3 / 4
+        cells[f"x{first}{first + 1}"] = {first: at, first + 1: at}
+    return Case("shared", cells)
+
+
 @dataclass(frozen=True)
 class Instance:
     single_agent_problem: str
@@ -97,13 +114,13 @@ class Instance:
     plans: list[list[str]]
 
 
-def build(case: Case, length: int) -> Instance:
+def build(case: Case, length: int, agents: int = AGENTS) -> Instance:
     """Tracks of ``length`` moves per cart; each agent's plan drives its cart to the end."""
     cells: list[str] = []
     facts: list[str] = []
     goal: list[str] = []
     plans: list[list[str]] = []
-    for cart in range(AGENTS):
+    for cart in range(agents):
         track = [f"k{cart}-{i}" for i in range(length + 1)]
         for cell, positions in case.shared_cells.items():
             if cart in positions:
@@ -114,8 +131,8 @@ def build(case: Case, length: int) -> Instance:
         goal.append(f"(at c{cart} {track[-1]})")
         plans.append([f"(move c{cart} {p} {q})" for p, q in itertools.pairwise(track)])
     facts += [f"(free {c})" for c in cells if not c.endswith("-0")]
-    carts = " ".join(f"c{i}" for i in range(AGENTS))
-    agents = " ".join(f"a{i}" for i in range(AGENTS))
+    carts = " ".join(f"c{i}" for i in range(agents))
+    agent_names = " ".join(f"a{i}" for i in range(agents))
     body = " ".join(sorted(set(facts)))
     goal_text = f"(:goal (and {' '.join(goal)}))"
     single = (
@@ -123,10 +140,10 @@ def build(case: Case, length: int) -> Instance:
         f" (:objects {carts} - cart {' '.join(cells)} - cell)\n"
         f" (:init (ready) {body})\n {goal_text})"
     )
-    ready = " ".join(f"(ready a{i})" for i in range(AGENTS))
+    ready = " ".join(f"(ready a{i})" for i in range(agents))
     multi = (
         f"(define (problem tracks-{case.name}-ma) (:domain tracks-ma)\n"
-        f" (:objects {agents} - agent {carts} - cart {' '.join(cells)} - cell)\n"
+        f" (:objects {agent_names} - agent {carts} - cart {' '.join(cells)} - cell)\n"
         f" (:init {ready} {body})\n {goal_text})"
     )
     return Instance(single, multi, plans)
@@ -343,15 +360,108 @@ def up_call_costs() -> str:
     )
 
 
+# ------------------------------------------------------------------ scaling with N
+
+SCALING_AGENTS = (2, 4, 6, 8, 10, 12, 14, 16)
+SCALING_LENGTHS = (30, 60, 100)
+
+
+def staggered_case(agents: int) -> Case:
+    """Two shared cells every cart crosses, at positions that differ by cart, so carts
+    reach them at different times and the greedy order is not always optimal."""
+    return Case(
+        "staggered",
+        {
+            "hub": {cart: (2 + cart % 3) / 8 for cart in range(agents)},
+            "hub2": {cart: (5 + (2 * cart) % 3) / 8 for cart in range(agents)},
+        },
+    )
+
+
+def scaling(max_nodes: int | None) -> int:
+    """The scaling table: exact mode, N = 2..16 agents, 30/60/100 steps per agent."""
+    print(f"exact mode, one run each, node budget {max_nodes}; grounding not timed")
+    columns = (
+        "case",
+        "N",
+        "steps/agent",
+        "ms",
+        "nodes",
+        "length",
+        "lower bound",
+        "exact",
+        "gap",
+        "hand-derived",
+    )
+    print()
+    print("| " + " | ".join(columns) + " |")
+    print("|" + "---|" * len(columns))
+    worst: dict[int, float] = {}
+    for make in (shared_case, staggered_case):
+        for agents in SCALING_AGENTS:
+            for length in SCALING_LENGTHS:
+                case = make(agents)
+                instance = build(case, length, agents)
+                problem = parse_problem(SINGLE_AGENT_DOMAIN, instance.single_agent_problem)
+                grounder = Grounder(problem)
+                plans = [grounder.ground_plan(plan) for plan in instance.plans]
+                start = time.perf_counter()
+                # parallel_length re-validates the schedule (check_schedule) before returning.
+                result = parallel_length(
+                    plans, problem.init, problem.goal, AGENT_PREDICATES, max_nodes=max_nodes
+                )
+                ms = 1000 * (time.perf_counter() - start)
+                if agents in (8, 16):
+                    worst[agents] = max(worst.get(agents, 0.0), ms)
+                # Shared case by hand: every cart holds the hub two steps (enter, leave),
+                # the last one enters 2 (N - 1) steps late, and the crossings add nothing.
+                derived = str(length + 2 * (agents - 1)) if case.name == "shared" else "-"
+                cells = [
+                    case.name,
+                    str(agents),
+                    str(length),
+                    f"{ms:.0f}",
+                    str(result.nodes_expanded),
+                    str(result.length),
+                    str(result.lower_bound),
+                    "yes" if result.exact else "no",
+                    str(result.gap),
+                    derived,
+                ]
+                print("| " + " | ".join(cells) + " |", flush=True)
+    print()
+    for agents, ms in sorted(worst.items()):
+        verdict = "met" if ms < 1000 else "NOT met"
+        print(
+            f"N = {agents}: worst {ms:.0f} ms over both cases and lengths (goal < 1 s: {verdict})"
+        )
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
     parser.add_argument("--repeats", type=int, default=5, help="timed runs per measurement")
     parser.add_argument("--budget", type=float, default=30.0, help="seconds per UP baseline run")
+    parser.add_argument(
+        "--scaling",
+        action="store_true",
+        help="print only the scaling table (N = 2..16 agents, 30/60/100 steps)",
+    )
+    parser.add_argument(
+        "--max-nodes",
+        type=int,
+        default=DEFAULT_MAX_NODES,
+        help="node budget of the search in the scaling table",
+    )
     args = parser.parse_args(argv)
+    command = " ".join(argv if argv is not None else sys.argv[1:])
+    if args.scaling:
+        print(f"$ python bench/bench_execution.py {command}".rstrip())
+        print(f"python {platform.python_version()}, {platform.machine()}, {os.cpu_count()} CPUs")
+        return scaling(args.max_nodes)
     from unified_planning.shortcuts import get_environment
 
     get_environment().credits_stream = None
-    command = " ".join(argv if argv is not None else sys.argv[1:])
     print(f"$ python bench/bench_execution.py {command}".rstrip())
     print(
         f"python {platform.python_version()}, {platform.machine()}, {os.cpu_count()} CPUs; "

@@ -70,6 +70,8 @@ class RunResult:
     seed: int = 0
     success: bool = False
     exec_length: int | None = None
+    exact: bool = True  # False when the scorer hit its node budget (exec_length is an upper bound)
+    lower_bound: int | None = None  # the scorer's proven lower bound on exec_length
     sa_length: int | None = None
     sa_cost: int | None = None  # the SA plan's cost (its length unless the domain has costs)
     planning_time_s: float = 0.0
@@ -98,6 +100,8 @@ class RunResult:
             "seed": self.seed,
             "success": self.success,
             "exec_length": self.exec_length,
+            "exact": self.exact,
+            "lower_bound": self.lower_bound,
             "sa_length": self.sa_length,
             "sa_cost": self.sa_cost,
             "planning_time_s": round(self.planning_time_s, 4),
@@ -286,6 +290,7 @@ def run_multi_agent(
     run.score_time_s = time.perf_counter() - score_start
     run.schedule = _named_schedule(execution, run.agent_order)
     run.exec_length = execution.length
+    run.exact, run.lower_bound = execution.exact, execution.lower_bound
     run.success = True
     run.extra["sequential_length"] = len(result.plan)
     run.wall_time_s = time.perf_counter() - start
@@ -428,6 +433,7 @@ def run_twostep(
         run.plans = dict(zip(names, [*helper_plans, main_plan or []], strict=True))
         run.schedule = _named_schedule(execution, names)
         run.exec_length = execution.length
+        run.exact, run.lower_bound = execution.exact, execution.lower_bound
         run.success = True
     else:
         if run.fallback is None:

@@ -36,6 +36,13 @@ Search
     more progress (larger g, then fewer actions left), so cases without contention go
     straight down.
 
+    A greedy list schedule (longest remaining plan first) gives an upper bound first; a
+    contention bound (:class:`~twostep.execution.bounds.ContentionBound`: agents that
+    consume the same exclusive fact, such as a free cell, take turns) often meets it at
+    the start, and then no search runs (N carts queueing at one hub). Otherwise A* stops
+    when f reaches the greedy length, or after a node budget (``max_nodes``): then the
+    greedy schedule comes back with ``exact=False`` and the proven ``lower_bound``.
+
     * ``paper`` -- the successors of the paper's recursion: one agent alone, or all agents
       that still have actions together. Its memoised recursion computes the shortest path in
       exactly this graph, which A* finds without visiting every index tuple.
@@ -52,8 +59,8 @@ One job per module:
 - :mod:`twostep.execution.model`      :class:`ParallelExecution`, :class:`ScheduleError`, modes
 - :mod:`twostep.execution.diagnosis`  why no schedule exists (agent copies, hand-off run)
 - :mod:`twostep.execution.compiled`   plans as bit sets over numbered facts
-- :mod:`twostep.execution.bounds`     the A* lower bound (remaining plans, pair projections)
-- :mod:`twostep.execution.search`     A* with the successor sets of each mode
+- :mod:`twostep.execution.bounds`     the A* lower bound (remaining plans, contention, pairs)
+- :mod:`twostep.execution.search`     greedy upper bound, budgeted A* with each mode's successors
 - :mod:`twostep.execution.check`      :func:`check_schedule`, the independent re-validation
 - :mod:`twostep.execution.parallel`   :func:`parallel_length`, which ties them together
 """

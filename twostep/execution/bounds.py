@@ -1,4 +1,4 @@
-"""Lower bounds for the A* search: the longest remaining plan and exact pair projections."""
+"""Lower bounds for the A* search: longest remaining plan, fact contention, pair projections."""
 
 from __future__ import annotations
 
@@ -29,7 +29,10 @@ class PairProjection:
     fact only a helper adds, or must not run before a helper's action it would disable.
     """
 
-    def __init__(self, task: CompiledTask, first: int, second: int):
+    def __init__(
+        self, task: CompiledTask, first: int, second: int, limit: int | None = None
+    ) -> None:
+        """Raises :class:`ProjectionTooLarge` past ``limit`` explored nodes (None: no limit)."""
         self.first, self.second = first, second
         others = 0
         for agent, written in enumerate(task.writes_from):
@@ -67,6 +70,8 @@ class PairProjection:
                 continue
             k, m, state = node
             children[node] = []
+            if limit is not None and len(children) > limit:
+                raise ProjectionTooLarge
             # Past the last point of contact the pair needs no search: both just run on.
             if not (writes[0][k] & (reads[1][m] | writes[1][m]) or writes[1][m] & reads[0][k]):
                 settled[node] = alone(k, m, state)
@@ -107,31 +112,159 @@ class PairProjection:
         return steps
 
 
-def interacting_pairs(task: CompiledTask) -> list[PairProjection]:
-    """Projections for the pairs of agents whose plans share a fact one of them writes."""
+class ProjectionTooLarge(Exception):
+    """A pair projection would explore more nodes than its budget allows."""
+
+
+PAIR_NODE_BUDGET = 20_000
+"""Projection nodes explored over all pairs before the rest are left out (many agents
+sharing cells give N (N - 1) / 2 projections of thousands of nodes each: seconds)."""
+
+
+def interacting_pairs(
+    task: CompiledTask, node_budget: int | None = PAIR_NODE_BUDGET
+) -> list[PairProjection]:
+    """Projections for the pairs of agents whose plans share a fact one of them writes.
+
+    Pairs are built in order until ``node_budget`` projection nodes are explored; the
+    rest are left out, which keeps the bound admissible (each pair only raises it) but
+    gives up their dead-end detection.
+    """
     pairs = []
+    left = node_budget
     for i, j in itertools.combinations(range(len(task.steps)), 2):
         reads_i, writes_i = task.reads_from[i][0], task.writes_from[i][0]
         reads_j, writes_j = task.reads_from[j][0], task.writes_from[j][0]
         if writes_i & (reads_j | writes_j) or writes_j & reads_i:
-            pairs.append(PairProjection(task, i, j))
+            try:
+                pair = PairProjection(task, i, j, left)
+            except ProjectionTooLarge:
+                break
+            pairs.append(pair)
+            if left is not None:
+                left -= len(pair.explored)
     return pairs
+
+
+class ContentionBound:
+    """Agents that consume the same exclusive fact must take turns: a makespan bound.
+
+    A *consumer* of environment fact f needs f and deletes it (and does not add it back),
+    like entering a cell that must be free. Two consumers of f cannot share a step (one
+    deletes what the other needs), and after one runs f is false until some action adds it
+    again in a later step, which cannot be the step of the next consumer either (adding and
+    deleting f interfere). So consumers of f run at least p = 2 steps apart, whichever
+    agents they belong to and whoever adds f back.
+
+    Holds: when every action that adds f is a *release*, preceded in its own plan by a
+    consumer of f with no other adder in between, f works as a lock. Invariant: holders
+    (agents past a consumer and before its release) plus [f true] is at most 1; a consumer
+    needs f true, so no one holds, and a release is run by its holder. So the next
+    consumer runs only after the current holder's release: p = release - consume + 1
+    steps apart. While an agent holds f, no other consumer runs before the step after its
+    release.
+
+    For a remaining consumption of an agent at index i, action k (n actions), the release
+    r = k - i + 1 is the earliest step it can run (later when f is false or held), and
+    q = n - k - 1 actions follow it. For any set S of them, in any order, the last runs no
+    earlier than min r + (sum of p over S) - its own p, and its agent then still has q to
+    do, so the makespan is at least min r + sum p + min (q - p) over S; the maximum over
+    the sets with r and q - p above thresholds is taken (single-machine "heads and tails").
+
+    Consistent: releases drop by at most one per step; when a member of the best set is
+    consumed now (release 1, hold p), the others now wait at least p steps for it, so the
+    value of the rest drops by at most one (a lone member falls back on its tail, which the
+    longest-remaining-plan bound covers).
+    """
+
+    def __init__(self, task: CompiledTask):
+        self.lengths = task.lengths
+        adders = 0
+        for plan in task.steps:
+            for step in plan:
+                adders |= step.add
+        # fact -> [(agent, ((consume index, hold p, release index or -1), ...))]
+        events: dict[int, list[tuple[int, tuple[tuple[int, int, int], ...]]]] = {}
+        locks = adders  # facts still possibly locks; cleared on a non-release adder
+        per_agent: list[dict[int, list[list[int]]]] = []
+        for plan in task.steps:
+            by_fact: dict[int, list[list[int]]] = {}
+            for k, step in enumerate(plan):
+                consumed = step.pre_positive & step.delete & ~step.add
+                added = step.add & adders
+                while added:
+                    bit = added & -added
+                    added ^= bit
+                    open_holds = by_fact.get(bit)
+                    if open_holds and open_holds[-1][2] < 0:
+                        open_holds[-1][2] = k
+                    else:
+                        locks &= ~bit
+                while consumed:
+                    bit = consumed & -consumed
+                    consumed ^= bit
+                    by_fact.setdefault(bit, []).append([k, 2, -1])
+            per_agent.append(by_fact)
+        for agent, by_fact in enumerate(per_agent):
+            for bit, holds in by_fact.items():
+                entries = []
+                for k, _, release in holds:
+                    lock = bool(locks & bit) and release >= 0
+                    entries.append((k, release - k + 1 if lock else 2, release if lock else -1))
+                events.setdefault(bit, []).append((agent, tuple(entries)))
+        self.facts = [
+            (bit, agents) for bit, agents in events.items() if sum(len(e) for _, e in agents) >= 2
+        ]
+
+    def __call__(self, indices: Sequence[int], state: int) -> int:
+        lengths = self.lengths
+        best = 0
+        for bit, agents in self.facts:
+            earliest = 1 if state & bit else 2
+            for agent, entries in agents:
+                index = indices[agent]
+                for k, _, release in entries:
+                    if k < index <= release:  # this agent holds the lock now
+                        earliest = max(earliest, release - index + 2)
+            events: list[tuple[int, int, int]] = []
+            for agent, entries in agents:
+                index = indices[agent]
+                for k, hold, _ in entries:
+                    if k >= index:
+                        release_at = max(k - index + 1, earliest)
+                        events.append((release_at, hold, lengths[agent] - k - 1 - hold))
+            if len(events) < 2:
+                continue
+            events.sort()
+            for first, (release_at, _, _) in enumerate(events):
+                if first and release_at == events[first - 1][0]:
+                    continue
+                total = 0
+                for _, hold, slack in sorted(events[first:], key=lambda e: -e[2]):
+                    total += hold
+                    best = max(best, release_at + total + slack)
+        return best
 
 
 class LowerBound:
     """An admissible, consistent lower bound on the steps left from a search node.
 
     The maximum of the longest remaining plan (each step advances an agent by at most one
-    action) and the pair projections of :class:`PairProjection`; None for a dead end.
-    Each part drops by at most one per real step, so the maximum is consistent too.
+    action), the contention bound of :class:`ContentionBound` and the pair projections of
+    :class:`PairProjection`; None for a dead end. Each part drops by at most one per real
+    step, so the maximum is consistent too. ``pairs=False`` skips the projections (cheap
+    to build, no dead-end detection), ``contention=False`` the contention bound.
     """
 
-    def __init__(self, task: CompiledTask, pairs: bool = True):
+    def __init__(self, task: CompiledTask, pairs: bool = True, contention: bool = True):
         self.lengths = task.lengths
+        self.contention = ContentionBound(task) if contention else None
         self.pairs = interacting_pairs(task) if pairs else []
 
     def __call__(self, indices: Sequence[int], state: int) -> int | None:
         bound = max((n - i for n, i in zip(self.lengths, indices, strict=True)), default=0)
+        if self.contention is not None:
+            bound = max(bound, self.contention(indices, state))
         for pair in self.pairs:
             steps = pair(indices, state)
             if steps is None:

@@ -25,6 +25,21 @@ class ParallelExecution:
     """``"exact"`` or ``"paper"``."""
     nodes_expanded: int
     """Search nodes expanded, a measure of effort for benchmarks."""
+    exact: bool = True
+    """Whether ``length`` is proven the shortest of the mode. False when the search hit
+    its node budget and returned the best schedule found (still a valid schedule)."""
+    lower_bound: int = -1
+    """A proven lower bound on the shortest length; equals ``length`` when ``exact``
+    (left out, it is set to ``length``)."""
+
+    def __post_init__(self) -> None:
+        if self.lower_bound < 0:
+            object.__setattr__(self, "lower_bound", self.length)
+
+    @property
+    def gap(self) -> int:
+        """``length - lower_bound``: 0 when exact."""
+        return self.length - self.lower_bound
 
 
 class ScheduleError(Exception):

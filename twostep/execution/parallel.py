@@ -8,7 +8,7 @@ from twostep.execution.check import check_schedule
 from twostep.execution.compiled import compile_task
 from twostep.execution.diagnosis import check_agent_copies, diagnose
 from twostep.execution.model import MODES, ParallelExecution
-from twostep.execution.search import search
+from twostep.execution.search import DEFAULT_MAX_NODES, search
 from twostep.pddl import Fact, Goal
 from twostep.strips import GroundAction
 
@@ -20,12 +20,14 @@ def _parallel_length(
     agent_predicates: Collection[str],
     mode: str,
     plain: bool = False,
+    max_nodes: int | None = DEFAULT_MAX_NODES,
 ) -> ParallelExecution:
     if mode not in MODES:
         raise ValueError(f"unknown mode {mode!r}; expected one of {', '.join(MODES)}")
     check_agent_copies(plans, init, goal, agent_predicates)
     task = compile_task(plans, init, goal, agent_predicates)
-    sets, expanded = search(task, mode, plain)
+    found = search(task, mode, plain, max_nodes)
+    sets = found.sets
     if sets is None:
         raise diagnose(plans, init, goal, agent_predicates)
     indices = [0] * len(plans)
@@ -38,7 +40,9 @@ def _parallel_length(
         steps.append(tuple(joint))
     schedule = tuple(steps)
     check_schedule(schedule, plans, init, goal, agent_predicates)
-    return ParallelExecution(len(schedule), schedule, mode, expanded)
+    return ParallelExecution(
+        len(schedule), schedule, mode, found.expanded, found.exact, found.lower_bound
+    )
 
 
 def parallel_length(
@@ -47,6 +51,7 @@ def parallel_length(
     goal: Goal,
     agent_predicates: Collection[str],
     mode: str = "exact",
+    max_nodes: int | None = DEFAULT_MAX_NODES,
 ) -> ParallelExecution:
     """The shortest joint schedule of per-agent plans that reaches ``goal``.
 
@@ -55,5 +60,10 @@ def parallel_length(
     length is never shorter. With one agent the length is its plan length.
     Raises :class:`ScheduleError` when no schedule reaches the goal, naming the agent, the
     1-based step, the action and the failing precondition (or the failing goal literal).
+
+    The search expands at most ``max_nodes`` nodes (None: no limit) once it has a schedule
+    in hand; past that it returns the best schedule found with ``exact=False`` and a proven
+    ``lower_bound`` (see :func:`~twostep.execution.search.search`). The schedule is
+    re-validated by :func:`check_schedule` in every case.
     """
-    return _parallel_length(plans, init, goal, agent_predicates, mode)
+    return _parallel_length(plans, init, goal, agent_predicates, mode, max_nodes=max_nodes)
