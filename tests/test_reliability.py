@@ -70,7 +70,10 @@ def _compose(*overrides: str) -> Any:
         ("score_mode=bogus", "score_mode=bogus is not allowed (allowed: exact, paper)"),
         ("planner.time_limit_s=0", "planner.time_limit_s=0.0 must be > 0"),
         ("planner.time_limit_s=-5", "planner.time_limit_s=-5.0 must be > 0"),
-        ("llm.mode=sometimes", "llm.mode=sometimes is not allowed (allowed: live, replay, scripted)"),
+        (
+            "llm.mode=sometimes",
+            "llm.mode=sometimes is not allowed (allowed: live, replay, scripted)",
+        ),
         ("agents=0", "agents=0 must be at least 1"),
         ("llm.timeout_s=0", "llm.timeout_s=0.0 must be > 0"),
     ],
@@ -83,7 +86,9 @@ def test_default_config_has_no_bad_value() -> None:
     assert value_problems(_compose()) == []
 
 
-def test_bad_score_mode_fails_before_planning_and_stores_nothing(data: Path, tmp_path: Path) -> None:
+def test_bad_score_mode_fails_before_planning_and_stores_nothing(
+    data: Path, tmp_path: Path
+) -> None:
     """Before: with sa (no scoring needed) score_mode=bogus was stored as a success."""
     out = tmp_path / "out"
     done = twostep(
@@ -106,9 +111,7 @@ def test_unwritable_output_root_is_one_line_before_any_work(data: Path, tmp_path
     blocker = tmp_path / "a-file"
     blocker.write_text("")
     for mode in ([], ["-m"]):
-        done = twostep(
-            *mode, "task=1", f"data.root={data}", f"output.root={blocker}/out", *FAST
-        )
+        done = twostep(*mode, "task=1", f"data.root={data}", f"output.root={blocker}/out", *FAST)
         assert f"output.root {blocker}/out is not writable" in one_error_line(done)
 
 
