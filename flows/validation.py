@@ -4,7 +4,8 @@ what is allowed; the command prints it and exits 2.
 
 :func:`check_values` runs from :func:`flows.build.check_job` (every job, before any
 planning); :func:`check_writable` runs from the Hydra callback (:mod:`flows.sweep`)
-before Hydra creates the run or sweep directory, and again in each job.
+before Hydra creates the run directory of a single run or the sweep directory of a
+multirun (the jobs of a sweep write where the sweep was checked).
 """
 
 from __future__ import annotations
@@ -14,9 +15,6 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 from urllib.parse import urlparse
-
-from twostep.execution.model import MODES as SCORE_MODES
-from twostep.llm.client import MODES as LLM_MODES
 
 
 class ValidationError(Exception):
@@ -40,7 +38,10 @@ def _positive(key: str, value: Any) -> str | None:
 
 def value_problems(cfg: Any) -> list[str]:
     """Every out-of-range value of a job config (an empty list: all fine)."""
+    # Imported here: the writability check of every run needs none of this.
     from flows.build import DECOMPOSERS, METHODS
+    from twostep.execution.model import MODES as SCORE_MODES
+    from twostep.llm.client import MODES as LLM_MODES
 
     problems = [
         _choice("score_mode", cfg.score_mode, SCORE_MODES),
