@@ -96,13 +96,17 @@ def records(out: Path) -> list[dict[str, Any]]:
     return found
 
 
-def run_until_killed(command: list[str], out: Path, after: int, rng: random.Random) -> int:
-    """Start the sweep; kill -9 it once ``after`` more jobs have finished (plus a random
-    fraction of a second, to land inside a job). Returns the jobs finished before."""
-    before = len(records(out))
+def computed(out: Path) -> int:
+    return sum(1 for r in records(out) if not r.get("reused"))
+
+
+def run_until_killed(command: list[str], out: Path, after: int, rng: random.Random) -> str:
+    """Start the sweep; kill -9 it once it computed ``after`` more jobs (reused ones do
+    not count), plus a random fraction of a second to land inside the next job."""
+    before, seen = computed(out), len(records(out))
     process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
-        while len(records(out)) < before + after and process.poll() is None:
+        while computed(out) < before + after and process.poll() is None:
             time.sleep(0.05)
         time.sleep(rng.uniform(0.0, 1.0))
         if process.poll() is None:
@@ -112,7 +116,8 @@ def run_until_killed(command: list[str], out: Path, after: int, rng: random.Rand
         if process.poll() is None:
             process.kill()
             process.wait()
-    return len(records(out)) - before
+    new = computed(out) - before
+    return f"{len(records(out)) - seen} job(s) finished, {new} of them computed"
 
 
 def mlflow_counts(out: Path) -> tuple[int, int]:
@@ -133,7 +138,7 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=20)
     parser.add_argument("--kills", type=int, default=2)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--fault-rate", type=float, default=0.12, help="per fault kind")
+    parser.add_argument("--fault-rate", type=float, default=0.15, help="per fault kind")
     parser.add_argument("--prefect", action="store_true")
     parser.add_argument("--data", type=Path, default=REPO / "data")
     parser.add_argument("--out", type=Path, default=None)
@@ -151,16 +156,16 @@ def main() -> None:
         server.next_reply = lambda request, authorization: llm.reply()[1]  # type: ignore[method-assign]
         command = sweep_command(args.data, out, args.jobs, server.api_base, args.prefect)
         for kill in range(args.kills):
-            finished = run_until_killed(command, out, rng.randint(2, 6), rng)
-            lines.append(f"start {kill + 1}: killed with SIGKILL after {finished} job(s)")
+            finished = run_until_killed(command, out, rng.randint(3, 6), rng)
+            lines.append(f"start {kill + 1}: killed with SIGKILL after {finished}")
         final = subprocess.run(command, capture_output=True, text=True, timeout=3600)
     wall = time.perf_counter() - start
     summaries = sorted(out.glob("multiruns/*/*/.twostep/summary.json"))
     summary = json.loads(summaries[-1].read_text()) if summaries else {}
-    computed: collections.Counter[str] = collections.Counter()
+    computations: collections.Counter[str] = collections.Counter()
     for record in records(out):
         if not record.get("reused") and record.get("status") == "success":
-            computed[str(record.get("job_key"))] += 1
+            computations[str(record.get("job_key"))] += 1
     stored = [json.loads(p.read_text()) for p in out.glob("jobs/*/result.json")]
     stored_failures = sum(1 for r in stored if r.get("status") in ("llm_error", "error"))
     runs, duplicates = mlflow_counts(out) if (out / "mlflow.db").is_file() else (0, 0)
@@ -171,7 +176,7 @@ def main() -> None:
         f"{'jobs':<22}{args.jobs}",
         f"{'jobs completed':<22}{summary.get('jobs_done', 0) - summary.get('jobs_failed', 0)}"
         f" (failed {summary.get('jobs_failed', '?')}, reused {summary.get('jobs_reused', '?')})",
-        f"{'jobs recomputed':<22}{sum(1 for n in computed.values() if n > 1)}",
+        f"{'jobs recomputed':<22}{sum(1 for n in computations.values() if n > 1)}",
         f"{'MLflow job runs':<22}{runs}",
         f"{'MLflow duplicates':<22}{duplicates}",
         f"{'stored failures':<22}{stored_failures}",
