@@ -232,11 +232,12 @@ def test_two_identical_sweeps_at_once_keep_apart_and_compute_each_job_once(
     data: Path, tmp_path: Path
 ) -> None:
     """Before: one multirun dir (named to the second), progress `[3/1 done`, both
-    sweeps computed every job."""
+    sweeps computed every job; on a fresh MLflow store both created its tables at once
+    and a job was not logged."""
     out = tmp_path / "out"
     command = [
-        str(TWOSTEP), "-m", "task=1,3", "method=sa", "mlflow.enabled=false",
-        f"data.root={data}", f"output.root={out}", *FAST,
+        str(TWOSTEP), "-m", "task=1,3", "method=sa", f"data.root={data}",
+        f"output.root={out}", *FAST,
     ]  # fmt: skip
     sweeps = [
         subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -246,12 +247,26 @@ def test_two_identical_sweeps_at_once_keep_apart_and_compute_each_job_once(
     for sweep, (stdout, stderr) in zip(sweeps, outputs, strict=True):
         assert sweep.returncode == 0, stdout + stderr
         assert "/1 done" not in stdout and "/4 done" not in stdout
+        assert "not logged to MLflow" not in stderr, stderr
     summaries = _summaries(out)
     assert len(summaries) == 2  # a directory each
     assert all(s["jobs_total"] == 2 and s["jobs_done"] == 2 for s in summaries)
     # Each of the 2 jobs was computed by exactly one of the sweeps; the other reused it.
     assert sum(s["jobs_reused"] for s in summaries) == 2
     assert len(list((out / "jobs").glob("*/result.json"))) == 2
+    jobs, _ = _mlflow_runs(out)
+    assert sorted(r.data.params["task"] for r in jobs) == ["1", "3"]  # one run per job
+
+
+def _mlflow_runs(out: Path) -> tuple[list[Any], list[Any]]:
+    """(job runs, sweep parent runs) of every sweep experiment in the store."""
+    from mlflow.tracking import MlflowClient
+
+    client = MlflowClient(f"sqlite:///{out}/mlflow.db")
+    experiments = [e for e in client.search_experiments() if e.name.startswith("sweep ")]
+    runs = [r for e in experiments for r in client.search_runs([e.experiment_id])]
+    jobs = [r for r in runs if r.data.tags.get("twostep.kind") == "job"]
+    return jobs, [r for r in runs if r.data.tags.get("twostep.kind") == "sweep"]
 
 
 # ----------------------------------------------------------------- kill -9 and resume
@@ -288,13 +303,7 @@ def test_sweep_killed_mid_run_resumes_without_duplicates_in_mlflow(
     assert final["jobs_done"] == 3 and final["jobs_failed"] == 0
     assert final["jobs_reused"] >= done_before  # finished jobs were not recomputed
 
-    from mlflow.tracking import MlflowClient
-
-    client = MlflowClient(f"sqlite:///{out}/mlflow.db")
-    experiments = [e for e in client.search_experiments() if e.name.startswith("sweep ")]
-    runs = [r for e in experiments for r in client.search_runs([e.experiment_id])]
-    jobs = [r for r in runs if r.data.tags.get("twostep.kind") == "job"]
-    parents = [r for r in runs if r.data.tags.get("twostep.kind") == "sweep"]
+    jobs, parents = _mlflow_runs(out)
     assert sorted(r.data.params["task"] for r in jobs) == ["1", "2", "3"]  # no duplicate
     assert len(parents) == 1
     assert {r.data.tags["mlflow.parentRunId"] for r in jobs} == {parents[0].info.run_id}
