@@ -15,6 +15,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from flows.config import TwostepConfig
+from flows.validation import check_values
 from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.base import Decomposer
 from twostep.planner import PlannerSettings
@@ -68,6 +69,7 @@ def load_job_task(cfg: TwostepConfig) -> BenchmarkTask:
 
 def check_job(cfg: TwostepConfig) -> None:
     """Reject a config that cannot run, before any work (and before any server starts)."""
+    check_values(cfg)  # every value in range, one line naming the key and allowed values
     if cfg.method.name not in METHODS:
         raise JobError(f"unknown method '{cfg.method.name}' (known: {', '.join(METHODS)})")
     if int(cfg.agents) < 1:

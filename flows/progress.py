@@ -17,13 +17,14 @@ def clock(seconds: float) -> str:
     return f"{hours}:{minutes:02d}:{secs:02d}" if hours else f"{minutes}:{secs:02d}"
 
 
-def progress_line(state: SweepState) -> str:
-    """``[3/4 done | 0 failed | 1 reused | 0:41 elapsed, ~0:14 left]``."""
+def progress_line(state: SweepState, now: float | None = None) -> str:
+    """``[3/4 done | 0 failed | 1 reused | 0:41 elapsed, ~0:14 left]`` (``now``: the
+    time to measure from, default the clock's)."""
     records = job_records(Path(state.sweep_dir))
     done = len(records)
     failed = sum(1 for r in records if r.get("status") == "failed")
     reused = sum(1 for r in records if r.get("reused"))
-    elapsed = time.time() - state.started_at
+    elapsed = (time.time() if now is None else now) - state.started_at
     total = state.total_jobs
     parts = [f"{done}/{total if total is not None else '?'} done", f"{failed} failed"]
     if reused:

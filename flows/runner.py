@@ -253,7 +253,7 @@ def execute_job(
 
         check_store(str(cfg.mlflow.tracking_uri), float(cfg.mlflow.connect_timeout_s))
     store = JobStore(str(cfg.orchestration.job_store))
-    stored = store.load(key) if cfg.orchestration.reuse_results else None
+    stored = store.load_or_claim(key) if cfg.orchestration.reuse_results else None
     experiment = _experiment(cfg, sweep)
     uri = str(cfg.mlflow.tracking_uri)
     logged = stored is not None and f"{uri} {experiment}" in store.logged_to(key)
@@ -277,6 +277,7 @@ def execute_job(
             store.save(key, config, result)  # unless it did not finish (llm_error, error)
         else:
             result = failed_result(config, error)
+    store.release(key)  # a second process waiting for this job reads its result now
     status, status_error = job_status(result)
     job_wall = time.perf_counter() - start
     work = compute_timings["server_wait_s"] + stats.planner_wall_s + stats.llm_wall_s

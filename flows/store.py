@@ -10,6 +10,8 @@ not finish (``llm_error``, ``error``), is not stored: a re-run tries it again.
 from __future__ import annotations
 
 import json
+import os
+import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -58,6 +60,7 @@ class JobStore:
 
     def __init__(self, root: str | Path) -> None:
         self.root = Path(root)
+        self._locks: dict[str, int] = {}  # key -> file descriptor holding its lock
 
     def path(self, key: str) -> Path:
         return self.root / key / "result.json"
@@ -69,14 +72,62 @@ class JobStore:
             return None
         return data if isinstance(data, dict) else None
 
+    def load_or_claim(self, key: str) -> dict[str, Any] | None:
+        """The stored result, or None after taking the key's lock: the caller computes
+        the job, then calls :meth:`release` (:meth:`save` does not release).
+
+        Two processes (two sweeps, or two single runs) asking for the same key: the
+        second waits here until the first released its lock, then reads the first one's
+        result. The lock is an ``flock``, so a process killed with ``kill -9`` drops it.
+        """
+        found = self.load(key)
+        if found is not None or key in self._locks:
+            return found
+        import fcntl
+
+        path = self.root / ".locks" / f"{key}.lock"
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            descriptor = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError:
+            return None  # no lock possible here: compute (the store write reports why)
+        try:
+            fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            print(
+                f"waiting: another process is computing job {key[:12]} (lock {path})",
+                file=sys.stderr,
+                flush=True,
+            )
+            fcntl.flock(descriptor, fcntl.LOCK_EX)
+        self._locks[key] = descriptor
+        return self.load(key)  # stored by the other process meanwhile?
+
+    def release(self, key: str) -> None:
+        descriptor = self._locks.pop(key, None)
+        if descriptor is not None:
+            os.close(descriptor)  # closing the descriptor drops the flock
+
     def save(self, key: str, config: Mapping[str, Any], result: Mapping[str, Any]) -> bool:
         """Store a finished job's result; False (nothing written) for one that did not
-        finish its work (:func:`twostep.identity.is_storable`)."""
+        finish its work (:func:`twostep.identity.is_storable`), or when the store cannot
+        be written: the result is not lost, the job's run directory holds it, and a
+        warning says so."""
         if not identity.is_storable(result):
             return False
-        # config first: a stored result always has its config beside it.
-        write_json_atomic(self.root / key / "config.json", dict(config))
-        write_json_atomic(self.path(key), dict(result))
+        try:
+            # config first: a stored result always has its config beside it.
+            write_json_atomic(self.root / key / "config.json", dict(config))
+            write_json_atomic(self.path(key), dict(result))
+        except OSError as error:
+            print(
+                f"warning: job store {self.root} not written ({error.strerror or error}): "
+                "the result is kept in the job's run directory (result.json); "
+                "this job will be computed again next time",
+                file=sys.stderr,
+                flush=True,
+            )
+            return False
         return True
 
     def logged_to(self, key: str) -> dict[str, str]:

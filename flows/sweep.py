@@ -2,8 +2,12 @@
 
 :class:`SweepCallback` runs in the process that launches the sweep, whatever the launcher:
 
+``on_run_start`` (a single run)
+    checks that the output locations are writable (:mod:`flows.validation`) before
+    Hydra creates the run directory: one line and exit 2;
 ``on_multirun_start``
-    checks the MLflow store (one line and exit 2 before any job when it cannot be used),
+    checks the output locations the same way, refuses a sweep directory that a running
+    sweep owns, checks the MLflow store (one line and exit 2 before any job when it cannot be used),
     picks the Prefect server (the user's, the long-lived services' from
     ``twostep-services up``, or one started on demand by the first job), starts a Dask
     ``LocalCluster`` for ``task_runner=dask`` without an address, and writes the sweep's
@@ -35,10 +39,46 @@ from omegaconf import DictConfig
 
 from flows.environment import quiet_defaults
 from flows.progress import footer, header
-from flows.server import ServerSettings, is_healthy, read_info
+from flows.server import ServerSettings, is_healthy, pid_alive, read_info
 from flows.sweep_services import count_flow_runs, stop_sweep_server
 from flows.sweep_state import SweepState, count_jobs, job_records, sweep_key, sweep_overrides
 from twostep.files import write_json_atomic
+
+
+def _set_hydra_config(config: DictConfig) -> None:
+    from hydra.core.hydra_config import HydraConfig
+
+    if not HydraConfig.initialized():
+        HydraConfig.instance().set_config(config)  # for ${hydra:...} in output.root
+
+
+def _check_writable(config: DictConfig, run_dir: Path) -> None:
+    from flows.validation import ValidationError, check_writable
+
+    try:
+        check_writable(config, run_dir)
+    except ValidationError as error:
+        print(f"error: {error}", file=sys.stderr, flush=True)
+        sys.exit(2)
+
+
+def _refuse_running_sweep(sweep_dir: Path) -> None:
+    """Two sweeps must never share a sweep directory (its server, parent run, job
+    records): refuse one whose directory belongs to a sweep that is still running.
+    A killed sweep's directory is resumed (its launching process is gone)."""
+    other = SweepState.load(sweep_dir)
+    if other is None or other.main_pid == os.getpid():
+        return
+    if other.hostname and other.hostname != socket.gethostname():
+        return  # its PID means nothing here
+    if pid_alive(other.main_pid):
+        print(
+            f"error: another sweep (pid {other.main_pid}) is running in {sweep_dir}: "
+            "wait for it, or choose another hydra.sweep.dir",
+            file=sys.stderr,
+            flush=True,
+        )
+        sys.exit(2)
 
 
 class SweepCallback(Callback):
@@ -56,13 +96,17 @@ class SweepCallback(Callback):
         self._cluster = None
         self._state = None
 
-    def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
-        from hydra.core.hydra_config import HydraConfig
+    def on_run_start(self, config: DictConfig, **kwargs: Any) -> None:
+        # Before Hydra creates the run directory: a read-only output root is one line.
+        _set_hydra_config(config)
+        _check_writable(config, Path(str(config.hydra.run.dir)))
 
+    def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
         quiet_defaults()
-        if not HydraConfig.initialized():
-            HydraConfig.instance().set_config(config)  # for ${hydra:...} in output.root
+        _set_hydra_config(config)
         sweep_dir = Path(str(config.hydra.sweep.dir)).resolve()
+        _check_writable(config, sweep_dir)
+        _refuse_running_sweep(sweep_dir)
         overrides = sweep_overrides(config)
         state = SweepState(
             sweep_dir=str(sweep_dir),

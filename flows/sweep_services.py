@@ -53,14 +53,18 @@ def sweep_server(state: SweepState) -> ServerInfo:
 def sweep_tracking(state: SweepState) -> tuple[Tracker, str, str]:
     """(Tracker, experiment id, parent run id), made by the first job that logs.
 
-    Under the lock because the first MlflowClient on a new SQLite file creates its
-    tables, which two processes must not do at once.
+    Under a lock because the first MlflowClient on a new SQLite file creates its
+    tables, which two processes must not do at once: a lock beside the SQLite file, so
+    that two sweeps sharing one store take turns too (else the sweep's own).
     """
     from flows.tracking import Tracker
 
     assert state.tracking_uri is not None and state.experiment is not None
     record = state.folder / "mlflow.json"
-    with file_lock(state.folder / "mlflow.lock"):
+    lock = state.folder / "mlflow.lock"
+    if state.tracking_uri.startswith("sqlite:///") and not state.tracking_uri.endswith(":memory:"):
+        lock = Path(state.tracking_uri[len("sqlite:///") :] + ".lock")
+    with file_lock(lock):
         tracker = Tracker(state.tracking_uri, state.artifact_location)
         with contextlib.suppress(OSError, ValueError, KeyError):
             data = json.loads(record.read_text())

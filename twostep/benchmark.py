@@ -49,7 +49,12 @@ class BenchmarkTask:
 
 
 def _read(path: Path) -> str:
-    return path.read_text() if path.is_file() else ""
+    if not path.is_file():
+        return ""
+    try:
+        return path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise BenchmarkError(f"{path}: not a text file (byte {error.start} is not UTF-8)") from None
 
 
 def list_domains(root: Path = DEFAULT_DATA_ROOT) -> list[str]:

@@ -7,13 +7,14 @@ it first by :mod:`twostep.pddl.adl`.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from twostep.pddl import adl
 from twostep.pddl.errors import PDDLError
 from twostep.pddl.model import ActionOrigin, Domain, Fact, Goal, Problem
 from twostep.pddl.repairs import repair_undeclared_constants
-from twostep.pddl.sexp import define_body, read_sexp, section, typed_names, write_sexp
+from twostep.pddl.sexp import SExp, define_body, read_sexp, section, typed_names, write_sexp
 from twostep.pddl.unified import (
     action_costs,
     fact_from_up,
@@ -32,6 +33,7 @@ def parse_problem(
     """Parse a domain and a problem given as PDDL text."""
     read_sexp(domain_text, domain_source, single=True)  # unbalanced parentheses: file and line
     read_sexp(problem_text, problem_source, single=True)
+    original = (domain_text, problem_text)
     origins: dict[str, ActionOrigin] = {}
     costs: dict[str, int] = {}
     if adl.needs_compilation(
@@ -47,6 +49,9 @@ def parse_problem(
     try:
         up_problem = parse_with_up(domain_text, problem_text, domain_source, problem_source)
     except PDDLError as error:
+        named = _unknown_name(*original, domain_source, problem_source)
+        if named is not None:  # clearer than unified-planning's "Not able to handle"
+            raise named from None
         if not origins:
             raise
         # line numbers of the compiled text would mislead: name the files only
@@ -101,6 +106,106 @@ def parse_problem(
     )
 
 
+_CONNECTIVES = frozenset(
+    {"and", "or", "not", "=", "imply", "forall", "exists", "when", "increase", "decrease"}
+)
+
+
+def _unknown_name(
+    domain_text: str,
+    problem_text: str,
+    domain_source: str | None,
+    problem_source: str | None,
+) -> PDDLError | None:
+    """The first predicate or object of the problem's ``:init`` and ``:goal`` that the
+    domain and problem do not declare, as an error with file and line (None: all known).
+    Asked only after parsing failed, to say what unified-planning's message does not."""
+    try:
+        domain = define_body(domain_text, "domain", domain_source)
+        problem = define_body(problem_text, "problem", problem_source)
+    except PDDLError:
+        return None
+    predicates = {
+        str(p[0]).lower()
+        for p in (section(domain, ":predicates") or [":p"])[1:]
+        if isinstance(p, list) and p
+    }
+    functions = {
+        str(f[0]).lower()
+        for f in (section(domain, ":functions") or [":f"])[1:]
+        if isinstance(f, list) and f
+    }
+    objects = {
+        n.lower()
+        for key, body in ((":constants", domain), (":objects", problem))
+        for n, _ in typed_names((section(body, key) or [key])[1:])
+    }
+
+    def first(expr: SExp, bound: frozenset[str]) -> tuple[str, str] | None:
+        if not isinstance(expr, list) or not expr or not isinstance(expr[0], str):
+            return None
+        head = expr[0].lower()
+        if head in ("forall", "exists") and len(expr) > 2 and isinstance(expr[1], list):
+            names = {str(n).lower() for n, _ in typed_names(expr[1])}
+            return first(expr[2], bound | names)
+        if head in _CONNECTIVES:
+            for arg in expr[1:]:
+                found = first(arg, bound)
+                if found:
+                    return found
+            return None
+        if head in functions:
+            return None
+        if head not in predicates:
+            return "predicate", head
+        for term in expr[1:]:
+            name = term.lower() if isinstance(term, str) else "?"
+            if not name.startswith("?") and name not in objects and name not in bound:
+                return "object", name
+        return None
+
+    for key in (":init", ":goal"):
+        part = section(problem, key)
+        for expr in (part or [key])[1:]:
+            found = first(expr, frozenset())
+            if found is None:
+                continue
+            kind, name = found
+            pattern = (
+                rf"\(\s*{re.escape(name)}[\s)]"
+                if kind == "predicate"
+                else rf"\b{re.escape(name)}\b"
+            )
+            line = _line_of(problem_text, pattern, key)
+            known = sorted(predicates) if kind == "predicate" else sorted(objects)
+            listing = ", ".join(known[:12]) + (", ..." if len(known) > 12 else "")
+            return PDDLError(
+                f"unknown {kind} '{name}' in {key} (declared: {listing or 'none'})",
+                problem_source,
+                line,
+            )
+    return None
+
+
+def _line_of(text: str, pattern: str, after: str) -> int | None:
+    """Line of the first match of ``pattern`` after the section ``after`` begins."""
+    start = re.search(rf"\(\s*{re.escape(after)}\b", text, re.IGNORECASE)
+    offset = start.start() if start else 0
+    match = re.compile(pattern, re.IGNORECASE).search(text, offset)
+    return text.count("\n", 0, match.start()) + 1 if match else None
+
+
+def read_pddl_file(path: Path) -> str:
+    """A PDDL file's text; a file that is not UTF-8 text is a :class:`PDDLError` naming it."""
+    data = path.read_bytes()
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise PDDLError(
+            f"not a text file (byte {error.start} is not UTF-8): expected PDDL", str(path)
+        ) from None
+
+
 def load_problem(domain_path: str | Path, problem_path: str | Path) -> Problem:
     """Read a domain file and a problem file."""
     domain_path, problem_path = Path(domain_path), Path(problem_path)
@@ -108,7 +213,10 @@ def load_problem(domain_path: str | Path, problem_path: str | Path) -> Problem:
         if not path.is_file():
             raise PDDLError("no such file", str(path))
     return parse_problem(
-        domain_path.read_text(), problem_path.read_text(), str(domain_path), str(problem_path)
+        read_pddl_file(domain_path),
+        read_pddl_file(problem_path),
+        str(domain_path),
+        str(problem_path),
     )
 
 

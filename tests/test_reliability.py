@@ -1,0 +1,382 @@
+"""Regression tests for the reliability findings (issue 12, findings 3, 4 and 5): concurrent
+sweeps, unwritable locations, bad config values, PDDL errors, and a fast kill -9 / resume.
+
+Every run goes through the ``twostep`` command as a user starts it, with Prefect off
+(``orchestration.prefect=false``) and tiny blocksworld tasks, so each takes seconds.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from flows.store import JobStore
+from flows.sweep import _refuse_running_sweep
+from flows.sweep_state import SweepState
+from flows.validation import value_problems, write_problem
+from tests.test_flows import make_data
+from twostep.pddl import PDDLError, load_problem
+
+REPO = Path(__file__).resolve().parent.parent
+TWOSTEP = Path(sys.executable).parent / "twostep"
+FAST = ["orchestration.prefect=false", "planner.time_limit_s=20"]
+
+
+@pytest.fixture(scope="module")
+def data(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return make_data(tmp_path_factory.mktemp("reliability") / "data")
+
+
+def twostep(*args: str, timeout: float = 240) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [str(TWOSTEP), *args], capture_output=True, text=True, cwd=REPO, timeout=timeout
+    )
+
+
+def one_error_line(done: subprocess.CompletedProcess[str]) -> str:
+    """The single ``error:`` line of a run that failed on its input (and no traceback)."""
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert "Traceback" not in done.stderr, done.stderr
+    errors = [line for line in done.stderr.splitlines() if line.startswith("error:")]
+    assert len(errors) == 1, done.stderr
+    return errors[0]
+
+
+# ----------------------------------------------------------------- finding 5: values
+
+
+def _compose(*overrides: str) -> Any:
+    from hydra import compose, initialize_config_dir
+
+    from flows.config import register
+
+    register()
+    with initialize_config_dir(config_dir=str(REPO / "conf"), version_base="1.3"):
+        return compose("config", overrides=["output.root=/tmp/x", "data.root=/tmp/x", *overrides])
+
+
+@pytest.mark.parametrize(
+    ("override", "expected"),
+    [
+        ("score_mode=bogus", "score_mode=bogus is not allowed (allowed: exact, paper)"),
+        ("planner.time_limit_s=0", "planner.time_limit_s=0.0 must be > 0"),
+        ("planner.time_limit_s=-5", "planner.time_limit_s=-5.0 must be > 0"),
+        (
+            "llm.mode=sometimes",
+            "llm.mode=sometimes is not allowed (allowed: live, replay, scripted)",
+        ),
+        ("agents=0", "agents=0 must be at least 1"),
+        ("llm.timeout_s=0", "llm.timeout_s=0.0 must be > 0"),
+    ],
+)
+def test_each_bad_value_is_named_with_what_is_allowed(override: str, expected: str) -> None:
+    assert value_problems(_compose(override)) == [expected]
+
+
+def test_default_config_has_no_bad_value() -> None:
+    assert value_problems(_compose()) == []
+
+
+def test_bad_score_mode_fails_before_planning_and_stores_nothing(
+    data: Path, tmp_path: Path
+) -> None:
+    """Before: with sa (no scoring needed) score_mode=bogus was stored as a success."""
+    out = tmp_path / "out"
+    done = twostep(
+        "method=sa", "task=1", "score_mode=bogus", "mlflow.enabled=false",
+        f"data.root={data}", f"output.root={out}", *FAST,
+    )  # fmt: skip
+    assert "score_mode=bogus" in one_error_line(done) and "exact, paper" in done.stderr
+    assert not list((out / "jobs").glob("*/result.json"))  # nothing stored as a success
+    (result,) = out.glob("runs/*/*/result.json")
+    assert json.loads(result.read_text())["status"] == "failed"
+    assert "plan_calls" not in json.loads(result.read_text())  # no planner ran
+
+
+# ----------------------------------------------------------------- finding 4: writing
+
+
+def test_unwritable_output_root_is_one_line_before_any_work(data: Path, tmp_path: Path) -> None:
+    """Before: Hydra's traceback (creating the run dir). A path under a regular file is
+    unwritable for every user, root included (permission bits are not, for root)."""
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    for mode in ([], ["-m"]):
+        done = twostep(*mode, "task=1", f"data.root={data}", f"output.root={blocker}/out", *FAST)
+        assert f"output.root {blocker}/out is not writable" in one_error_line(done)
+
+
+def test_unwritable_job_store_is_refused_before_the_job_computes(
+    data: Path, tmp_path: Path
+) -> None:
+    """Before: the job computed, then died writing the store, leaving no result.json."""
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    out = tmp_path / "out"
+    done = twostep(
+        "task=1", "mlflow.enabled=false", f"orchestration.job_store={blocker}/jobs",
+        f"data.root={data}", f"output.root={out}", *FAST,
+    )  # fmt: skip
+    assert "orchestration.job_store" in one_error_line(done)
+    assert not list(out.glob("runs/*/*/result.json"))  # refused: nothing computed
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes through permission bits")
+def test_read_only_folder_is_reported(tmp_path: Path) -> None:
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(0o555)
+    try:
+        assert write_problem(folder / "out") is not None
+    finally:
+        folder.chmod(0o755)
+
+
+def test_job_store_failing_after_the_work_keeps_the_result(
+    data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The store becomes unwritable while the job runs: result.json is still written to
+    the run directory, and a warning says where it is."""
+    from hydra import compose, initialize_config_dir
+
+    from flows.config import register
+    from flows.runner import execute_job
+
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    register()
+    with initialize_config_dir(config_dir=str(REPO / "conf"), version_base="1.3"):
+        cfg = compose(
+            "config",
+            overrides=[
+                "task=1", "mlflow.enabled=false", f"orchestration.job_store={blocker}/jobs",
+                f"data.root={data}", f"output.root={tmp_path / 'out'}", *FAST,
+            ],
+        )  # fmt: skip
+    job_dir = tmp_path / "job"
+    outcome = execute_job(cfg, job_dir)
+    assert outcome.status == "success"
+    assert json.loads((job_dir / "result.json").read_text())["success"] is True
+    warning = capsys.readouterr().err
+    assert f"job store {blocker}/jobs not written" in warning and "result.json" in warning
+
+
+# ----------------------------------------------------------------- finding 3: concurrency
+
+
+def test_second_claim_waits_for_the_first_and_reads_its_result(tmp_path: Path) -> None:
+    first, second = JobStore(tmp_path), JobStore(tmp_path)
+    assert first.load_or_claim("k") is None  # nothing stored: first computes
+    seen: list[dict[str, Any] | None] = []
+    waiter = threading.Thread(target=lambda: seen.append(second.load_or_claim("k")))
+    waiter.start()
+    waiter.join(timeout=1.0)
+    assert waiter.is_alive()  # blocked on the first one's lock, not computing
+    first.save("k", {"task": 1}, {"success": True, "exec_length": 4})
+    first.release("k")
+    waiter.join(timeout=30)
+    assert seen == [{"success": True, "exec_length": 4}]
+    second.release("k")
+    assert JobStore(tmp_path).load_or_claim("other") is None  # locks are per key
+
+
+def test_a_killed_claimant_does_not_block_the_next(tmp_path: Path) -> None:
+    code = (
+        "import sys, time; from flows.store import JobStore; "
+        f"s = JobStore({str(tmp_path)!r}); s.load_or_claim('k'); print('claimed', flush=True); "
+        "time.sleep(600)"
+    )
+    holder = subprocess.Popen(
+        [sys.executable, "-c", code], stdout=subprocess.PIPE, text=True, cwd=REPO
+    )
+    try:
+        assert holder.stdout is not None and holder.stdout.readline().strip() == "claimed"
+        holder.send_signal(signal.SIGKILL)
+        holder.wait()
+    finally:
+        if holder.poll() is None:
+            holder.kill()
+    store = JobStore(tmp_path)
+    assert store.load_or_claim("k") is None  # the lock died with its process
+    store.release("k")
+
+
+def test_a_running_sweeps_directory_is_refused_a_dead_ones_resumed(tmp_path: Path) -> None:
+    sleeper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(600)"])
+    try:
+        SweepState(str(tmp_path), time.time(), sleeper.pid).save()
+        with pytest.raises(SystemExit) as stop:
+            _refuse_running_sweep(tmp_path)
+        assert stop.value.code == 2
+    finally:
+        sleeper.kill()
+        sleeper.wait()
+    _refuse_running_sweep(tmp_path)  # its sweep is gone (kill -9): resuming is fine
+
+
+def _summaries(out: Path) -> list[dict[str, Any]]:
+    paths = sorted(out.glob("multiruns/*/*/.twostep/summary.json"))
+    return [json.loads(p.read_text()) for p in paths]
+
+
+def test_two_identical_sweeps_at_once_keep_apart_and_compute_each_job_once(
+    data: Path, tmp_path: Path
+) -> None:
+    """Before: one multirun dir (named to the second), progress `[3/1 done`, both
+    sweeps computed every job; on a fresh MLflow store both created its tables at once
+    and a job was not logged."""
+    out = tmp_path / "out"
+    command = [
+        str(TWOSTEP), "-m", "task=1,3", "method=sa", f"data.root={data}",
+        f"output.root={out}", *FAST,
+    ]  # fmt: skip
+    sweeps = [
+        subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        for _ in range(2)
+    ]
+    outputs = [sweep.communicate(timeout=240) for sweep in sweeps]
+    for sweep, (stdout, stderr) in zip(sweeps, outputs, strict=True):
+        assert sweep.returncode == 0, stdout + stderr
+        assert "/1 done" not in stdout and "/4 done" not in stdout
+        assert "not logged to MLflow" not in stderr, stderr
+    summaries = _summaries(out)
+    assert len(summaries) == 2  # a directory each
+    assert all(s["jobs_total"] == 2 and s["jobs_done"] == 2 for s in summaries)
+    # Each of the 2 jobs was computed by exactly one of the sweeps; the other reused it.
+    assert sum(s["jobs_reused"] for s in summaries) == 2
+    assert len(list((out / "jobs").glob("*/result.json"))) == 2
+    jobs, _ = _mlflow_runs(out)
+    assert sorted(r.data.params["task"] for r in jobs) == ["1", "3"]  # one run per job
+
+
+def _mlflow_runs(out: Path) -> tuple[list[Any], list[Any]]:
+    """(job runs, sweep parent runs) of every sweep experiment in the store."""
+    from mlflow.tracking import MlflowClient
+
+    client = MlflowClient(f"sqlite:///{out}/mlflow.db")
+    experiments = [e for e in client.search_experiments() if e.name.startswith("sweep ")]
+    runs = [r for e in experiments for r in client.search_runs([e.experiment_id])]
+    jobs = [r for r in runs if r.data.tags.get("twostep.kind") == "job"]
+    return jobs, [r for r in runs if r.data.tags.get("twostep.kind") == "sweep"]
+
+
+# ----------------------------------------------------------------- kill -9 and resume
+
+
+def test_sweep_killed_mid_run_resumes_without_duplicates_in_mlflow(
+    data: Path, tmp_path: Path
+) -> None:
+    """Fast version of tests/test_sweep.py's kill -9 test: 3 tiny jobs, Prefect off."""
+    out = tmp_path / "out"
+    command = [
+        "-m", "task=1,2,3", "method=twostep", "agents=2", f"data.root={data}",
+        f"output.root={out}", *FAST,
+    ]  # fmt: skip
+    process = subprocess.Popen(
+        [str(TWOSTEP), *command], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+    )
+    try:
+        deadline = time.monotonic() + 200
+        while not list(out.glob("multiruns/*/*/.twostep/jobs/0.json")):
+            assert process.poll() is None and time.monotonic() < deadline
+            time.sleep(0.02)
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+    finally:
+        if process.poll() is None:
+            process.kill()
+    done_before = len(list(out.glob("multiruns/*/*/.twostep/jobs/*.json")))
+    assert 1 <= done_before <= 3
+
+    again = twostep(*command)
+    assert again.returncode == 0, again.stdout + again.stderr
+    final = _summaries(out)[-1]
+    assert final["jobs_done"] == 3 and final["jobs_failed"] == 0
+    assert final["jobs_reused"] >= done_before  # finished jobs were not recomputed
+
+    jobs, parents = _mlflow_runs(out)
+    assert sorted(r.data.params["task"] for r in jobs) == ["1", "2", "3"]  # no duplicate
+    assert len(parents) == 1
+    assert {r.data.tags["mlflow.parentRunId"] for r in jobs} == {parents[0].info.run_id}
+
+
+# ----------------------------------------------------------------- PDDL messages
+
+
+DOMAIN = """(define (domain bw)
+ (:requirements :strips)
+ (:predicates (on ?x ?y) (clear ?x))
+ (:action touch :parameters (?x) :precondition (clear ?x) :effect (clear ?x)))
+"""
+
+
+def _problem(goal: str) -> str:
+    return f"(define (problem p) (:domain bw)\n (:objects b1 b2)\n (:init (clear b1))\n (:goal {goal}))\n"
+
+
+def _load(tmp_path: Path, domain: str | bytes, problem: str | bytes) -> PDDLError:
+    for name, text in (("domain.pddl", domain), ("p01.pddl", problem)):
+        path = tmp_path / name
+        path.write_bytes(text if isinstance(text, bytes) else text.encode())
+    with pytest.raises(PDDLError) as error:
+        load_problem(tmp_path / "domain.pddl", tmp_path / "p01.pddl")
+    return error.value
+
+
+def test_unknown_predicate_in_the_goal_is_named_with_file_and_line(tmp_path: Path) -> None:
+    error = _load(tmp_path, DOMAIN, _problem("(and (levitating b1))"))
+    assert str(error).startswith(f"{tmp_path / 'p01.pddl'}:4: unknown predicate 'levitating'")
+
+
+def test_unknown_object_in_the_goal_is_named(tmp_path: Path) -> None:
+    error = _load(tmp_path, DOMAIN, _problem("(and (clear b3))"))
+    assert str(error).startswith(f"{tmp_path / 'p01.pddl'}:4: unknown object 'b3'")
+
+
+def test_derived_predicates_are_named_as_unsupported(tmp_path: Path) -> None:
+    domain = DOMAIN.replace(
+        "(:action", "(:derived (on ?x ?y) (clear ?x))\n (:action"
+    )  # line 4 of the domain
+    error = _load(tmp_path, domain, _problem("(and (clear b1))"))
+    assert error.source == str(tmp_path / "domain.pddl") and error.line == 4
+    assert "derived predicates are not supported" in error.message
+
+
+def test_an_error_in_a_forall_effect_names_the_file(tmp_path: Path) -> None:
+    domain = DOMAIN.replace(":strips", ":adl").replace(
+        ":effect (clear ?x)", ":effect (forall (?y) (glowing ?y))"
+    )
+    error = _load(tmp_path, domain, _problem("(and (clear b1))"))
+    assert error.source == str(tmp_path / "domain.pddl"), str(error)
+
+
+@pytest.mark.parametrize("which", ["domain", "problem"])
+def test_a_binary_file_is_named(tmp_path: Path, which: str) -> None:
+    binary = b"\x89PNG\r\n\x1a\n\x00\xff\xfe"
+    domain = binary if which == "domain" else DOMAIN
+    problem = binary if which == "problem" else _problem("(and (clear b1))")
+    error = _load(tmp_path, domain, problem)
+    name = "domain.pddl" if which == "domain" else "p01.pddl"
+    assert error.source == str(tmp_path / name) and "not a text file" in error.message
+
+
+def test_a_binary_task_file_exits_2_with_its_name(data: Path, tmp_path: Path) -> None:
+    (data / "blocksworld" / "p09.pddl").write_bytes(b"\x00\xff\xfe binary")
+    try:
+        done = twostep(
+            "task=9", "mlflow.enabled=false", f"data.root={data}",
+            f"output.root={tmp_path / 'out'}", *FAST,
+        )  # fmt: skip
+    finally:
+        (data / "blocksworld" / "p09.pddl").unlink()
+    line = one_error_line(done)
+    assert "p09.pddl" in line and "not a text file" in line
