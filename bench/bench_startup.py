@@ -11,7 +11,8 @@ For each scenario, on a warm install (compiled venv: ``make setup``) and a warm 
   and the planner's wall time from result.json (``orchestration.planner_wall_s``).
   Goals: wall minus planner <= 3 s (a), <= 5 s (b).
 * **breakdown**: the same job in a driver process timing its phases: Python start,
-  imports of the ``twostep`` app, composing the config, reading the task, the planner,
+  imports of the ``twostep`` app, composing the config, reading the task (from the
+  parsed-task cache ``<output.root>/cache/tasks`` once the warm-up run filled it), the planner,
   MLflow (logging: rows written into the warm SQLite store, or waiting for the MLflow
   helper process), Prefect (import, flow and task runs), the rest (job key, job store,
   files, checks).
