@@ -18,6 +18,7 @@ module               what it is for
 ``services``         ``twostep-services``: long-lived Prefect server and MLflow UI
 ``tracking``         MLflow: store check, experiments, parent/child runs (docs/tracking.md)
 ``tracking_worker``  a single run's MLflow logging in a process started with the job
+``tracking_sqlite``  a single run's MLflow rows written into a warm SQLite store directly
 ``store``            the store of finished jobs (keys: :mod:`twostep.identity`)
 ``artifacts``        the files a job writes (and logs as artifacts)
 ``environment``      offline-safe environment defaults (telemetry off)

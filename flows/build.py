@@ -64,7 +64,8 @@ def open_decomposer(cfg: TwostepConfig) -> Iterator[Decomposer]:
 
 
 def load_job_task(cfg: TwostepConfig) -> BenchmarkTask:
-    return load_task(cfg.domain.name, int(cfg.task), Path(cfg.data.root))
+    cache = Path(cfg.output.root) / "cache" / "tasks"  # parsed PDDL: see load_problem
+    return load_task(cfg.domain.name, int(cfg.task), Path(cfg.data.root), cache)
 
 
 def check_job(cfg: TwostepConfig) -> None:

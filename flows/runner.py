@@ -238,7 +238,8 @@ def execute_job(
     Raises :class:`~flows.tracking.TrackingError` when the MLflow store of a single run
     cannot be used, before any planning; every other error is a ``failed`` outcome.
 
-    ``tracking_worker`` (single runs of the command): MLflow logging goes through a
+    ``tracking_worker`` (single runs of the command): a warm SQLite store is written
+    directly (:mod:`flows.tracking_sqlite`); otherwise MLflow logging goes through a
     process started now (:mod:`flows.tracking_worker`), which imports MLflow and opens
     its store while this one runs the job; the job still returns after its run is logged.
     """
@@ -257,11 +258,17 @@ def execute_job(
     experiment = _experiment(cfg, sweep)
     uri = str(cfg.mlflow.tracking_uri)
     logged = stored is not None and f"{uri} {experiment}" in store.logged_to(key)
-    worker = None
+    worker, light = None, None
     if tracking and tracking_worker and sweep is None and not logged:
-        from flows.tracking_worker import TrackingWorker
+        from flows.tracking_sqlite import SqliteJobLog
 
-        worker = TrackingWorker.start(uri, cfg.mlflow.artifact_location, experiment)
+        # A warm SQLite store takes the run's rows directly (milliseconds); otherwise
+        # MLflow is imported in a helper process while the job runs.
+        light = SqliteJobLog.open(uri, experiment)
+        if light is None:
+            from flows.tracking_worker import TrackingWorker
+
+            worker = TrackingWorker.start(uri, cfg.mlflow.artifact_location, experiment)
     stats, error, details, input_error = StepStats(), None, None, False
     compute_timings: dict[str, float] = {"server_wait_s": 0.0}
     if stored is not None:
@@ -307,7 +314,10 @@ def execute_job(
     if tracking and not logged:
         try:
             record = _job_record(outcome, config, files)
-            if worker is not None:
+            run_id = light.log(record) if light is not None else None
+            if run_id is not None:
+                outcome.mlflow_run_id = run_id
+            elif worker is not None:
                 outcome.mlflow_run_id = worker.log(record)
             else:
                 outcome.mlflow_run_id = _record_in_mlflow(cfg, sweep, record)

@@ -269,12 +269,7 @@ class Tracker:
         for start in range(0, len(new_params), 100):
             _retry(partial(self.client.log_batch, run_id, params=new_params[start : start + 100]))
         now = int(time.time() * 1000)
-        metric_list: list[Metric] = []
-        for key, value in metrics.items():
-            if isinstance(value, list):
-                metric_list += [Metric(key, float(v), now, step) for step, v in enumerate(value)]
-            else:
-                metric_list.append(Metric(key, float(value), now, 0))
+        metric_list = [Metric(*point) for point in metric_points(metrics, now)]
         for start in range(0, len(metric_list), 1000):
             _retry(
                 partial(self.client.log_batch, run_id, metrics=metric_list[start : start + 1000])
@@ -288,6 +283,31 @@ class Tracker:
 
 def _clip(text: str, limit: int) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def metric_points(
+    metrics: Mapping[str, float | list[float]], timestamp_ms: int
+) -> list[tuple[str, float, int, int]]:
+    """``(key, value, timestamp, step)`` of every metric point: a list is one point per step."""
+    points: list[tuple[str, float, int, int]] = []
+    for key, value in metrics.items():
+        if isinstance(value, list):
+            points += [(key, float(v), timestamp_ms, step) for step, v in enumerate(value)]
+        else:
+            points.append((key, float(value), timestamp_ms, 0))
+    return points
+
+
+def job_tags(record: Mapping[str, Any]) -> dict[str, str]:
+    """The status tags written at the end of a job run's logging, in one batch."""
+    tags = {
+        STATUS: str(record["status"]),
+        SCRIPTED: "true" if record["scripted"] else "false",
+        REUSED: "true" if record["reused"] else "false",
+    }
+    if record["error"]:
+        tags[ERROR] = str(record["error"])
+    return tags
 
 
 # ----------------------------------------------------------------- params / metrics
@@ -305,18 +325,11 @@ def log_job_run(
     run_id, found = tracker.job_run(experiment_id, record["key"], record["name"], parent)
     if found is not None and found.data.tags.get(STATUS) in ("success", "timeout"):
         return run_id
-    tags = {
-        STATUS: str(record["status"]),
-        SCRIPTED: "true" if record["scripted"] else "false",
-        REUSED: "true" if record["reused"] else "false",
-    }
-    if record["error"]:
-        tags[ERROR] = str(record["error"])
     tracker.log_job(
         run_id,
         record["params"],
         record["metrics"],
-        tags,
+        job_tags(record),
         [(Path(path), folder) for path, folder in record["files"]],
         existing_params=dict(found.data.params) if found is not None else None,
         terminated="FAILED" if record["status"] == "failed" else "FINISHED",

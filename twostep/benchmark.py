@@ -86,12 +86,15 @@ def task_path(domain: str, task: int, root: Path = DEFAULT_DATA_ROOT) -> Path:
     raise BenchmarkError(f"unknown task {task} of domain '{domain}'; tasks: {listing}")
 
 
-def load_task(domain: str, task: int, root: Path = DEFAULT_DATA_ROOT) -> BenchmarkTask:
-    """Load task ``task`` (1-based) of ``domain`` from the data root ``root``."""
+def load_task(
+    domain: str, task: int, root: Path = DEFAULT_DATA_ROOT, cache_dir: Path | None = None
+) -> BenchmarkTask:
+    """Load task ``task`` (1-based) of ``domain`` from the data root ``root``
+    (``cache_dir``: parsed problems kept for the next process, see ``load_problem``)."""
     root = Path(root)
     folder = domain_dir(domain, root)
     path = task_path(domain, task, root)
-    problem = load_problem(folder / "domain.pddl", path)
+    problem = load_problem(folder / "domain.pddl", path, cache_dir)
     plan_text = _read(folder / "p_example.sol")
     example_plan = tuple(
         line.split(";", 1)[0].strip()

@@ -7,9 +7,16 @@ it first by :mod:`twostep.pddl.adl`.
 
 from __future__ import annotations
 
+import contextlib
+import functools
+import hashlib
+import json
+import pickle
 import re
+from importlib import metadata
 from pathlib import Path
 
+from twostep.files import write_bytes_atomic
 from twostep.pddl import adl
 from twostep.pddl.errors import PDDLError
 from twostep.pddl.model import ActionOrigin, Domain, Fact, Goal, Problem
@@ -206,18 +213,51 @@ def read_pddl_file(path: Path) -> str:
         ) from None
 
 
-def load_problem(domain_path: str | Path, problem_path: str | Path) -> Problem:
-    """Read a domain file and a problem file."""
+def load_problem(
+    domain_path: str | Path, problem_path: str | Path, cache_dir: str | Path | None = None
+) -> Problem:
+    """Read a domain file and a problem file.
+
+    ``cache_dir``: keep the parsed problem there, so that the next process reads it back
+    in milliseconds instead of importing unified-planning and parsing (about a second).
+    An entry is keyed by both files' paths and contents and by the parser's own code
+    (:func:`_parser_version`): a change to any of them parses again. Files that do not
+    parse raise as without a cache (nothing is stored).
+    """
     domain_path, problem_path = Path(domain_path), Path(problem_path)
     for path in (domain_path, problem_path):
         if not path.is_file():
             raise PDDLError("no such file", str(path))
-    return parse_problem(
-        read_pddl_file(domain_path),
-        read_pddl_file(problem_path),
-        str(domain_path),
-        str(problem_path),
-    )
+    domain_text, problem_text = read_pddl_file(domain_path), read_pddl_file(problem_path)
+    sources = (str(domain_path), str(problem_path))
+    if cache_dir is None:
+        return parse_problem(domain_text, problem_text, *sources)
+    key = hashlib.sha256(
+        json.dumps([_parser_version(), *sources, domain_text, problem_text]).encode()
+    ).hexdigest()
+    entry = Path(cache_dir) / f"{key}.pickle"
+    try:
+        cached = pickle.loads(entry.read_bytes())
+    except Exception:  # absent, or written by other code: parse again
+        cached = None
+    if isinstance(cached, Problem):
+        return cached
+    problem = parse_problem(domain_text, problem_text, *sources)
+    with contextlib.suppress(OSError):  # a read-only cache only costs the parse
+        write_bytes_atomic(entry, pickle.dumps(problem, protocol=pickle.HIGHEST_PROTOCOL))
+    return problem
+
+
+@functools.cache
+def _parser_version() -> str:
+    """Digest of what turns PDDL into a :class:`Problem`: this package's code and the
+    unified-planning release that reads the files."""
+    digest = hashlib.sha256()
+    for module in sorted(Path(__file__).parent.glob("*.py")):
+        digest.update(module.name.encode() + b"\0" + module.read_bytes())
+    with contextlib.suppress(metadata.PackageNotFoundError):
+        digest.update(metadata.version("unified-planning").encode())
+    return digest.hexdigest()
 
 
 def parse_goal(text: str, problem: Problem, source: str = "subgoal") -> Goal:

@@ -7,6 +7,7 @@ exit code into a :class:`~twostep.planner.results.Status`.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import re
 import signal
@@ -27,10 +28,16 @@ _PLANNER_TIME = re.compile(r"Planner time: ([0-9.]+)s")
 
 
 def driver_path() -> Path:
-    """The ``fast-downward.py`` driver inside the installed up-fast-downward wheel."""
-    import up_fast_downward
+    """The ``fast-downward.py`` driver inside the installed up-fast-downward wheel.
 
-    return Path(up_fast_downward.__file__).resolve().parent / "downward" / "fast-downward.py"
+    Found without importing the package: its ``__init__`` imports unified-planning's
+    engines (ConfigSpace, scipy), seconds per process that the driver does not need.
+    """
+    spec = importlib.util.find_spec("up_fast_downward")
+    if spec is None or not spec.submodule_search_locations:
+        raise FileNotFoundError("up-fast-downward is not installed")
+    package = Path(next(iter(spec.submodule_search_locations))).resolve()
+    return package / "downward" / "fast-downward.py"
 
 
 def status_for(code: int | None, plan: PlanFile | None) -> tuple[Status, str]:
