@@ -42,10 +42,7 @@ from dataclasses import dataclass, field
 
 from twostep.pddl.errors import PDDLError
 from twostep.pddl.model import ActionOrigin, Goal, Problem
-from twostep.pddl.sexp import SExp, define_body, section, write_sexp
-
-TypeSpec = str | tuple[str, ...]
-"""A declared type, or the alternatives of an ``(either ...)`` type."""
+from twostep.pddl.sexp import SExp, TypeSpec, define_body, section, typed_list, write_sexp
 
 Atom = tuple[str, ...]
 """A possibly lifted atom: predicate (or ``=``) followed by terms."""
@@ -133,38 +130,6 @@ class _Source:
 
 
 # ----------------------------------------------------------------- types and objects
-
-
-def _clean(token: SExp) -> SExp:
-    # AlfWorld writes "(?l - location, ?r - receptacle)": the comma is a separator.
-    return token.rstrip(",") if isinstance(token, str) else token
-
-
-def typed_list(items: Sequence[SExp]) -> list[tuple[str, TypeSpec]]:
-    """A PDDL typed list, ``(either ...)`` types and comma separators included."""
-    tokens = [_clean(t) for t in items]
-    tokens = [t for t in tokens if t != ""]
-    result: list[tuple[str, TypeSpec]] = []
-    pending: list[str] = []
-    i = 0
-    while i < len(tokens):
-        token = tokens[i]
-        if token == "-" and i + 1 < len(tokens):
-            spec = tokens[i + 1]
-            type_spec: TypeSpec
-            if isinstance(spec, list) and spec[:1] == ["either"]:
-                type_spec = tuple(str(_clean(t)) for t in spec[1:] if _clean(t))
-            else:
-                type_spec = str(spec)
-            result += [(name, type_spec) for name in pending]
-            pending = []
-            i += 2
-            continue
-        if isinstance(token, str):
-            pending.append(token)
-        i += 1
-    result += [(name, "object") for name in pending]
-    return result
 
 
 @dataclass

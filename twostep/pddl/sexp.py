@@ -7,6 +7,7 @@ messages do not say where); the section helpers serve the repairs and the reader
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 
 from twostep.pddl.errors import PDDLError
 
@@ -81,22 +82,43 @@ def section(body: list[SExp], key: str) -> list[SExp] | None:
     return None
 
 
-def typed_names(items: list[SExp]) -> list[tuple[str, str]]:
-    """Parse a PDDL typed list ``a b - t c`` into ``[(a, t), (b, t), (c, object)]``."""
-    names: list[tuple[str, str]] = []
+TypeSpec = str | tuple[str, ...]
+"""A declared type: one name, or the members of ``(either t1 t2 ...)``."""
+
+
+def _clean(token: SExp) -> SExp:
+    # AlfWorld writes "(?l - location, ?r - receptacle)": the comma is a separator.
+    return token.rstrip(",") if isinstance(token, str) else token
+
+
+def typed_list(items: Sequence[SExp]) -> list[tuple[str, TypeSpec]]:
+    """A PDDL typed list, ``(either ...)`` types and comma separators included."""
+    tokens = [_clean(t) for t in items]
+    tokens = [t for t in tokens if t != ""]
+    result: list[tuple[str, TypeSpec]] = []
     pending: list[str] = []
     i = 0
-    while i < len(items):
-        item = items[i]
-        if item == "-" and i + 1 < len(items):
-            parent = items[i + 1]
-            type_name = parent if isinstance(parent, str) else "object"  # (either ...) unsupported
-            names += [(n, type_name) for n in pending]
+    while i < len(tokens):
+        token = tokens[i]
+        if token == "-" and i + 1 < len(tokens):
+            spec = tokens[i + 1]
+            type_spec: TypeSpec
+            if isinstance(spec, list) and spec[:1] == ["either"]:
+                type_spec = tuple(str(_clean(t)) for t in spec[1:] if _clean(t))
+            else:
+                type_spec = str(spec)
+            result += [(name, type_spec) for name in pending]
             pending = []
             i += 2
             continue
-        if isinstance(item, str):
-            pending.append(item)
+        if isinstance(token, str):
+            pending.append(token)
         i += 1
-    names += [(n, "object") for n in pending]
-    return names
+    result += [(name, "object") for name in pending]
+    return result
+
+
+def typed_names(items: list[SExp]) -> list[tuple[str, str]]:
+    """Parse a PDDL typed list ``a b - t c`` into ``[(a, t), (b, t), (c, object)]``
+    (an ``(either ...)`` type reads as ``object`` here; :func:`typed_list` keeps it)."""
+    return [(name, spec if isinstance(spec, str) else "object") for name, spec in typed_list(items)]
