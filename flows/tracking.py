@@ -357,6 +357,9 @@ def job_metrics(result: Mapping[str, Any], timings: Mapping[str, float]) -> dict
         "state_editing_time_s",
         "wall_time_s",
         "sa_planning_time_s",
+        "embodied_length",  # executor=embodied
+        "waits",
+        "backoffs",
     ):
         number = _number(result.get(key))
         if number is not None:
