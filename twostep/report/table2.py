@@ -81,6 +81,8 @@ def _cell(runs: pd.DataFrame, length: str) -> dict[str, Any]:
         "n_runs": len(runs),
         "n_timeouts": int(limited.sum()),
         "n_failed": int((runs["status"] != "success").sum()),
+        # planned but not executed to the goal on the floor plan (embodied length only)
+        "n_not_executed": int(((runs["status"] == "success") & runs[length].isna()).sum()),
     }
 
 
@@ -129,6 +131,7 @@ def table_two(
                 "n_runs": sum(c["n_runs"] for c in cells),
                 "n_timeouts": timeouts,  # macro: task cells that timed out, as the paper
                 "n_failed": sum(c["n_failed"] for c in cells),
+                "n_not_executed": sum(c["n_not_executed"] for c in cells),
             }
         )
     for label, lengths, times_paper in PAPER_TABLE2:
@@ -149,6 +152,7 @@ def table_two(
                     "n_runs": math.nan,
                     "n_timeouts": timeouts if column == "macro" else int(time is None),
                     "n_failed": math.nan,
+                    "n_not_executed": math.nan,
                 }
             )
     return pd.DataFrame.from_records(rows, columns=columns)
@@ -163,9 +167,13 @@ def length_cell(row: Mapping[str, Any]) -> str:
     if pd.isna(mean):
         return "n/a"
     text = _number(mean) if pd.isna(std) else f"{_number(mean)} ± {_number(std)}"
-    failed = row.get("n_failed")
-    if row["source"] == "ours" and not pd.isna(failed) and failed:
-        text += f" ({int(failed)} failed)"
+    if row["source"] == "ours":
+        failed, unexecuted = row.get("n_failed"), row.get("n_not_executed")
+        notes = [f"{int(failed)} failed"] if not pd.isna(failed) and failed else []
+        if not pd.isna(unexecuted) and unexecuted:
+            notes.append(f"{int(unexecuted)} not executed")
+        if notes:
+            text += f" ({', '.join(notes)})"
     return text
 
 
@@ -183,7 +191,7 @@ def time_cell(row: Mapping[str, Any]) -> str:
     if not pd.isna(std):
         text += f" ± {_number(std, 2)}"
     if timeouts:
-        text += f" ({timeouts}/{runs} timeout)"
+        text += f" ({timeouts}/{int(float(runs))} timeout)"
     return text
 
 
