@@ -181,17 +181,17 @@ def time_cell(row: Mapping[str, Any]) -> str:
     timeouts = int(row["n_timeouts"]) if not pd.isna(row["n_timeouts"]) else 0
     if row["task"] == "macro":
         return f"{timeouts} timeout{'s' if timeouts != 1 else ''}"
-    runs = row.get("n_runs")
     if row["source"] == "paper":
         return "timeout" if timeouts else _number(row["time_mean"])
-    if not pd.isna(runs) and runs and timeouts == runs:
+    runs = int(row["n_runs"])
+    if runs and timeouts == runs:
         return "timeout"
     mean, std = row["time_mean"], row["time_std"]
     text = "n/a" if pd.isna(mean) else _number(mean, 2)
     if not pd.isna(std):
         text += f" ± {_number(std, 2)}"
     if timeouts:
-        text += f" ({timeouts}/{int(float(runs))} timeout)"
+        text += f" ({timeouts}/{runs} timeout)"
     return text
 
 
