@@ -255,6 +255,17 @@ def _table1_section(report: Report) -> str:
     return intro + "\n\n" + markdown_table(headers, rows)
 
 
+def _kitchen_limits(report: Report) -> str:
+    """The planner alias and search limit(s) the kitchen runs were launched with."""
+    runs = report.runs[report.runs["domain"] == TABLE2_DOMAIN]
+    settings = []
+    for column, unit in (("param.planner.alias", ""), ("param.planner.time_limit_s", " s")):
+        if column in runs:
+            values = sorted({str(v) for v in runs[column].dropna()})
+            settings += [f"{v}{unit}" for v in values]
+    return ", ".join(settings) or "see the runs' planner settings"
+
+
 def _table2_sections(report: Report) -> list[str]:
     """The paper's Table II beside ours, when the report has kitchen runs."""
     if report.table2.empty:
@@ -265,9 +276,9 @@ def _table2_sections(report: Report) -> list[str]:
         f"N = {TABLE2_AGENTS}. Length: {length} (steps), mean ± sample std over seeds; "
         "macro = mean of the task means ± mean of the task stds (as the paper). Planning "
         "time (s): 'timeout' when every run of the cell hit the planner's time limit "
-        f"(the paper's limit: {PAPER_TIME_LIMIT_S / 60:.0f} min; see the runs' planner "
-        "settings for ours); macro = number of such cells. The paper's rows are its "
-        "reported figures (AI2-THOR, GPT-4o)."
+        f"(the paper's limit: {PAPER_TIME_LIMIT_S / 60:.0f} min; ours: {_kitchen_limits(report)}"
+        "); macro = number of such cells. The paper's rows are its reported figures "
+        "(AI2-THOR, GPT-4o)."
     )
     headers, rows = table_two_rows(report.table2)
     return ["## Embodied execution (paper's Table II)", intro, markdown_table(headers, rows)]
