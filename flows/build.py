@@ -27,7 +27,6 @@ class JobError(Exception):
 
 METHODS = ("sa", "ma", "twostep")
 DECOMPOSERS = ("goal-split", "expert", "llm", "plan-split", "portfolio")
-EXECUTORS = ("symbolic", "embodied")
 
 
 def planner_settings(cfg: TwostepConfig) -> PlannerSettings:
@@ -86,9 +85,6 @@ def check_job(cfg: TwostepConfig) -> None:
     if cfg.method.name == "twostep" and cfg.decomposer.name not in DECOMPOSERS:
         known = ", ".join(DECOMPOSERS)
         raise JobError(f"unknown decomposer '{cfg.decomposer.name}' (known: {known})")
-    if cfg.executor.name not in EXECUTORS:
-        known = ", ".join(EXECUTORS)
-        raise JobError(f"unknown executor '{cfg.executor.name}' (known: {known})")
 
 
 def executor_settings(cfg: TwostepConfig) -> ExecutorSettings:

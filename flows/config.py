@@ -47,13 +47,18 @@ class DecomposerConfig:
     link_degree: int = 2
 
 
+class ExecutorName(enum.StrEnum):
+    symbolic = "symbolic"  # the joint schedule is the result
+    embodied = "embodied"  # plans then run on the task's floor plan (twostep.embodied)
+
+
 @dataclass
 class ExecutorConfig:
     """How plans are executed after planning: ``symbolic`` (the joint schedule) or
     ``embodied`` (:class:`twostep.embodied.ExecutorSettings`, same names and defaults;
     the seed is the job's)."""
 
-    name: str = "symbolic"  # symbolic | embodied
+    name: ExecutorName = ExecutorName.symbolic
     max_steps: int | None = _EXECUTOR.max_steps
     stall_limit: int = _EXECUTOR.stall_limit
     backoff_radius: int = _EXECUTOR.backoff_radius
