@@ -7,6 +7,9 @@ Layout (docs/tracking.md)::
     plans/<agent>.plan       each agent's plan, one action per line
     subgoals/helper<k>.pddl  each helper's PDDL subgoal (TwoStep)
     llm/helper<k>.json       every prompt and answer behind helper k's subgoal (LLM)
+    embodied/trace.json      executor=embodied: every agent's primitive per step, the floor plan
+    embodied/kitchen.gif     ... the kitchen animated (agents, what they hold, where they go)
+    embodied/timeline.png    ... agents x steps, coloured navigate / interact / wait / backoff
     error.txt                traceback of a job that raised (not an artifact)
 
 Only ``result.json`` is written under that name: the reports read every result.json
@@ -15,12 +18,17 @@ below a sweep directory.
 
 from __future__ import annotations
 
+import logging
+import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 from flows.job import format_schedule
+from twostep.embodied.run import GIF_NAME, TIMELINE_NAME, TRACE_KEY
 from twostep.files import write_json_atomic
+
+EMBODIED_FOLDER = "embodied"
 
 
 def write_job_files(job_dir: Path, result: Mapping[str, Any]) -> list[tuple[Path, str | None]]:
@@ -64,10 +72,41 @@ def write_job_files(job_dir: Path, result: Mapping[str, Any]) -> list[tuple[Path
             path = job_dir / "llm" / f"helper{helper}.json"
             write_json_atomic(path, {k: subgoal.get(k) for k in _LLM_KEYS})
             files.append((path, "llm"))
+    files += _embodied_files(job_dir, result)
     path = job_dir / "result.json"
-    write_json_atomic(path, dict(result))
+    write_json_atomic(path, {k: v for k, v in result.items() if k != TRACE_KEY})
     files.append((path, None))
     return files
+
+
+def _embodied_files(job_dir: Path, result: Mapping[str, Any]) -> list[tuple[Path, str | None]]:
+    """The embodied trace (result.json keeps only its summary) and its two pictures."""
+    recorded = result.get(TRACE_KEY)
+    if not isinstance(recorded, Mapping):
+        return []
+    folder = job_dir / EMBODIED_FOLDER
+    path = folder / "trace.json"
+    write_json_atomic(path, dict(recorded))
+    files: list[tuple[Path, str | None]] = [(path, EMBODIED_FOLDER)]
+    if not recorded.get("render", True):
+        return files
+    from twostep.embodied import write_pictures
+
+    # Hydra logs INFO to the console; matplotlib's "Animation.save using ..." is noise there.
+    logging.getLogger("matplotlib").setLevel(logging.WARNING)
+    try:
+        pictures = write_pictures(result, folder)
+    except Exception as error:  # a picture is not worth the job: the trace is kept
+        print(f"warning: embodied pictures not drawn: {error}", file=sys.stderr)
+        return files
+    return files + [(p, EMBODIED_FOLDER) for p in pictures.values()]
+
+
+def picture_paths(job_dir: Path) -> list[tuple[str, Path]]:
+    """The job's pictures that exist, labelled for the terminal."""
+    folder = job_dir / EMBODIED_FOLDER
+    named = (("timeline", folder / TIMELINE_NAME), ("animation", folder / GIF_NAME))
+    return [(label, path) for label, path in named if path.is_file()]
 
 
 _LLM_KEYS = ("helper", "english", "pddl", "status", "reason", "llm_time_s", "exchanges")

@@ -18,6 +18,7 @@ from flows.config import TwostepConfig
 from flows.validation import check_values
 from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.base import Decomposer
+from twostep.embodied import ExecutorSettings
 from twostep.planner import PlannerSettings
 
 
@@ -26,7 +27,7 @@ class JobError(Exception):
 
 
 METHODS = ("sa", "ma", "twostep")
-DECOMPOSERS = ("goal-split", "expert", "llm")
+DECOMPOSERS = ("goal-split", "expert", "llm", "plan-split", "portfolio")
 
 
 def planner_settings(cfg: TwostepConfig) -> PlannerSettings:
@@ -54,6 +55,15 @@ def open_decomposer(cfg: TwostepConfig) -> Iterator[Decomposer]:
         from twostep.decomposers.expert import ExpertDecomposer
 
         yield ExpertDecomposer()
+    elif name == "plan-split":
+        from twostep.decomposers.plan_split import PlanSplitDecomposer
+
+        yield PlanSplitDecomposer(agent_predicates)
+    elif name == "portfolio":
+        # Method-level: run_twostep hands a Portfolio to twostep.portfolio.run_portfolio.
+        from twostep.portfolio import Portfolio
+
+        yield Portfolio(agent_predicates, cfg.decomposer.link_degree)
     elif name == "llm":
         from flows.llm import llm_decomposer
 
@@ -78,3 +88,14 @@ def check_job(cfg: TwostepConfig) -> None:
     if cfg.method.name == "twostep" and cfg.decomposer.name not in DECOMPOSERS:
         known = ", ".join(DECOMPOSERS)
         raise JobError(f"unknown decomposer '{cfg.decomposer.name}' (known: {known})")
+
+
+def executor_settings(cfg: TwostepConfig) -> ExecutorSettings:
+    """The embodied executor's settings; its seed is the job's."""
+    return ExecutorSettings(
+        seed=int(cfg.seed),
+        max_steps=cfg.executor.max_steps,
+        random_start=bool(cfg.executor.random_start),
+        stall_limit=int(cfg.executor.stall_limit),
+        backoff_radius=int(cfg.executor.backoff_radius),
+    )

@@ -18,6 +18,7 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.types import RunMode
 from omegaconf import DictConfig
 
+from flows.artifacts import picture_paths
 from flows.config import register
 from flows.environment import quiet_defaults
 from flows.job import format_schedule, format_summary
@@ -74,6 +75,8 @@ def app(cfg: DictConfig) -> None:
         if table:
             print(table)
         print(f"result: {job_dir / 'result.json'}")
+        for label, path in picture_paths(job_dir):
+            print(f"{label}: {path}")
         if outcome.status != "success":  # no plan (unsolvable, timeout): scripts see it
             sys.exit(1)
         return

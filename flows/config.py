@@ -18,11 +18,13 @@ from typing import Any, cast
 
 from hydra.core.config_store import ConfigStore
 
+from twostep.embodied import ExecutorSettings
 from twostep.llm.client import LLMSettings
 from twostep.planner import PlannerSettings
 
 _LLM = LLMSettings()
 _PLANNER = PlannerSettings()
+_EXECUTOR = ExecutorSettings()
 
 
 @dataclass
@@ -34,12 +36,34 @@ class DomainConfig:
 @dataclass
 class MethodConfig:
     name: str = "twostep"  # sa | ma | twostep
+    # TwoStep: a joint schedule longer than the SA plan gives way to it (run_twostep's own
+    # parameter of the same name); ignored by sa and ma.
+    fallback_if_longer: bool = True
 
 
 @dataclass
 class DecomposerConfig:
-    name: str = "goal-split"  # goal-split | expert | llm
+    name: str = "goal-split"  # goal-split | expert | llm | plan-split | portfolio
     link_degree: int = 2
+
+
+class ExecutorName(enum.StrEnum):
+    symbolic = "symbolic"  # the joint schedule is the result
+    embodied = "embodied"  # plans then run on the task's floor plan (twostep.embodied)
+
+
+@dataclass
+class ExecutorConfig:
+    """How plans are executed after planning: ``symbolic`` (the joint schedule) or
+    ``embodied`` (:class:`twostep.embodied.ExecutorSettings`, same names and defaults;
+    the seed is the job's)."""
+
+    name: ExecutorName = ExecutorName.symbolic
+    max_steps: int | None = _EXECUTOR.max_steps
+    stall_limit: int = _EXECUTOR.stall_limit
+    backoff_radius: int = _EXECUTOR.backoff_radius
+    random_start: bool = _EXECUTOR.random_start
+    render: bool = True  # GIF + timeline in the job directory (MLflow artifacts)
 
 
 @dataclass
@@ -127,6 +151,7 @@ class TwostepConfig:
     decomposer: DecomposerConfig = field(default_factory=DecomposerConfig)
     llm: LLMConfig = field(default_factory=LLMConfig)
     planner: PlannerConfig = field(default_factory=PlannerConfig)
+    executor: ExecutorConfig = field(default_factory=ExecutorConfig)
     data: DataConfig = field(default_factory=DataConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
     mlflow: MLflowConfig = field(default_factory=MLflowConfig)

@@ -15,7 +15,13 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
 
-from flows.build import check_job, load_job_task, open_decomposer, planner_settings
+from flows.build import (
+    check_job,
+    executor_settings,
+    load_job_task,
+    open_decomposer,
+    planner_settings,
+)
 from flows.config import TwostepConfig
 from twostep.benchmark import BenchmarkTask
 from twostep.decomposers.base import Decomposer
@@ -56,7 +62,9 @@ def run_job(
     seed = int(cfg.seed)
     agent_predicates = list(cfg.domain.agent_predicates)
     if method == "sa":
-        return run_single_agent(task, settings, seed, steps=steps)
+        return execute_after_planning(
+            cfg, task, run_single_agent(task, settings, seed, steps=steps)
+        )
     sa: RunResult | None = None
     if cfg.compare_sa:
         sa = run_single_agent(task, settings, seed, steps=steps)
@@ -79,11 +87,33 @@ def run_job(
                 seed,
                 sa_length,
                 steps=steps,
+                sa_plan=sa.planner_calls[0].result if sa is not None else None,
+                fallback_if_longer=bool(cfg.method.fallback_if_longer),
             )
+        result.extra["fallback_if_longer"] = bool(cfg.method.fallback_if_longer)
     if sa is not None:
         # The SA comparison is solved in the same job; its planner time is reported apart.
         result.extra["sa_planning_time_s"] = round(sa.planning_time_s, 4)
-    return result
+    return execute_after_planning(cfg, task, result)
+
+
+def execute_after_planning(cfg: TwostepConfig, task: BenchmarkTask, run: RunResult) -> RunResult:
+    """``executor=embodied``: the run's plans executed on the task's floor plan; the
+    result gains the embodied fields (:func:`twostep.embodied.embodied_fields`). A
+    failed execution is a recorded status, never an exception."""
+    if cfg.executor.name != "embodied":
+        return run
+    from twostep.embodied import embodied_fields, execute_run, task_floor_plan
+
+    if not run.success or not run.plans:
+        run.extra.update(executor="embodied", embodied_status="not_run", embodied_length=None)
+        run.extra["embodied"] = {"status": "not_run", "reason": "no plan to execute"}
+        return run
+    floor = task_floor_plan(task.problem, task.problem_path.parent)
+    execution = execute_run(task.problem, run.plans, run.agent_order, floor, executor_settings(cfg))
+    run.extra.update(embodied_fields(execution, floor))
+    run.extra["embodied_trace"]["render"] = bool(cfg.executor.render)
+    return run
 
 
 @dataclass
@@ -148,6 +178,19 @@ def format_summary(result: RunResult | Mapping[str, Any]) -> str:
         parts.append(f"subgoals={accepted}/{len(subgoals)} accepted")
     if r.get("fallback"):
         parts.append(f"fallback: {r['fallback']}")
+    if r.get("executor") == "embodied":
+        embodied = r.get("embodied") or {}
+        if r.get("embodied_status") == "success":
+            parts.append(
+                f"embodied_length={r.get('embodied_length')} "
+                f"(waits={r.get('waits')}, backoffs={r.get('backoffs')})"
+            )
+        else:
+            where = f" {embodied.get('agent')} at step {embodied.get('step')}"
+            where = where if embodied.get("agent") is not None else ""
+            parts.append(
+                f"embodied: {r.get('embodied_status')}{where}: {embodied.get('reason', '')}"
+            )
     return " | ".join(parts)
 
 

@@ -370,6 +370,9 @@ def job_metrics(result: Mapping[str, Any], timings: Mapping[str, float]) -> dict
         "state_editing_time_s",
         "wall_time_s",
         "sa_planning_time_s",
+        "embodied_length",  # executor=embodied
+        "waits",
+        "backoffs",
     ):
         number = _number(result.get(key))
         if number is not None:
@@ -391,6 +394,10 @@ def job_metrics(result: Mapping[str, Any], timings: Mapping[str, float]) -> dict
     per_call = [_number(c.get("planner_time_s")) for c in calls]
     if per_call and all(v is not None for v in per_call):
         metrics["planner_time_s"] = [v for v in per_call if v is not None]
+    if calls:  # Table II's "timeout": planner calls stopped by their time limit
+        from twostep.report.table2 import planner_limit_hits
+
+        metrics["planner_timeouts"] = float(planner_limit_hits(result))
     for key, value in timings.items():
         metrics[key] = float(value)
     return metrics

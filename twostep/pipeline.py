@@ -11,7 +11,9 @@ Each step is one function here (the LLM decomposer's two calls are
 :func:`~twostep.decomposers.llm.translate_subgoal`), and :class:`Steps` is the one way to
 replace them: the Prefect flow (``flows/``) passes task-wrapped versions.
 The subgoal rules are :mod:`twostep.subgoals`.
-Every method returns a :class:`RunResult`, which serialises to the common result.json.
+Every method returns a :class:`RunResult`, which serialises to the common result.json;
+plans and schedules are planned (and kept in the result object) in the compiled domain's
+terms, and result.json names them in the task's own (:mod:`twostep.pddl.origins`).
 A decomposer that cannot propose (an LLM call failed after its retries) fails the run
 with status ``llm_error``; only unusable subgoals lead to the single-agent fallback.
 """
@@ -40,6 +42,8 @@ from twostep.decomposers.llm import (
 from twostep.execution import ParallelExecution, ScheduleError, check_schedule, parallel_length
 from twostep.multiagent import compile_multi_agent_problem, split_plan
 from twostep.pddl import Fact, Goal, Problem
+from twostep.pddl.model import ActionOrigin
+from twostep.pddl.origins import original_action, original_plan
 from twostep.planner import PlannerSettings, PlanResult, Status, plan
 from twostep.progression import environment_part, handoff_problem, progress_state
 from twostep.strips import Grounder, PlanError
@@ -90,8 +94,31 @@ class RunResult:
     wall_time_s: float = 0.0
     scripted_llm: bool = False
     extra: dict[str, Any] = field(default_factory=dict)
+    # The compiled domain's action origins (an ADL task): plans and schedule are in its
+    # terms here, in the task's own in result.json; empty for a STRIPS task.
+    origins: Mapping[str, ActionOrigin] = field(default_factory=dict, repr=False)
+
+    def task_plans(self) -> dict[str, list[str]]:
+        """The plans in the task's own action names (goal actions of a compilation left out)."""
+        if not self.origins:
+            return self.plans
+        return {agent: original_plan(self.origins, steps) for agent, steps in self.plans.items()}
+
+    def task_schedule(self) -> list[list[tuple[str, str]]]:
+        """The joint schedule in the task's own action names (a step keeps its place even
+        when it only held a compilation's goal action, so its length is ``exec_length``)."""
+        if not self.origins:
+            return self.schedule
+        named = []
+        for step in self.schedule:
+            pairs = [(agent, original_action(self.origins, action)) for agent, action in step]
+            named.append([(agent, action) for agent, action in pairs if action is not None])
+        return named
 
     def to_dict(self) -> dict[str, Any]:
+        compiled = (
+            {"compiled_plans": self.plans} if self.task_plans() != self.plans else {}
+        )  # kept so that a schedule can be re-validated against the compiled task
         return {
             "domain": self.domain,
             "task": self.task,
@@ -106,9 +133,10 @@ class RunResult:
             "sa_cost": self.sa_cost,
             "planning_time_s": round(self.planning_time_s, 4),
             "llm_time_s": round(self.llm_time_s, 4),
-            "plans": self.plans,
+            "plans": self.task_plans(),
+            **compiled,
             "agent_order": self.agent_order,
-            "schedule": [[list(pair) for pair in step] for step in self.schedule],
+            "schedule": [[list(pair) for pair in step] for step in self.task_schedule()],
             "subgoals": self.subgoals,
             "decomposer": self.decomposer,
             "status": self.status,
@@ -252,7 +280,7 @@ def run_single_agent(
     start = time.perf_counter()
     problem = task.problem
     result = steps.plan(problem, settings)
-    run = RunResult(task.domain_name, task.task_id, "sa", 1, seed)
+    run = RunResult(task.domain_name, task.task_id, "sa", 1, seed, origins=problem.domain.origins)
     run.planner_calls.append(AgentPlan("agent0", "single", problem.goal.to_pddl(), result))
     run.planning_time_s = result.planner_time_s
     _use_single_agent_plan(run, result)
@@ -275,6 +303,7 @@ def run_multi_agent(
     compiled, names = compile_multi_agent_problem(task.problem, agents, agent_predicates)
     result = steps.plan(compiled, settings)
     run = RunResult(task.domain_name, task.task_id, "ma", agents, seed, sa_length=sa_length)
+    run.origins = task.problem.domain.origins
     run.planner_calls.append(AgentPlan("all", "multi", compiled.goal.to_pddl(), result))
     run.planning_time_s = result.planner_time_s
     run.status = result.status.value
@@ -327,7 +356,7 @@ def run_twostep(
     from twostep.portfolio import Portfolio, run_portfolio  # it calls this function
 
     if isinstance(decomposer, Portfolio):
-        return run_portfolio(
+        chosen = run_portfolio(
             task,
             agents,
             decomposer,
@@ -340,9 +369,12 @@ def run_twostep(
             sa_plan,
             fallback_if_longer,
         )
+        chosen.origins = task.problem.domain.origins
+        return chosen
     start = time.perf_counter()
     problem = task.problem
     run = RunResult(task.domain_name, task.task_id, "twostep", agents, seed, sa_length=sa_length)
+    run.origins = problem.domain.origins
     run.decomposer = decomposer.name
     per_agent_settings = settings.with_time_limit(settings.search_time_limit_s / max(agents, 1))
     planner_time = 0.0

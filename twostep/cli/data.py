@@ -1,7 +1,8 @@
 """``twostep-data``: build, check and scale the benchmark tasks in ``data/``.
 
-``generate`` rewrites the committed set (p01..p20 and the example of each domain) from
-the seeded generators; ``check`` verifies that a data folder is exactly what
+``generate`` rewrites the committed set (p01..p20 and the example of each domain, and
+the embodied kitchen domain ``alfworld``: p01..p04, its floor plan) from the seeded
+generators; ``check`` verifies that a data folder is exactly what
 ``generate`` would write; ``scale`` writes larger tasks for scaling benchmarks into a
 folder of the same layout; ``example-plan`` re-plans an in-context example (whose plan
 is a static file of the package). Hand-written files (``expert.yaml``) are never touched.
@@ -17,6 +18,7 @@ from pathlib import Path
 from twostep.generators import (
     DOMAINS,
     GENERATORS,
+    alfworld,
     benchmark_files,
     example_task,
     scale_files,
@@ -25,6 +27,15 @@ from twostep.generators import (
 from twostep.pddl import parse_problem
 
 EXAMPLE_ALIAS = "seq-opt-lmcut"  # shortest plans make the clearest in-context examples
+# The benchmark domains, then the embodied kitchen (its own generator: tasks + floor plan).
+DATA_DOMAINS = (*DOMAINS, alfworld.DOMAIN)
+
+
+def domain_files(domain: str, seed: int) -> dict[str, str]:
+    """Every generated file of ``data/<domain>`` (the paper's kitchen tasks are fixed)."""
+    if domain == alfworld.DOMAIN:
+        return alfworld.data_files()
+    return benchmark_files(domain, seed)
 
 
 def write_files(folder: Path, files: dict[str, str]) -> int:
@@ -62,8 +73,8 @@ def compare_files(folder: Path, files: dict[str, str]) -> list[str]:
 
 
 def _generate(args: argparse.Namespace) -> int:
-    for domain in args.domain or DOMAINS:
-        files = benchmark_files(domain, args.seed)
+    for domain in args.domain or DATA_DOMAINS:
+        files = domain_files(domain, args.seed)
         changed = write_files(Path(args.out) / domain, files)
         print(f"{domain}: {len(files)} files, {changed} written")
     return 0
@@ -71,8 +82,8 @@ def _generate(args: argparse.Namespace) -> int:
 
 def _check(args: argparse.Namespace) -> int:
     problems: list[str] = []
-    for domain in args.domain or DOMAINS:
-        problems += compare_files(Path(args.data) / domain, benchmark_files(domain, args.seed))
+    for domain in args.domain or DATA_DOMAINS:
+        problems += compare_files(Path(args.data) / domain, domain_files(domain, args.seed))
     if problems:
         print(f"{len(problems)} file(s) do not match the generators:", file=sys.stderr)
         for line in problems:
@@ -87,9 +98,13 @@ def _scale(args: argparse.Namespace) -> int:
     if args.size < 2 or args.count < 1:
         print("error: --size must be at least 2 and --count at least 1", file=sys.stderr)
         return 2
-    files = scale_files(args.domain, args.size, args.count, args.seed)
+    if args.domain == alfworld.DOMAIN:
+        files = alfworld.scale_files(args.size, args.count, args.seed)
+        unit = alfworld.SCALE_UNIT
+    else:
+        files = scale_files(args.domain, args.size, args.count, args.seed)
+        unit = GENERATORS[args.domain].scale_unit
     write_files(Path(args.out), files)
-    unit = GENERATORS[args.domain].scale_unit
     print(f"{args.out}: {args.count} {args.domain} task(s) with {args.size} {unit}")
     return 0
 
@@ -119,13 +134,14 @@ def build_parser() -> argparse.ArgumentParser:
         sub.add_argument(
             "--domain",
             action="append",
-            choices=DOMAINS,
+            choices=DATA_DOMAINS,
             help="only this domain (repeatable; default: all)",
         )
         sub.add_argument("--seed", type=int, default=0, help="base seed (default: 0)")
     units = ", ".join(f"{name}: {g.scale_unit}" for name, g in GENERATORS.items())
+    units += f", {alfworld.DOMAIN}: {alfworld.SCALE_UNIT}"
     scale = commands.add_parser("scale", help="write larger tasks for scaling benchmarks")
-    scale.add_argument("--domain", required=True, choices=DOMAINS)
+    scale.add_argument("--domain", required=True, choices=DATA_DOMAINS)
     scale.add_argument("--size", type=int, required=True, help=f"size ({units})")
     scale.add_argument("--out", required=True, help="folder to write (LLM+P layout)")
     scale.add_argument("--count", type=int, default=1, help="number of tasks (default: 1)")

@@ -3,7 +3,8 @@
 :mod:`~twostep.embodied.floorplan` (grid, furniture, location cells),
 :mod:`~twostep.embodied.navigation` (shortest paths around furniture and agents),
 :mod:`~twostep.embodied.executor` (the step-by-step execution and its trace) and
-:mod:`~twostep.embodied.render` (GIF and timeline pictures; needs matplotlib).
+:mod:`~twostep.embodied.render` (GIF and timeline pictures; needs matplotlib) and
+:mod:`~twostep.embodied.run` (a finished run executed on its task's floor plan).
 """
 
 from twostep.embodied.executor import (
@@ -26,6 +27,12 @@ from twostep.embodied.floorplan import (
     floor_plan_from_locations,
     load_floor_plan,
 )
+from twostep.embodied.run import (
+    embodied_fields,
+    execute_run,
+    task_floor_plan,
+    write_pictures,
+)
 
 __all__ = [
     "EmbodiedError",
@@ -37,11 +44,15 @@ __all__ = [
     "TraceStep",
     "alfworld_position",
     "build_floor_plan",
+    "embodied_fields",
     "embody",
     "execute",
     "execute_plans",
+    "execute_run",
     "floor_plan_for_task",
     "floor_plan_from_dict",
     "floor_plan_from_locations",
     "load_floor_plan",
+    "task_floor_plan",
+    "write_pictures",
 ]

@@ -57,6 +57,7 @@ from twostep.report.series import (
     series_label,
     series_order,
 )
+from twostep.report.table2 import table_two
 from twostep.report.tables import changes_against_baselines, table_one
 
 __all__ = [
@@ -128,6 +129,9 @@ def build_report(runs: pd.DataFrame) -> Report:
     series_frame = series_frame.assign(_rank=series_frame["series"].map(rank)).sort_values("_rank")
     changes = changes_against_baselines(normalised, series_frame, values_of)
     table1 = table_one(identified, series_frame)
+    table2 = table_two(
+        identified, [(str(s), str(m)) for s, m in series_frame[["series", "method"]].values]
+    )
 
     current = table[~table["superseded"]]
     status = current["status"]
@@ -155,4 +159,5 @@ def build_report(runs: pd.DataFrame) -> Report:
         series=order,
         variant_params=tuple(variant_params),
         notes=tuple(notes),
+        table2=table2,
     )

@@ -34,6 +34,8 @@ class Report:
     ``cross_domain``: per (series, N, metric) the normalised mean across domains.
     ``changes``: TwoStep vs SA/MA per N and metric, beside the paper's figures.
     ``table1``: expert vs decomposers on the annotated tasks (paper's rows included).
+    ``table2``: embodied length and planning time on the kitchen tasks (paper's rows
+    included; empty without kitchen runs): :mod:`twostep.report.table2`.
     """
 
     runs: pd.DataFrame
@@ -48,6 +50,7 @@ class Report:
     series: tuple[str, ...]
     variant_params: tuple[str, ...]
     notes: tuple[str, ...] = field(default=())
+    table2: pd.DataFrame = field(default_factory=pd.DataFrame)  # the paper's Table II (kitchen)
 
     @property
     def domains(self) -> tuple[str, ...]:

@@ -24,6 +24,12 @@ import pandas as pd
 from twostep.report.aggregate import METRIC_NAMES, Report
 from twostep.report.paper import ANNOTATED_TASKS, TABLE1_AGENTS, TABLE1_DOMAINS
 from twostep.report.plots import plot_report
+from twostep.report.table2 import (
+    PAPER_TIME_LIMIT_S,
+    TABLE2_AGENTS,
+    TABLE2_DOMAIN,
+    table_two_rows,
+)
 
 FAILED_ROWS_SHOWN = 200
 
@@ -249,6 +255,35 @@ def _table1_section(report: Report) -> str:
     return intro + "\n\n" + markdown_table(headers, rows)
 
 
+def _kitchen_limits(report: Report) -> str:
+    """The planner alias and search limit(s) the kitchen runs were launched with."""
+    runs = report.runs[report.runs["domain"] == TABLE2_DOMAIN]
+    settings = []
+    for column, unit in (("param.planner.alias", ""), ("param.planner.time_limit_s", " s")):
+        if column in runs:
+            values = sorted({str(v) for v in runs[column].dropna()})
+            settings += [f"{v}{unit}" for v in values]
+    return ", ".join(settings) or "see the runs' planner settings"
+
+
+def _table2_sections(report: Report) -> list[str]:
+    """The paper's Table II beside ours, when the report has kitchen runs."""
+    if report.table2.empty:
+        return []
+    length = str(report.table2[report.table2["source"] == "ours"]["length"].iloc[0])
+    intro = (
+        f"Kitchen tasks ({TABLE2_DOMAIN} p01..p04), SA at N = 1, MA and TwoStep at "
+        f"N = {TABLE2_AGENTS}. Length: {length} (steps), mean ± sample std over seeds; "
+        "macro = mean of the task means ± mean of the task stds (as the paper). Planning "
+        "time (s): 'timeout' when every run of the cell hit the planner's time limit "
+        f"(the paper's limit: {PAPER_TIME_LIMIT_S / 60:.0f} min; ours: {_kitchen_limits(report)}"
+        "); macro = number of such cells. The paper's rows are its reported figures "
+        "(AI2-THOR, GPT-4o)."
+    )
+    headers, rows = table_two_rows(report.table2)
+    return ["## Embodied execution (paper's Table II)", intro, markdown_table(headers, rows)]
+
+
 def _failed_section(report: Report) -> str:
     runs = report.runs
     bad = runs[((runs["status"] != "success") | ~runs["placed"]) & ~runs["superseded"]]
@@ -297,6 +332,7 @@ def render_markdown(report: Report, title: str, source: str, figures: Sequence[P
         _changes_section(report),
         "## Expert subgoals versus decomposers (paper's Table I)",
         _table1_section(report),
+        *_table2_sections(report),
         "## Failed, timed-out and unplaced runs",
         _failed_section(report),
     ]
@@ -316,6 +352,9 @@ def format_console(report: Report) -> str:
                 f"{METRIC_NAMES.get(str(row['metric']), row['metric'])}, N={row['agents']}: "
                 f"{format_pct(row['change_pct'])} | paper {format_pct(row['paper_change_pct'])}"
             )
+    if not report.table2.empty:
+        headers, rows = table_two_rows(report.table2)
+        lines += ["Table II (embodied length; planning time):", markdown_table(headers, rows)]
     return "\n".join(lines)
 
 
@@ -341,6 +380,7 @@ def write_report(
         _write_csv(report.summary, out_dir / "summary.csv"),
         _write_csv(report.changes, out_dir / "changes.csv"),
         _write_csv(report.table1, out_dir / "table1.csv"),
+        *([_write_csv(report.table2, out_dir / "table2.csv")] if not report.table2.empty else []),
         _write_csv(report.per_seed, out_dir / "per_seed.csv"),
         _write_csv(report.per_task, out_dir / "per_task.csv"),
         _write_csv(report.normalised, out_dir / "normalised.csv"),

@@ -41,6 +41,7 @@ import pandas as pd
 import yaml
 
 from twostep.params import flatten_config
+from twostep.report.table2 import planner_limit_hits
 
 
 class ReportInputError(Exception):
@@ -59,6 +60,10 @@ METRICS: tuple[str, ...] = (
     "subgoals_proposed",
     "subgoals_accepted",
     "subgoals_discarded",
+    "embodied_length",  # executor=embodied (Table II)
+    "waits",
+    "backoffs",
+    "planner_timeouts",  # planner calls that hit their time limit (Table II's "timeout")
 )
 
 #: Columns that identify a job: one (domain, task, method, decomposer, N, seed) cell.
@@ -266,6 +271,7 @@ def result_to_row(result: Mapping[str, Any]) -> dict[str, Any]:
         if metric in result:
             row[metric] = result[metric]
     row.update(_subgoal_counts(result.get("subgoals")))
+    row["planner_timeouts"] = float(planner_limit_hits(result))
     exec_length = _to_float(result.get("exec_length"))
     sa_length = _to_float(result.get("sa_length"))
     if "speedup_exec" not in result and exec_length > 0 and not math.isnan(sa_length):

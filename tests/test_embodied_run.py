@@ -1,0 +1,177 @@
+"""The ``twostep`` command wired to the embodied executor, the new decomposers and ADL naming.
+
+Each test runs the real command (Prefect and MLflow off) and checks what it wrote against
+something it did not compute itself: the trace's own steps, the images' headers, the task
+files' action names, the lengths of the SA plan.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+from hydra import compose, initialize_config_dir
+from omegaconf import DictConfig
+from PIL import Image
+
+from flows.config import register, typed
+from flows.job import run_job
+from tests.conftest import BLOCKS_DOMAIN, FIXTURES, blocks_problem
+from tests.test_cli import REPO, run_cli
+
+
+@pytest.fixture(scope="module", autouse=True)
+def hydra_conf() -> Iterator[None]:
+    register()
+    with initialize_config_dir(config_dir=str(REPO / "conf"), version_base="1.3"):
+        yield
+
+
+def make(*overrides: str) -> DictConfig:
+    return compose("config", overrides=[f"data.root={REPO / 'data'}", *overrides])
+
+
+def _result(out: Path) -> tuple[Path, dict[str, Any]]:
+    (path,) = list((out / "runs").rglob("result.json"))
+    data: dict[str, Any] = json.loads(path.read_text())
+    return path.parent, data
+
+
+@pytest.mark.slow  # a GIF of ~60 steps and a process start: ~20-40 s
+def test_alfworld_twostep_runs_embodied_with_pictures(tmp_path: Path) -> None:
+    proc = run_cli(f"output.root={tmp_path}", "domain=alfworld", "task=1", "method=twostep")
+    assert proc.returncode == 0, proc.stderr
+    job_dir, result = _result(tmp_path)
+    assert result["executor"] == "embodied" and result["embodied_status"] == "success"
+    trace = json.loads((job_dir / "embodied" / "trace.json").read_text())["trace"]
+    assert "embodied_trace" not in result  # the trace is an artifact, not in result.json
+    # the summary fields agree with the trace they summarise
+    assert result["embodied_length"] == max(t["step"] for t in trace)
+    assert result["waits"] == sum(t["primitive"] == "wait" for t in trace)
+    # a backoff is one or more moves: each run of backoff moves is at least one backoff
+    backing = {(t["agent"], t["step"]) for t in trace if t["primitive"] == "backoff"}
+    runs = sum(1 for agent, step in backing if (agent, step - 1) not in backing)
+    assert runs <= result["backoffs"] and (result["backoffs"] > 0 or not backing)
+    # every plan action is applied exactly once by the body that plans it
+    for agent, plan in result["plans"].items():
+        applied = [t["action"] for t in trace if t["agent"] == agent and t.get("applied")]
+        assert applied == plan
+    # the summary line and the picture paths
+    assert f"embodied_length={result['embodied_length']}" in proc.stdout
+    timeline = job_dir / "embodied" / "timeline.png"
+    assert f"timeline: {timeline}" in proc.stdout
+    with Image.open(timeline) as image:
+        assert image.format == "PNG" and image.width > 100
+    with Image.open(job_dir / "embodied" / "kitchen.gif") as image:
+        assert image.format == "GIF" and image.n_frames > 2
+
+
+def test_executor_config_alfworld_embodied_by_default() -> None:
+    assert make().executor.name == "symbolic"
+    assert make("domain=alfworld").executor.name == "embodied"
+    assert make("domain=alfworld", "executor=symbolic").executor.name == "symbolic"
+    table2 = make("experiment=table2", "method=twostep")
+    assert (table2.domain.name, table2.executor.name, table2.planner.alias) == (
+        "alfworld",
+        "embodied",
+        "lama",
+    )
+    assert table2.method.fallback_if_longer is False
+    assert make("experiment=paper").method.fallback_if_longer is False
+    assert make().method.fallback_if_longer is True
+
+
+def test_alfworld_symbolic_executor_has_no_embodied_fields() -> None:
+    cfg = typed(make("domain=alfworld", "task=1", "method=sa", "executor=symbolic"))
+    result = run_job(cfg).to_dict()
+    assert result["success"]
+    embodied = {"executor", "embodied_status", "embodied_length", "waits", "backoffs", "embodied"}
+    assert not embodied & set(result)
+    # the same job embodied: the fields appear and the execution replays the SA plan
+    embodied_run = run_job(typed(make("domain=alfworld", "task=1", "method=sa"))).to_dict()
+    assert embodied <= set(embodied_run) and embodied_run["embodied_status"] == "success"
+    steps = embodied_run["embodied_trace"]["trace"]
+    assert [t["action"] for t in steps if t.get("applied")] == result["plans"]["agent0"]
+
+
+@pytest.mark.slow
+def test_adl_task_result_names_the_tasks_own_actions(tmp_path: Path) -> None:
+    root = FIXTURES / "adl_quirks"
+    proc = run_cli(
+        f"output.root={tmp_path}", f"data.root={root}", "domain.name=kitchen",
+        "domain.agent_predicates=[atlocation,holds,holdsany]", "task=1", "method=ma",
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    job_dir, result = _result(tmp_path)
+    text = (root / "kitchen" / "domain.pddl").read_text().lower()
+    arity = {
+        name: len(re.findall(r"\?[\w-]+", params.split(")")[0]))
+        for name, params in re.findall(r"\(:action\s+([\w-]+)\s+:parameters\s*\(([^)]*\))", text)
+    }
+    steps = [s for plan in result["plans"].values() for s in plan]
+    assert steps
+    for step in steps:
+        name, *args = step.strip("()").split()
+        assert arity.get(name) == len(args), step  # the domain file's own action and arity
+    for step in (a for pairs in result["schedule"] for _, a in pairs):
+        assert step.strip("()").split()[0] in arity
+    # the compiled plans are kept (they name variants the domain file does not have)
+    compiled = [s for plan in result["compiled_plans"].values() for s in plan]
+    assert any(s.strip("()").split()[0] not in arity for s in compiled)
+    assert (job_dir / "plans").is_dir()
+
+
+@pytest.mark.slow
+def test_plan_split_and_portfolio_from_the_command(tmp_path: Path) -> None:
+    for name in ("plan-split", "portfolio"):
+        out = tmp_path / name
+        proc = run_cli(
+            f"output.root={out}", "domain=blocksworld", "task=3", "agents=3",
+            f"decomposer={name}",
+        )  # fmt: skip
+        assert proc.returncode == 0, proc.stderr
+        _, result = _result(out)
+        assert result["success"] and result["decomposer"].startswith(name)
+        assert result["fallback_if_longer"] is True
+        if name == "portfolio":
+            candidates = result["candidates"]
+            lengths = [c["exec_length"] for c in candidates if c.get("exec_length") is not None]
+            # the winner is the shortest candidate (or SA, when every candidate is longer)
+            assert result["exec_length"] == min([*lengths, result["sa_length"]])
+            assert {c["agents"] for c in candidates} == {3, 2}
+
+
+def _wasteful_task(root: Path) -> None:
+    """SA needs 2 steps (pickup a, stack a b); the expert's helper first builds b on a,
+    which the main agent must undo: the joint schedule is longer than SA."""
+    folder = root / "blocks"
+    folder.mkdir(parents=True)
+    (folder / "domain.pddl").write_text(BLOCKS_DOMAIN)
+    init = "(clear a) (clear b) (on-table a) (on-table b) (arm-empty)"
+    (folder / "p01.pddl").write_text(blocks_problem(init, "(on a b)", objects="a b"))
+    (folder / "expert.yaml").write_text('p01:\n  2:\n    - "(on b a)"\n')
+
+
+def test_fallback_if_longer_true_and_false(tmp_path: Path) -> None:
+    _wasteful_task(tmp_path / "data")
+    results = {}
+    for flag in ("true", "false"):
+        cfg = compose("config", overrides=[
+            f"data.root={tmp_path / 'data'}", "domain.name=blocks",
+            "domain.agent_predicates=[arm-empty,holding]", "task=1", "decomposer=expert",
+            f"method.fallback_if_longer={flag}",
+        ])  # fmt: skip
+        results[flag] = run_job(typed(cfg)).to_dict()
+    kept, fell_back = results["false"], results["true"]
+    assert kept["sa_length"] == fell_back["sa_length"] == 2
+    assert kept["fallback"] is None and kept["exec_length"] > 2
+    assert [s["status"] for s in kept["subgoals"]] == ["accepted"]
+    assert fell_back["exec_length"] == 2 and fell_back["plans"] == {
+        "agent0": ["(pickup a)", "(stack a b)"]
+    }
+    assert "longer than SA" in fell_back["fallback"]
+    assert fell_back["fallback_if_longer"] is True and kept["fallback_if_longer"] is False

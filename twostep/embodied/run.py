@@ -1,0 +1,139 @@
+"""A finished run, executed on its floor plan: the one entry point the orchestration calls.
+
+:func:`task_floor_plan` finds the floor plan of a task (its folder's ``kitchen.yaml``, else
+the AlfWorld location names' coordinates); :func:`execute_run` executes a run's plans (in
+hand-off order) on it; :func:`embodied_fields` is what result.json gains (the trace and
+the floor plan ride along under ``embodied_trace`` for the job's files, which
+:func:`write_pictures` draws from the result dict alone, so a reused result can be drawn
+again without re-executing).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from twostep.embodied.executor import (
+    LOCATION_TYPE,
+    EmbodiedResult,
+    ExecutorSettings,
+    TraceStep,
+    execute,
+)
+from twostep.embodied.floorplan import FloorPlan, floor_plan_for_task, floor_plan_from_dict
+from twostep.pddl import Problem
+
+TRACE_KEY = "embodied_trace"  # result dict key of the trace + floor plan (not in result.json)
+
+
+def task_floor_plan(problem: Problem, folder: str | Path | None) -> FloorPlan:
+    """The floor plan of ``problem`` whose files live in ``folder``."""
+    types = problem.domain.types
+
+    def is_location(type_name: str | None) -> bool:
+        seen: set[str] = set()
+        while type_name is not None and type_name not in seen:
+            if type_name == LOCATION_TYPE:
+                return True
+            seen.add(type_name)
+            type_name = types.get(type_name)
+        return False
+
+    locations = [name for name, kind in problem.all_objects.items() if is_location(kind)]
+    return floor_plan_for_task(locations, folder)
+
+
+def execute_run(
+    problem: Problem,
+    plans: Mapping[str, Sequence[str]],
+    agent_order: Sequence[str],
+    floor_plan: FloorPlan,
+    settings: ExecutorSettings | None = None,
+) -> EmbodiedResult:
+    """Execute a run's plans (``RunResult.plans`` in the planner's terms, by agent, and
+    ``agent_order``) on ``floor_plan``; a failure is the result's status, never raised."""
+    order = [agent for agent in agent_order if agent in plans]
+    return execute(problem, [plans[a] for a in order], floor_plan, order, settings)
+
+
+def floor_plan_to_dict(floor_plan: FloorPlan) -> dict[str, Any]:
+    """The inverse of :func:`~twostep.embodied.floorplan.floor_plan_from_dict`."""
+    return {
+        "name": floor_plan.name,
+        "width": floor_plan.width,
+        "height": floor_plan.height,
+        "walls": [list(rect) for rect in floor_plan.walls],
+        "furniture": {name: list(rect) for name, rect in floor_plan.furniture.items()},
+        "locations": {name: list(cell) for name, cell in floor_plan.locations.items()},
+    }
+
+
+def embodied_fields(result: EmbodiedResult, floor_plan: FloorPlan) -> dict[str, Any]:
+    """The fields a run's result dict gains from its embodied execution."""
+    return {
+        "executor": "embodied",
+        "embodied_status": result.status,
+        "embodied_length": result.embodied_length,
+        "waits": result.waits,
+        "backoffs": result.backoffs,
+        "embodied": result.to_dict(),  # status, agent/step/reason of a failure, starts
+        TRACE_KEY: {
+            "floor_plan": floor_plan_to_dict(floor_plan),
+            "trace": [step.to_dict() for step in result.trace],
+        },
+    }
+
+
+def result_from_fields(fields: Mapping[str, Any]) -> tuple[EmbodiedResult, FloorPlan]:
+    """The execution and floor plan back from :func:`embodied_fields` (to draw them)."""
+    summary = fields["embodied"]
+    recorded = fields[TRACE_KEY]
+    trace = [
+        TraceStep(
+            step=int(t["step"]),
+            agent=str(t["agent"]),
+            primitive=str(t["primitive"]),
+            position=(int(t["position"][0]), int(t["position"][1])),
+            action=t.get("action"),
+            applied=t.get("applied"),
+            holding=tuple(t.get("holding") or ()),
+            reason=t.get("reason"),
+        )
+        for t in recorded["trace"]
+    ]
+    result = EmbodiedResult(
+        status=str(summary["status"]),
+        agents=list(summary["agents"]),
+        embodied_length=summary.get("embodied_length"),
+        steps=int(summary["steps"]),
+        waits=int(summary["waits"]),
+        backoffs=int(summary["backoffs"]),
+        trace=trace,
+        start_positions={a: (int(c[0]), int(c[1])) for a, c in summary["start_positions"].items()},
+        floor_plan=str(summary["floor_plan"]),
+        seed=int(summary["seed"]),
+        agent=summary.get("agent"),
+        step=summary.get("step"),
+        reason=str(summary.get("reason") or ""),
+        unmet_goal=list(summary.get("unmet_goal") or []),
+    )
+    return result, floor_plan_from_dict(recorded["floor_plan"], "recorded floor plan")
+
+
+GIF_NAME = "kitchen.gif"
+TIMELINE_NAME = "timeline.png"
+
+
+def write_pictures(fields: Mapping[str, Any], folder: str | Path) -> dict[str, Path]:
+    """The animation and the timeline of an execution given as :func:`embodied_fields`."""
+    from twostep.embodied.render import save_animation, save_timeline
+
+    result, floor_plan = result_from_fields(fields)
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    title = f"{floor_plan.name}: {result.message}"
+    return {
+        "timeline": save_timeline(result, folder / TIMELINE_NAME, title),
+        "animation": save_animation(result, floor_plan, folder / GIF_NAME),
+    }

@@ -1,0 +1,211 @@
+"""The paper's Table II: embodied execution length and planning time on the kitchen tasks.
+
+One row per series (SA, MA, TwoStep with its decomposer), one column per task and a macro
+column. Execution length is the embodied length (``embodied_length``: environment steps on
+the floor plan) when the runs have one, else the symbolic ``exec_length`` (said in the
+table's ``length`` column). Cells: mean ± sample std over seeds (ddof = 1, as everywhere
+in the reports); the macro column is, as in the paper, the mean of the task means ± the
+mean of the task stds (the paper's MA macro std 105.8 is the mean of its four stds).
+
+Planning time as in the paper: a task cell whose runs all hit the planner's time limit
+reads ``timeout``; the macro column counts those cells. A run hit the limit when one of its
+planner calls stopped for lack of time (:func:`planner_limit_hits`), whether or not the
+anytime planner had found a plan by then (the paper's SA has a length and a timeout).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import pandas as pd
+
+from twostep.planner import returncodes
+from twostep.report.aggregation import sample_std
+
+TABLE2_DOMAIN = "alfworld"
+TABLE2_TASKS: tuple[int, ...] = (1, 2, 3, 4)
+TABLE2_AGENTS = 2
+PAPER_TIME_LIMIT_S = 3600.0
+
+#: The paper's Table II: per series, per task then macro, (length mean, std or None) and
+#: planning time in seconds (None: timeout at 60 minutes).
+PAPER_TABLE2: tuple[tuple[str, list[tuple[float, float | None]], list[float | None]], ...] = (
+    ("paper: SA", [(172.0, None), (201.0, None), (99.0, None), (44.0, None), (129.0, None)],
+     [None, None, 11.3, None]),
+    ("paper: MA", [(189.2, 16.7), (260.0, 248.5), (196.7, 88.3), (166.5, 69.6), (203.1, 105.8)],
+     [None, None, None, None]),
+    ("paper: TwoStep", [(113.6, 6.6), (147.0, 62.7), (204.5, 17.8), (54.2, 14.0), (129.8, 25.3)],
+     [22.0, 14.8, 18.4, None]),
+)  # fmt: skip
+
+
+#: Exit codes of a planner call stopped by its time limit (with or without a plan).
+LIMIT_CODES: frozenset[int] = returncodes.OUT_OF_TIME | {
+    returncodes.SEARCH_PLAN_FOUND_AND_OUT_OF_TIME,
+    returncodes.SEARCH_PLAN_FOUND_AND_OUT_OF_MEMORY_AND_TIME,
+}
+
+
+def planner_limit_hits(result: Mapping[str, Any]) -> int:
+    """How many of a result.json's planner calls stopped at their time limit."""
+    hits = 0
+    for call in result.get("planner_calls") or []:
+        if not isinstance(call, Mapping):
+            continue
+        code = call.get("exit_code")
+        if (
+            call.get("status") == "timeout"
+            or (isinstance(code, int) and code in LIMIT_CODES)
+            or (code is None and "wall-clock guard" in str(call.get("message") or ""))
+        ):
+            hits += 1
+    if not hits and result.get("status") == "timeout":
+        hits = 1
+    return hits
+
+
+def _cell(runs: pd.DataFrame, length: str) -> dict[str, Any]:
+    ok = runs[(runs["status"] == "success") & runs[length].notna()]
+    per_seed = ok.groupby("seed")[length].mean()
+    limited = runs["planner_timeouts"].fillna(0) > 0
+    timed = runs[~limited & runs["planning_time_s"].notna()]
+    times = timed.groupby("seed")["planning_time_s"].mean()
+    return {
+        "length_mean": float(per_seed.mean()) if len(per_seed) else math.nan,
+        "length_std": sample_std(per_seed),
+        "n_seeds": len(per_seed),
+        "time_mean": float(times.mean()) if len(times) else math.nan,
+        "time_std": sample_std(times),
+        "n_runs": len(runs),
+        "n_timeouts": int(limited.sum()),
+        "n_failed": int((runs["status"] != "success").sum()),
+        # planned but not executed to the goal on the floor plan (embodied length only)
+        "n_not_executed": int(((runs["status"] == "success") & runs[length].isna()).sum()),
+    }
+
+
+def table_two(
+    identified: pd.DataFrame, series: Sequence[tuple[str, str]], domain: str = TABLE2_DOMAIN
+) -> pd.DataFrame:
+    """Table II of ``identified`` runs (the report's counted runs) for ``series``:
+    (series label, method) pairs in display order. Empty without runs of ``domain``."""
+    runs = identified[identified["domain"] == domain]
+    columns = ["series", "source", "task", "length", *_cell(runs.head(0), "exec_length")]
+    if runs.empty:
+        return pd.DataFrame(columns=columns)
+    if "planner_timeouts" not in runs:  # a run table made before the metric existed
+        runs = runs.assign(planner_timeouts=math.nan)
+    embodied = "embodied_length" in runs and bool(runs["embodied_length"].notna().any())
+    length = "embodied_length" if embodied else "exec_length"
+    rows: list[dict[str, Any]] = []
+    for label, method in series:
+        agents = 1 if method == "sa" else TABLE2_AGENTS
+        mine = runs[(runs["series"] == label) & (runs["agents"] == agents)]
+        if mine.empty:
+            continue
+        cells = []
+        for task in TABLE2_TASKS:
+            cell = _cell(mine[mine["task"] == task], length)
+            cells.append(cell)
+            rows.append(
+                {"series": label, "source": "ours", "task": str(task), "length": length, **cell}
+            )
+        means = [c["length_mean"] for c in cells]
+        stds = [0.0 if math.isnan(c["length_std"]) else c["length_std"] for c in cells]
+        complete = not any(math.isnan(m) for m in means)
+        timeouts = sum(1 for c in cells if c["n_runs"] and c["n_timeouts"] == c["n_runs"])
+        times = [c["time_mean"] for c in cells if not math.isnan(c["time_mean"])]
+        rows.append(
+            {
+                "series": label,
+                "source": "ours",
+                "task": "macro",
+                "length": length,
+                "length_mean": sum(means) / len(means) if complete else math.nan,
+                "length_std": sum(stds) / len(stds) if complete else math.nan,
+                "n_seeds": min(c["n_seeds"] for c in cells),
+                "time_mean": sum(times) / len(times) if times else math.nan,
+                "time_std": math.nan,
+                "n_runs": sum(c["n_runs"] for c in cells),
+                "n_timeouts": timeouts,  # macro: task cells that timed out, as the paper
+                "n_failed": sum(c["n_failed"] for c in cells),
+                "n_not_executed": sum(c["n_not_executed"] for c in cells),
+            }
+        )
+    for label, lengths, times_paper in PAPER_TABLE2:
+        for column, (mean, std) in zip([*map(str, TABLE2_TASKS), "macro"], lengths, strict=True):
+            time = times_paper[int(column) - 1] if column != "macro" else None
+            timeouts = sum(1 for t in times_paper if t is None)
+            rows.append(
+                {
+                    "series": label,
+                    "source": "paper",
+                    "task": column,
+                    "length": "embodied_length",
+                    "length_mean": mean,
+                    "length_std": math.nan if std is None else std,
+                    "n_seeds": math.nan,
+                    "time_mean": math.nan if time is None else time,
+                    "time_std": math.nan,
+                    "n_runs": math.nan,
+                    "n_timeouts": timeouts if column == "macro" else int(time is None),
+                    "n_failed": math.nan,
+                    "n_not_executed": math.nan,
+                }
+            )
+    return pd.DataFrame.from_records(rows, columns=columns)
+
+
+def _number(value: float, digits: int = 1) -> str:
+    return f"{value:.{digits}f}"
+
+
+def length_cell(row: Mapping[str, Any]) -> str:
+    mean, std = row["length_mean"], row["length_std"]
+    if pd.isna(mean):
+        return "n/a"
+    text = _number(mean) if pd.isna(std) else f"{_number(mean)} ± {_number(std)}"
+    if row["source"] == "ours":
+        failed, unexecuted = row.get("n_failed"), row.get("n_not_executed")
+        notes = [f"{int(failed)} failed"] if not pd.isna(failed) and failed else []
+        if not pd.isna(unexecuted) and unexecuted:
+            notes.append(f"{int(unexecuted)} not executed")
+        if notes:
+            text += f" ({', '.join(notes)})"
+    return text
+
+
+def time_cell(row: Mapping[str, Any]) -> str:
+    timeouts = int(row["n_timeouts"]) if not pd.isna(row["n_timeouts"]) else 0
+    if row["task"] == "macro":
+        return f"{timeouts} timeout{'s' if timeouts != 1 else ''}"
+    if row["source"] == "paper":
+        return "timeout" if timeouts else _number(row["time_mean"])
+    runs = int(row["n_runs"])
+    if runs and timeouts == runs:
+        return "timeout"
+    mean, std = row["time_mean"], row["time_std"]
+    text = "n/a" if pd.isna(mean) else _number(mean, 2)
+    if not pd.isna(std):
+        text += f" ± {_number(std, 2)}"
+    if timeouts:
+        text += f" ({timeouts}/{runs} timeout)"
+    return text
+
+
+def table_two_rows(frame: pd.DataFrame) -> tuple[list[str], list[list[str]]]:
+    """Headers and rows of the printed table: a length row and a time row per series."""
+    tasks = [*map(str, TABLE2_TASKS), "macro"]
+    headers = ["series", "", *(f"task {t}" if t != "macro" else "macro" for t in tasks)]
+    rows: list[list[str]] = []
+    for label in dict.fromkeys(frame["series"]):
+        cells = {str(r["task"]): r for r in frame[frame["series"] == label].to_dict("records")}
+        rows.append(
+            [label, "length", *(length_cell(cells[t]) if t in cells else "" for t in tasks)]
+        )
+        rows.append(
+            ["", "planning (s)", *(time_cell(cells[t]) if t in cells else "" for t in tasks)]
+        )
+    return headers, rows
