@@ -421,6 +421,7 @@ def run_twostep(
             proposal.reason = {
                 Status.TIMEOUT: "timed out",
                 Status.UNSOLVABLE: "unsolvable from the helper's initial state",
+                Status.INCOMPLETE: "no plan found (incomplete search: not a proof)",
             }.get(result.status, f"planner error: {result.message}")
             continue
         edit_start = time.perf_counter()
