@@ -103,14 +103,16 @@ def execute_after_planning(cfg: TwostepConfig, task: BenchmarkTask, run: RunResu
     failed execution is a recorded status, never an exception."""
     if cfg.executor.name != "embodied":
         return run
-    from twostep.embodied import embodied_fields, execute_run, task_floor_plan
+    from twostep.embodied import embodied_fields, execute_plans, task_floor_plan
 
     if not run.success or not run.plans:
         run.extra.update(executor="embodied", embodied_status="not_run", embodied_length=None)
         run.extra["embodied"] = {"status": "not_run", "reason": "no plan to execute"}
         return run
     floor = task_floor_plan(task.problem, task.problem_path.parent)
-    execution = execute_run(task.problem, run.plans, run.agent_order, floor, executor_settings(cfg))
+    execution = execute_plans(
+        task.problem, run.plans, run.agent_order, floor, executor_settings(cfg)
+    )
     run.extra.update(embodied_fields(execution, floor))
     run.extra["embodied_trace"]["render"] = bool(cfg.executor.render)
     return run

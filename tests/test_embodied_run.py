@@ -23,16 +23,20 @@ from flows.job import run_job
 from tests.conftest import BLOCKS_DOMAIN, FIXTURES, blocks_problem
 from tests.test_cli import REPO, run_cli
 
+OUTPUT: list[Path] = []  # the module's output.root (set by the fixture below)
+
 
 @pytest.fixture(scope="module", autouse=True)
-def hydra_conf() -> Iterator[None]:
+def hydra_conf(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
     register()
+    OUTPUT[:] = [tmp_path_factory.mktemp("out")]
     with initialize_config_dir(config_dir=str(REPO / "conf"), version_base="1.3"):
         yield
 
 
 def make(*overrides: str) -> DictConfig:
-    return compose("config", overrides=[f"data.root={REPO / 'data'}", *overrides])
+    base = [f"data.root={REPO / 'data'}", f"output.root={OUTPUT[0]}"]
+    return compose("config", overrides=[*base, *overrides])
 
 
 def _result(out: Path) -> tuple[Path, dict[str, Any]]:
@@ -161,7 +165,7 @@ def test_fallback_if_longer_true_and_false(tmp_path: Path) -> None:
     results = {}
     for flag in ("true", "false"):
         cfg = compose("config", overrides=[
-            f"data.root={tmp_path / 'data'}", "domain.name=blocks",
+            f"data.root={tmp_path / 'data'}", f"output.root={tmp_path / 'out'}", "domain.name=blocks",
             "domain.agent_predicates=[arm-empty,holding]", "task=1", "decomposer=expert",
             f"method.fallback_if_longer={flag}",
         ])  # fmt: skip

@@ -40,18 +40,8 @@ def _agent_typed(domain: Domain) -> bool:
     """Whether ``domain`` already models agents: an ``agent`` type every action takes."""
     if AGENT_TYPE not in domain.types or not domain.actions:
         return False
-    agent_types = {t for t in domain.types if _is_subtype(domain, t, AGENT_TYPE)}
+    agent_types = {t for t in domain.types if domain.is_subtype(t, AGENT_TYPE)}
     return all(any(t in agent_types for _, t in a.parameters) for a in domain.actions.values())
-
-
-def _is_subtype(domain: Domain, name: str | None, of: str) -> bool:
-    seen: set[str] = set()
-    while name is not None and name not in seen:
-        if name == of:
-            return True
-        seen.add(name)
-        name = domain.types.get(name)
-    return False
 
 
 def agent_names(agents: int, taken: Collection[str] = ()) -> list[str]:
@@ -127,7 +117,7 @@ def _per_agent(
 def _replicate_agent(problem: Problem, agents: int) -> tuple[Problem, AgentNames]:
     """The N-agent task of a domain that already models agents (see the module docstring)."""
     domain = problem.domain
-    own = sorted(o for o, t in problem.objects.items() if _is_subtype(domain, t, AGENT_TYPE))
+    own = sorted(o for o, t in problem.objects.items() if domain.is_subtype(t, AGENT_TYPE))
     if len(own) != 1:
         raise ValueError(
             f"task {problem.name} has {len(own)} agent objects ({', '.join(own) or 'none'}); "

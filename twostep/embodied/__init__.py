@@ -29,7 +29,6 @@ from twostep.embodied.floorplan import (
 )
 from twostep.embodied.run import (
     embodied_fields,
-    execute_run,
     task_floor_plan,
     write_pictures,
 )
@@ -48,7 +47,6 @@ __all__ = [
     "embody",
     "execute",
     "execute_plans",
-    "execute_run",
     "floor_plan_for_task",
     "floor_plan_from_dict",
     "floor_plan_from_locations",

@@ -34,7 +34,7 @@ from typing import Any
 
 from twostep.embodied.floorplan import Cell, FloorPlan
 from twostep.embodied.navigation import reachable_cells, shortest_path
-from twostep.pddl import Domain, Fact, Goal, Problem
+from twostep.pddl import Fact, Goal, Problem
 from twostep.strips import GroundAction, Grounder, PlanError, parse_action
 
 AGENT_TYPE = "agent"
@@ -158,20 +158,9 @@ class EmbodiedResult:
 # ------------------------------------------------------------------ bodies
 
 
-def _is_a(domain: Domain, type_name: str, ancestor: str) -> bool:
-    seen: set[str] = set()
-    current: str | None = type_name
-    while current is not None and current not in seen:
-        if current == ancestor:
-            return True
-        seen.add(current)
-        current = domain.types.get(current)
-    return False
-
-
 def _objects_of_type(problem: Problem, type_name: str) -> list[str]:
     domain = problem.domain
-    return sorted(o for o, t in problem.all_objects.items() if _is_a(domain, t, type_name))
+    return sorted(o for o, t in problem.all_objects.items() if domain.is_subtype(t, type_name))
 
 
 def body_names(names: Sequence[str], taken: Mapping[str, str]) -> list[str]:
@@ -216,7 +205,7 @@ def embody(
             "needs actions that name the acting agent"
         )
     agent_slots = {
-        name: [i for i, (_, t) in enumerate(a.parameters) if _is_a(domain, t, agent_type)]
+        name: [i for i, (_, t) in enumerate(a.parameters) if domain.is_subtype(t, agent_type)]
         for name, a in domain.actions.items()
     }
     agent_set = set(agents)
@@ -655,5 +644,7 @@ def execute_plans(
     floor_plan: FloorPlan,
     settings: ExecutorSettings | None = None,
 ) -> EmbodiedResult:
-    """Execute a run's plans as result.json holds them (``plans`` by agent, ``agent_order``)."""
-    return execute(problem, [plans[a] for a in agent_order], floor_plan, agent_order, settings)
+    """Execute a run's plans as result.json holds them (``plans`` by agent, ``agent_order``;
+    agents without a plan are left out); a failure is the result's status, never raised."""
+    order = [agent for agent in agent_order if agent in plans]
+    return execute(problem, [plans[a] for a in order], floor_plan, order, settings)

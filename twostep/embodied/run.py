@@ -1,8 +1,8 @@
-"""A finished run, executed on its floor plan: the one entry point the orchestration calls.
+"""A finished run and its floor plan: what the orchestration needs around the executor.
 
 :func:`task_floor_plan` finds the floor plan of a task (its folder's ``kitchen.yaml``, else
-the AlfWorld location names' coordinates); :func:`execute_run` executes a run's plans (in
-hand-off order) on it; :func:`embodied_fields` is what result.json gains (the trace and
+the AlfWorld location names' coordinates); :func:`~twostep.embodied.executor.execute_plans`
+executes a run's plans (in hand-off order) on it; :func:`embodied_fields` is what result.json gains (the trace and
 the floor plan ride along under ``embodied_trace`` for the job's files, which
 :func:`write_pictures` draws from the result dict alone, so a reused result can be drawn
 again without re-executing).
@@ -10,16 +10,14 @@ again without re-executing).
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 from twostep.embodied.executor import (
     LOCATION_TYPE,
     EmbodiedResult,
-    ExecutorSettings,
     TraceStep,
-    execute,
 )
 from twostep.embodied.floorplan import FloorPlan, floor_plan_for_task, floor_plan_from_dict
 from twostep.pddl import Problem
@@ -29,32 +27,12 @@ TRACE_KEY = "embodied_trace"  # result dict key of the trace + floor plan (not i
 
 def task_floor_plan(problem: Problem, folder: str | Path | None) -> FloorPlan:
     """The floor plan of ``problem`` whose files live in ``folder``."""
-    types = problem.domain.types
-
-    def is_location(type_name: str | None) -> bool:
-        seen: set[str] = set()
-        while type_name is not None and type_name not in seen:
-            if type_name == LOCATION_TYPE:
-                return True
-            seen.add(type_name)
-            type_name = types.get(type_name)
-        return False
-
-    locations = [name for name, kind in problem.all_objects.items() if is_location(kind)]
+    locations = [
+        name
+        for name, kind in problem.all_objects.items()
+        if problem.domain.is_subtype(kind, LOCATION_TYPE)
+    ]
     return floor_plan_for_task(locations, folder)
-
-
-def execute_run(
-    problem: Problem,
-    plans: Mapping[str, Sequence[str]],
-    agent_order: Sequence[str],
-    floor_plan: FloorPlan,
-    settings: ExecutorSettings | None = None,
-) -> EmbodiedResult:
-    """Execute a run's plans (``RunResult.plans`` in the planner's terms, by agent, and
-    ``agent_order``) on ``floor_plan``; a failure is the result's status, never raised."""
-    order = [agent for agent in agent_order if agent in plans]
-    return execute(problem, [plans[a] for a in order], floor_plan, order, settings)
 
 
 def floor_plan_to_dict(floor_plan: FloorPlan) -> dict[str, Any]:

@@ -80,6 +80,16 @@ class Domain:
     def typed(self) -> bool:
         return any(t != "object" for t in self.types)
 
+    def is_subtype(self, name: str | None, of: str) -> bool:
+        """Whether type ``name`` is ``of`` or descends from it (cycles end the walk)."""
+        seen: set[str] = set()
+        while name is not None and name not in seen:
+            if name == of:
+                return True
+            seen.add(name)
+            name = self.types.get(name)
+        return False
+
     @property
     def has_action_costs(self) -> bool:
         """True when actions have costs (``:action-costs``): a plan's cost is their sum."""
