@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -10,6 +11,8 @@ import pytest
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 os.environ.setdefault("MLFLOW_DISABLE_TELEMETRY", "true")
 os.environ.setdefault("PREFECT_SERVER_ANALYTICS_ENABLED", "false")
+# twostep-score keeps parsed tasks in a user cache folder: never the tester's home here.
+os.environ.setdefault("TWOSTEP_CACHE_DIR", tempfile.mkdtemp(prefix="twostep-test-cache-"))
 
 REPO = Path(__file__).resolve().parent.parent
 DATA = REPO / "data"

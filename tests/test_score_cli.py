@@ -145,3 +145,24 @@ def test_runs_as_a_module(files: dict[str, str]) -> None:
     )
     assert completed.returncode == EXIT_VALID, completed.stderr
     assert json.loads(completed.stdout)["exec_length"] == 3
+
+
+def test_parsed_tasks_are_cached_by_content(
+    files: dict[str, str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    cache = tmp_path / "cache"
+    argv = [files["domain"], files["problem"], files["helper"], files["main"]]
+    argv += ["--agent-predicates", "arm-empty,holding", "--cache-dir", str(cache)]
+    code, first, _ = run(argv, capsys)
+    assert code == EXIT_VALID and len(list(cache.iterdir())) == 1
+    code, again, _ = run(argv, capsys)
+    assert (code, again) == (EXIT_VALID, first)  # read back from the cache: same answer
+    # An edited goal is a new entry, never the stale one: the same plans no longer reach it.
+    edited = Path(files["problem"]).read_text().replace("(on b3 b1)", "(on b2 b3)")
+    Path(files["problem"]).write_text(edited)
+    code, _, err = run(argv, capsys)
+    assert code == EXIT_INVALID_PLANS and "(on b2 b3)" in err
+    assert len(list(cache.iterdir())) == 2
+    nocache = tmp_path / "unused"
+    run([*argv[:-2], "--cache-dir", str(nocache), "--no-cache"], capsys)
+    assert not nocache.exists()

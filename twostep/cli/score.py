@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -59,7 +60,24 @@ def _parser() -> argparse.ArgumentParser:
         help="exact: any set of agents per step (optimal); paper: one agent or all "
         "(the paper's Algorithm 1). Default: exact",
     )
+    parser.add_argument(
+        "--cache-dir",
+        type=Path,
+        default=default_cache_dir(),
+        help="keep parsed tasks here, keyed by file contents and parser code, so that later "
+        "calls on the same files skip parsing (default: $TWOSTEP_CACHE_DIR, else "
+        "$XDG_CACHE_HOME/twostep/tasks or ~/.cache/twostep/tasks)",
+    )
+    parser.add_argument("--no-cache", action="store_true", help="always parse the PDDL files")
     return parser
+
+
+def default_cache_dir() -> Path:
+    """Where parsed tasks are kept between calls (see ``--cache-dir``)."""
+    if os.environ.get("TWOSTEP_CACHE_DIR"):
+        return Path(os.environ["TWOSTEP_CACHE_DIR"])
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "twostep" / "tasks"
 
 
 def _fail(message: str) -> int:
@@ -70,7 +88,9 @@ def _fail(message: str) -> int:
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
-        problem = load_problem(args.domain, args.problem)
+        problem = load_problem(
+            args.domain, args.problem, cache_dir=None if args.no_cache else args.cache_dir
+        )
     except PDDLError as error:
         return _fail(str(error))
     agent_predicates = [p.strip().lower() for p in args.agent_predicates.split(",") if p.strip()]
