@@ -3,9 +3,8 @@ decomposer a job's config names, and the check that they exist and fit together.
 
 Each library setting has one name in the config (``flows/config.py``, whose defaults
 are the library dataclasses' defaults) and is mapped here once; ``planner.time_limit_s``
-is the planner's ``search_time_limit_s``. The LLM settings are built by
-:func:`flows.llm.llm_settings` (the LLM client's own module), reached through
-:func:`open_decomposer`.
+is the planner's ``search_time_limit_s``; :func:`llm_settings` maps the ``llm`` group to
+the LLM client's settings.
 """
 
 from __future__ import annotations
@@ -13,11 +12,15 @@ from __future__ import annotations
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from flows.config import TwostepConfig
 from flows.validation import check_values
 from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.base import Decomposer
+
+if TYPE_CHECKING:
+    from twostep.llm import LLMSettings
 from twostep.embodied import ExecutorSettings
 from twostep.planner import PlannerSettings
 
@@ -43,7 +46,7 @@ def open_decomposer(cfg: TwostepConfig) -> Iterator[Decomposer]:
     """The decomposer the config names, for the duration of one job.
 
     A context manager because the LLM decomposer owns a client (``llm=local`` runs a
-    model server for the job's lifetime: :func:`flows.llm.llm_decomposer`).
+    model server for the job's lifetime, stopped when the job ends).
     """
     name = cfg.decomposer.name
     agent_predicates = list(cfg.domain.agent_predicates)
@@ -65,12 +68,36 @@ def open_decomposer(cfg: TwostepConfig) -> Iterator[Decomposer]:
 
         yield Portfolio(agent_predicates, cfg.decomposer.link_degree)
     elif name == "llm":
-        from flows.llm import llm_decomposer
+        from twostep.decomposers.llm import LLMDecomposer
+        from twostep.llm import open_client
 
-        with llm_decomposer(cfg) as decomposer:
-            yield decomposer
+        with open_client(llm_settings(cfg)) as client:
+            yield LLMDecomposer(client)
     else:
         raise JobError(f"unknown decomposer '{name}' (known: {', '.join(DECOMPOSERS)})")
+
+
+def llm_settings(cfg: TwostepConfig) -> LLMSettings:
+    """The LLM client's settings from the ``llm`` group (imported only for LLM jobs)."""
+    from twostep.llm import LLMSettings
+
+    llm = cfg.llm
+    return LLMSettings(
+        model=llm.model,
+        temperature=float(llm.temperature),
+        top_p=None if llm.top_p is None else float(llm.top_p),
+        max_tokens=int(llm.max_tokens),
+        api_base=llm.api_base,
+        api_key_env=llm.api_key_env,
+        mode=llm.mode,
+        cache_dir=Path(llm.cache_dir),
+        script=Path(llm.script) if llm.script else None,
+        max_retries=int(llm.max_retries),
+        backoff_s=float(llm.backoff_s),
+        timeout_s=float(llm.timeout_s),
+        use_cache=bool(llm.use_cache),
+        local=bool(llm.local),
+    )
 
 
 def load_job_task(cfg: TwostepConfig) -> BenchmarkTask:
