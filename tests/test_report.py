@@ -386,6 +386,21 @@ def frame(rows: list[dict[str, Any]]) -> pd.DataFrame:
     return pd.DataFrame.from_records(rows)
 
 
+def test_one_domain_has_no_normalised_change_only_the_raw_one() -> None:
+    """Min-max scaling inside one domain only ranks the series: no normalised change."""
+    rows = [
+        {"domain": "A", "task": 1, "method": method, "decomposer": "goal-split",
+         "agents": agents, "seed": 0, "status": "success", "exec_length": value,
+         "planning_time_s": value}
+        for method, agents, value in (("sa", 1, 10.0), ("ma", 2, 8.0), ("twostep", 2, 6.0))
+    ]  # fmt: skip
+    report = build_report(frame(rows))
+    changes = report.changes[report.changes["metric"] == "exec_length"].set_index("baseline")
+    assert math.isnan(changes.loc["SA", "change_pct"])  # was -100 % (TwoStep 0, SA 1)
+    assert changes.loc["SA", "change_pct_raw"] == pytest.approx(-40.0)  # (6 - 10) / 10
+    assert changes.loc["MA", "change_pct_raw"] == pytest.approx(-25.0)  # (6 - 8) / 8
+
+
 def test_changes_follow_the_papers_normalisation() -> None:
     """Per-domain min-max normalisation, averaged over domains, then the change."""
     rows = []

@@ -98,7 +98,11 @@ def change_row(t: pd.DataFrame, b: pd.DataFrame, series: str, baseline: str) -> 
     return row | {
         "twostep_normalised": t_norm,
         "baseline_normalised": b_norm,
-        "change_pct": (t_norm - b_norm) / b_norm * 100 if b_norm > 0 else math.nan,
+        # Min-max scaling within a single domain only ranks the series (0 or 1): a change
+        # of those is meaningless, so the paper's normalised change needs two domains.
+        "change_pct": (
+            (t_norm - b_norm) / b_norm * 100 if b_norm > 0 and len(common) > 1 else math.nan
+        ),
         "change_pct_raw": sum(raw) / len(raw) if raw else math.nan,
     }
 
