@@ -38,6 +38,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from flows.environment import DEFAULTS
+
 REPO = Path(__file__).resolve().parent.parent
 BIN = Path(sys.executable).parent
 JOB = ["method=sa", "domain=grippers", "task=9"]
@@ -69,12 +71,7 @@ import os; os._exit(0)  # as the twostep command ends a single run (flows.cli._f
 
 
 def environment() -> dict[str, str]:
-    env = dict(os.environ)
-    env.update(
-        MLFLOW_DISABLE_TELEMETRY="true",
-        PREFECT_SERVER_ANALYTICS_ENABLED="false",
-        LITELLM_LOCAL_MODEL_COST_MAP="True",
-    )
+    env = {**os.environ, **DEFAULTS}  # the offline-safe settings, as the command sets them
     env.pop("PREFECT_API_URL", None)
     return env
 

@@ -108,14 +108,11 @@ def _mlflow_command(root: Path, host: str, port: int) -> list[str]:
 def _mlflow_environment() -> dict[str, str]:
     import os
 
-    env = dict(os.environ)
-    # Without these the server hangs at start-up offline (STACK-NOTES: MLflow 3.17.2).
-    env.update(
-        MLFLOW_SERVER_ENABLE_JOB_EXECUTION="false",
-        LITELLM_LOCAL_MODEL_COST_MAP="True",
-        MLFLOW_DISABLE_TELEMETRY="true",
-    )
-    return env
+    from flows.environment import DEFAULTS
+
+    # Forced, not defaults: without them the server hangs at start-up offline
+    # (STACK-NOTES: MLflow 3.17.2).
+    return {**os.environ, **DEFAULTS}
 
 
 def up(root: Path, host: str = "127.0.0.1", timeout_s: float = 180.0) -> dict[str, Service]:

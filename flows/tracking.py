@@ -113,13 +113,11 @@ def _check_sqlite(path: Path, uri: str, hint: str) -> None:
 
 
 def _check_writable(folder: Path, what: str, hint: str) -> None:
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        probe = folder / f".twostep-write-probe-{time.time_ns()}"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as error:
-        raise TrackingError(f"{what} is not writable: {_one_line(error)} ({hint})") from None
+    from flows.validation import write_problem
+
+    problem = write_problem(folder)
+    if problem is not None:
+        raise TrackingError(f"{what} is not writable: {problem} ({hint})")
 
 
 def _client(tracking_uri: str) -> Any:
