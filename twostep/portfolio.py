@@ -84,39 +84,6 @@ class Portfolio:
             PlanDeal(agent_predicates),
         ]
 
-    def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]:
-        return self.proposals
-
-
-class Portfolio:
-    """The candidates for N agents: each member with N, N-1, ..., 2 agents.
-
-    Default members: plan-split cut at free states, plan-split cut by what the agent holds
-    (with partial progress, and with goal literals only), goal-split, the three
-    plan-splits again with consecutive stretches instead of the list schedule, and
-    plan-deal (:mod:`twostep.plan_deal`, with N agents only, tried last).
-    """
-
-    name = "portfolio"
-    needs_sa_plan = True
-
-    def __init__(
-        self,
-        agent_predicates: Collection[str],
-        link_degree: int = 2,
-        members: Sequence[Decomposer] | None = None,
-    ):
-        self.members: list[Decomposer] = list(members or ()) or [
-            PlanSplitDecomposer(agent_predicates),
-            PlanSplitDecomposer(agent_predicates, cut="holding"),
-            PlanSplitDecomposer(agent_predicates, cut="holding", keep="goal"),
-            GoalSplitDecomposer(agent_predicates, link_degree),
-            PlanSplitDecomposer(agent_predicates, assign="chunks"),
-            PlanSplitDecomposer(agent_predicates, cut="holding", assign="chunks"),
-            PlanSplitDecomposer(agent_predicates, cut="holding", keep="goal", assign="chunks"),
-            PlanDeal(agent_predicates),
-        ]
-
     def candidates(self, agents: int) -> list[Candidate]:
         """Every TwoStep member with N, N-1, ..., 2 agents, then plan-deal with N agents
         (its list schedule leaves agents idle where fewer do better). Ties go to the
