@@ -161,3 +161,14 @@ def test_resume_keeps_the_rows_of_tasks_outside_the_run(tmp_path: Path) -> None:
     assert "1 rows planned" not in result.stderr and "0 rows planned, 2 reused" in result.stderr
     rows = json.loads(out.read_text())
     assert sorted(rows, key=str) == sorted(done, key=str)
+
+
+def test_overview_has_a_row_per_method_and_n_with_the_domains_across() -> None:
+    text = bm.report(ROWS, ["ma", "goal-split"], [1, 2])
+    lines = {tuple(c.strip() for c in line.strip("|").split("|")) for line in text.splitlines()}
+    # method, N, A, B, macro, macro planning time, its ratio to MA's
+    # goal-split times: A (1 + 1) / 2 = 1, B 2 -> 1.5; MA: A (2 + 6) / 2 = 4, B 4 -> 4
+    assert ("goal-split", "2", "0.750", "0.900", "0.825", "1.50", "0.375") in lines
+    assert ("ma", "2", "0.750", "0.800", "0.775", "4.00", "") in lines
+    # SA: A (1 + 3) / 2 = 2, B 2
+    assert ("sa", "1", "1.000", "1.000", "1.000", "2.00", "") in lines
