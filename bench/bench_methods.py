@@ -212,7 +212,7 @@ def run_job(job: Job) -> list[Row]:
             continue
         rows.append({**common, "method": method, "agents": n, "exec_length": result.exec_length,
                      "planning_time_s": result.planning_time_s, "sa_length": sa_length,
-                     "valid": valid, "status": result.status, "exact": result.exact,
+                     "valid": valid, "status": result.status, "exact": result.exact, "lower_bound": result.lower_bound,
                      "fallback_if_longer": job.fallback, "fallback": result.fallback,
                      "message": result.message,
                      "accepted": sum(s["status"] == "accepted" for s in result.subgoals),
@@ -530,9 +530,12 @@ def main() -> int:
             rows += got
             write_json_atomic(out, rows, indent=1)  # finished tasks survive a crash or a stop
             reused = sum(r in job.known for r in got)
+            elapsed = time.perf_counter() - start
+            # rough: later tasks are larger, so the estimate errs short
+            left = elapsed / done * (len(jobs) - done)
             _say(f"[{done}/{len(jobs)}] {job.label}:{job.domain}/p{job.task:02d}: "
                  f"{len(got) - reused} rows planned, {reused} reused; "
-                 f"elapsed {_clock(time.perf_counter() - start)}")  # fmt: skip
+                 f"elapsed {_clock(elapsed)}, left ~{_clock(left)}")  # fmt: skip
     methods = [m for m in METHODS if m in args.methods]
     print(f"# {' '.join(sys.argv)}")
     print(f"# planner {args.alias}, search time limit {args.time_limit:g} s (TwoStep: limit/N per "
