@@ -205,16 +205,16 @@ def run_job(job: Job) -> list[Row]:
                 valid, result.message = False, f"schedule invalid: {error}"
         except Exception:  # a crash of one method is a row, not the end of an hour's run
             rows.append({**common, "method": method, "agents": n, "exec_length": None,
-                         "planning_time_s": float("nan"), "sa_length": sa_length, "valid": False,
+                         "planning_time_s": None, "sa_length": sa_length, "valid": False,
                          "status": "error", "message": traceback.format_exc(limit=3),
                          "wall_s": time.perf_counter() - start})  # fmt: skip
             _say(f"  {name} {method} N={n}: error")
             continue
         rows.append({**common, "method": method, "agents": n, "exec_length": result.exec_length,
                      "planning_time_s": result.planning_time_s, "sa_length": sa_length,
-                     "valid": valid, "status": result.status, "exact": result.exact, "lower_bound": result.lower_bound,
-                     "fallback_if_longer": job.fallback, "fallback": result.fallback,
-                     "message": result.message,
+                     "valid": valid, "status": result.status, "exact": result.exact,
+                     "lower_bound": result.lower_bound, "fallback_if_longer": job.fallback,
+                     "fallback": result.fallback, "message": result.message,
                      "accepted": sum(s["status"] == "accepted" for s in result.subgoals),
                      "candidates": result.extra.get("candidates"),
                      "wall_s": time.perf_counter() - start})  # fmt: skip
@@ -258,7 +258,7 @@ class Cell:
 
 def cell(rows: Sequence[Row]) -> Cell:
     valid = [r for r in rows if r["valid"] and r["exec_length"] is not None]
-    times = [r["planning_time_s"] for r in rows if r["planning_time_s"] == r["planning_time_s"]]
+    times = [r["planning_time_s"] for r in rows if r["planning_time_s"] is not None]
     return Cell(
         length=mean(r["exec_length"] for r in valid),
         ratio=mean(x for x in map(exec_ratio, valid) if x is not None),
@@ -551,7 +551,8 @@ def main() -> int:
     ]
     inexact = sum(r.get("exact") is False for r in rows)
     print(f"\nrows: {len(rows)}; not valid: {unsolved} (of which invalid schedules or crashes: "
-          f"{len(broken)}); scored inexactly (node budget: the length is an upper bound): {inexact}")  # fmt: skip
+          f"{len(broken)}); scored inexactly (node budget: the length is an upper bound): "
+          f"{inexact}")  # fmt: skip
     return 1 if broken else 0
 
 
