@@ -8,6 +8,7 @@ real task of ``data/`` but give every row as known, with lengths no planner woul
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -53,7 +54,7 @@ def test_macro_is_the_mean_over_domains_of_the_per_task_mean() -> None:
     assert table[("A", 2, "ma")].time_s == pytest.approx(4.0)
     # an invalid row counts as invalid, never as a length or a ratio
     ps = table[("A", 2, "plan-split")]
-    assert (ps.tasks, ps.invalid, ps.ratio, ps.length) == (2, 1, pytest.approx(0.75), 15)
+    assert (ps.tasks, ps.failed, ps.ratio, ps.length) == (2, 1, pytest.approx(0.75), 15)
     assert table[("B", 2, "plan-split")].longer_than_sa == 1
     assert bm.macro_ratio(table, "plan-split", 2) == pytest.approx((0.75 + 1.2) / 2)
 
@@ -65,6 +66,13 @@ def test_domains_no_longer_than_ma() -> None:
     # plan-split: A 0.75 <= 0.75, B 1.2 > 0.8
     assert bm.no_longer_than_ma(table, "plan-split", 2) == (["A"], 2)
     assert bm.no_longer_than_ma(table, "ma", 2) == (["A", "B"], 2)
+    # where MA solves nothing, a method that solves is no longer than it
+    failed = [r for r in ROWS if not (r["domain"] == "B" and r["method"] == "ma")]
+    failed.append(row("B", 1, "ma", 2, None, 10, valid=False, time_s=90.0))
+    table = bm.summarise(failed, ["ma", "goal-split"], [2])
+    assert bm.no_longer_than_ma(table, "goal-split", 2) == (["A", "B"], 2)
+    assert math.isnan(bm.macro_ratio(table, "ma", 2))
+    assert table[("B", 2, "ma")].time_s == 90.0  # a timeout's time counts
 
 
 def test_single_agent_rows_are_the_sa_plan_for_every_method() -> None:
@@ -75,11 +83,12 @@ def test_single_agent_rows_are_the_sa_plan_for_every_method() -> None:
     assert bm.macro_ratio(table, "goal-split", 1) == 1.0
     text = bm.report(ROWS, ["ma", "goal-split"], [1, 2], targets={2: 0.7})
     lines = {tuple(c.strip() for c in line.strip("|").split("|")) for line in text.splitlines()}
-    # domain, N, tasks, SA len, lengths, ratios, SA time, times, goal-split/MA time, longer, invalid
+    # domain, N, tasks, SA len, lengths, ratios, SA time, times, goal-split/MA time, longer,
+    # inexact, failed
     assert ("A", "1", "2", "15.0", "15.0", "15.0", "1.000", "1.000", "2.00", "2.00", "2.00",
-            "1.000", "0", "0") in lines  # fmt: skip
+            "1.000", "0", "0", "0") in lines  # fmt: skip
     assert ("A", "2", "2", "15.0", "12.5", "10.0", "0.750", "0.750", "2.00", "4.00", "1.00",
-            "0.250", "0", "0") in lines  # fmt: skip
+            "0.250", "0", "0", "0") in lines  # fmt: skip
     # macro: N, target, ma, goal-split, goal-split domains <= MA
     assert ("2", "0.70", "0.775", "0.825", "1/2") in lines
     assert ("1", "", "1.000", "1.000", "2/2") in lines
