@@ -1,19 +1,31 @@
-"""SA vs MA vs TwoStep (goal-split, plan-split, portfolio) over the benchmark.
+"""SA vs MA vs TwoStep (every registered decomposer) over the benchmark and larger tasks.
 
-For every domain, task and N = 1..4: SA (N = 1), MA (compiled N-agent PDDL) and TwoStep
-with each decomposer named in ``--methods``. TwoStep runs get the SA plan of the same task
-(plan-split reads it; ``fallback_if_longer`` compares against it, on unless
+For every data root, domain, task and N: SA (N = 1), MA (compiled N-agent PDDL) and
+TwoStep with each decomposer named in ``--methods``. TwoStep runs get the SA plan of the
+same task (plan-split reads it; ``fallback_if_longer`` compares against it, on unless
 ``--no-fallback``), and its planner time counts in theirs. Every joint schedule is
-re-validated by simulation against the original task (``check_run``). Prints, per domain
-and N, the mean execution length and planning time of each method, the mean of the
-per-task ratios execution length / SA length, and the ratio TwoStep planning time / MA
-planning time; then the macro mean (over domains) of exec/SA per N against the targets of
-issue 11 and the domains where each method is no longer than MA. Raw rows go to a JSON
-file.
+re-validated by simulation against the original task (``check_run``). At N = 1 every
+method is the SA plan: those rows are shown as such, never run.
 
-    .venv/bin/python bench/bench_methods.py --time-limit 60 --workers 2
+Prints, per data root, a side-by-side table per domain and N (mean execution length,
+mean of the per-task ratios exec length / SA length, mean planning time, and TwoStep
+planning time / MA planning time), then the macro exec/SA per N (mean over domains)
+against the targets of issue 11, and per method the domains where it is no longer than MA.
+
+Runs are long (the 100 tasks x N = 1..4 take about an hour), so: progress goes to stderr
+(per planned method, and task i/n with the elapsed time); rows are written to ``--out``
+after every task (atomically: a crash or a stop keeps the finished tasks); ``--resume``
+skips the rows already in ``--out``; ``--reuse`` takes the SA and MA rows of earlier runs
+(lama-first is deterministic, so only new methods need planning). A row is reused only
+for the same data root, domain, task, N and method, planned with the same planner alias
+and time limit (and, for TwoStep, the same ``fallback_if_longer``).
+
     .venv/bin/python bench/bench_methods.py --domains blocksworld --tasks 1-5 --agents 2
-    .venv/bin/python bench/bench_methods.py --tasks 1,6,11,16 --methods ma plan-split portfolio
+    .venv/bin/python bench/bench_methods.py --data data data/large --workers 2 \
+        --reuse docs/bench/methods_sa_ma.json --out outputs/bench/methods_all.json
+    .venv/bin/python bench/bench_methods.py --report outputs/bench/methods_all.json
+
+A new decomposer joins the bench with one line in :data:`DECOMPOSERS`.
 """
 
 from __future__ import annotations
@@ -23,8 +35,11 @@ import json
 import statistics
 import sys
 import time
+import traceback
 from collections import defaultdict
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -34,25 +49,81 @@ from twostep.benchmark import DEFAULT_DATA_ROOT, list_domains, list_tasks, load_
 from twostep.decomposers.base import Decomposer
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.decomposers.plan_split import PlanSplitDecomposer
+from twostep.files import write_json_atomic
+from twostep.generators import DOMAINS as BENCHMARK_DOMAINS
 from twostep.pipeline import RunResult, check_run, run_multi_agent, run_single_agent, run_twostep
 from twostep.planner import PlannerSettings
+from twostep.planner.results import PlanResult, Status
 from twostep.portfolio import Portfolio
 
-CONF = Path(__file__).resolve().parent.parent / "conf" / "domain"
-METHODS = ("ma", "goal-split", "plan-split", "portfolio")
+REPO = Path(__file__).resolve().parent.parent
+CONF = REPO / "conf"
+
+# The TwoStep decomposers the bench knows, by their config name (conf/decomposer/<name>).
+# Each is built from the domain's agent predicates; a new one joins with one line here.
+DECOMPOSERS: dict[str, Callable[[list[str]], Decomposer]] = {
+    "goal-split": GoalSplitDecomposer,
+    "plan-split": PlanSplitDecomposer,
+    "portfolio": Portfolio,
+}
+METHODS = ("ma", *DECOMPOSERS)
+REUSED_BY_DEFAULT = ("sa", "ma")  # planner only: unchanged by any decomposer's code
 TARGETS = {2: 0.70, 3: 0.58, 4: 0.50}  # issue 11: macro exec/SA of the offline default
+# Rows written before rows named their settings were all planned with these.
+LEGACY = {"data": "data", "alias": "lama-first", "time_limit_s": 60.0, "fallback_if_longer": True}
+
+Row = dict[str, Any]
+RowKey = tuple[str, str, int, int, str]  # data root, domain, task, N, method
 
 
 def agent_predicates(domain: str) -> list[str]:
-    return list(yaml.safe_load((CONF / f"{domain}.yaml").read_text())["agent_predicates"])
+    return list(
+        yaml.safe_load((CONF / "domain" / f"{domain}.yaml").read_text())["agent_predicates"]
+    )
 
 
-def decomposer(name: str, preds: list[str]) -> Decomposer:
-    if name == "goal-split":
-        return GoalSplitDecomposer(preds)
-    if name == "plan-split":
-        return PlanSplitDecomposer(preds)
-    return Portfolio(preds)
+def offline_default() -> str:
+    """The decomposer the default config uses (conf/config.yaml's defaults list)."""
+    defaults = yaml.safe_load((CONF / "config.yaml").read_text())["defaults"]
+    return next(str(d["decomposer"]) for d in defaults if isinstance(d, dict) and "decomposer" in d)
+
+
+def data_label(root: Path) -> str:
+    """How rows name a data root: relative to the repository when inside it (``data``,
+    ``data/large``), so rows of one checkout are reused in another; else absolute."""
+    path = root.resolve()
+    return path.relative_to(REPO).as_posix() if path.is_relative_to(REPO) else path.as_posix()
+
+
+def row_key(row: Mapping[str, Any]) -> RowKey:
+    data = str(row.get("data", LEGACY["data"]))
+    return data, row["domain"], int(row["task"]), int(row["agents"]), row["method"]
+
+
+def same_settings(row: Mapping[str, Any], alias: str, time_limit_s: float, fallback: bool) -> bool:
+    """Was ``row`` planned as this run would plan it? (fallback matters to TwoStep only)."""
+    if row.get("alias", LEGACY["alias"]) != alias:
+        return False
+    if float(row.get("time_limit_s", LEGACY["time_limit_s"])) != time_limit_s:
+        return False
+    if row["method"] in ("sa", "ma"):
+        return True
+    return bool(row.get("fallback_if_longer", LEGACY["fallback_if_longer"])) == fallback
+
+
+def reusable_rows(
+    rows: Iterable[Row],
+    methods: Collection[str],
+    alias: str,
+    time_limit_s: float,
+    fallback: bool,
+) -> dict[RowKey, Row]:
+    """The rows of ``methods`` planned with these settings, by key (the last one wins)."""
+    return {
+        row_key(r): r
+        for r in rows
+        if r["method"] in methods and same_settings(r, alias, time_limit_s, fallback)
+    }
 
 
 def verify(task: Any, result: RunResult, preds: list[str]) -> bool:
@@ -62,51 +133,323 @@ def verify(task: Any, result: RunResult, preds: list[str]) -> bool:
     return True
 
 
-def job(
-    data: str,
-    domain: str,
-    task_id: int,
-    agents_list: list[int],
-    limit: float,
-    alias: str,
-    methods: list[str],
-    fallback: bool,
-) -> list[dict[str, Any]]:
-    task = load_task(domain, task_id, Path(data))
-    preds = agent_predicates(domain)
-    settings = PlannerSettings(alias, limit)
-    sa = run_single_agent(task, settings)
-    sa_plan = sa.planner_calls[0].result
-    rows = [dict(domain=domain, task=task_id, method="sa", agents=1, exec_length=sa.exec_length,
-                 planning_time_s=sa.planning_time_s, sa_length=sa.sa_length, valid=verify(task, sa, preds),
-                 status=sa.status)]  # fmt: skip
-    for n in agents_list:
-        if n == 1:
+def _sa_plan(row: Row) -> PlanResult | None:
+    """The SA planner result a stored SA row carries (rows since the ``plan`` field)."""
+    if row.get("plan") is None or row.get("status") != Status.SOLVED.value:
+        return None
+    plan = tuple(row["plan"])
+    return PlanResult(Status.SOLVED, plan, row["planning_time_s"], row.get("wall_s", 0.0))
+
+
+def _say(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
+@dataclass(frozen=True)
+class Job:
+    """One task of one data root, and what to do with it."""
+
+    data: str  # the root as given (to read the task)
+    label: str  # the root as rows name it
+    domain: str
+    task: int
+    agents: tuple[int, ...]
+    methods: tuple[str, ...]
+    alias: str
+    time_limit_s: float
+    fallback: bool
+    known: tuple[Row, ...]  # rows of this task that are reused, not planned again
+
+
+def run_job(job: Job) -> list[Row]:
+    """Every row of one task: reused ones as they are, the others planned now."""
+    name = f"{job.label}:{job.domain}/p{job.task:02d}"
+    known = {(r["agents"], r["method"]): r for r in job.known}
+    todo = [(n, m) for n in job.agents if n > 1 for m in job.methods if (n, m) not in known]
+    task = load_task(job.domain, job.task, Path(job.data))
+    preds = agent_predicates(job.domain)
+    settings = PlannerSettings(job.alias, job.time_limit_s)
+    common = {"data": job.label, "domain": job.domain, "task": job.task, "alias": job.alias,
+              "time_limit_s": job.time_limit_s}  # fmt: skip
+    sa_row = known.get((1, "sa"))
+    sa_plan = _sa_plan(sa_row) if sa_row else None
+    needs_plan = any(m != "ma" for _, m in todo)
+    if sa_row is None or (needs_plan and sa_plan is None):
+        start = time.perf_counter()
+        sa = run_single_agent(task, settings)
+        sa_plan = sa.planner_calls[0].result
+        sa_row = {**common, "method": "sa", "agents": 1, "exec_length": sa.exec_length,
+                  "planning_time_s": sa.planning_time_s, "sa_length": sa.sa_length,
+                  "valid": verify(task, sa, preds), "status": sa.status,
+                  "plan": list(sa_plan.plan) if sa_plan.plan else None,
+                  "wall_s": time.perf_counter() - start}  # fmt: skip
+        _say(f"  {name} sa: {sa.status}, length {sa.exec_length}, {sa_row['wall_s']:.1f} s")
+    rows = [sa_row]
+    sa_length = sa_row["sa_length"]
+    for n, method in [(n, m) for n in job.agents if n > 1 for m in job.methods]:
+        if (n, method) in known:
+            rows.append(known[(n, method)])
             continue
-        for method in methods:
-            start = time.perf_counter()
+        start = time.perf_counter()
+        try:
             if method == "ma":
-                result = run_multi_agent(task, n, preds, settings, sa_length=sa.sa_length)
+                result = run_multi_agent(task, n, preds, settings, sa_length=sa_length)
             else:
                 result = run_twostep(
-                    task, n, decomposer(method, preds), preds, settings, sa_length=sa.sa_length,
-                    sa_plan=sa_plan, fallback_if_longer=fallback,
+                    task, n, DECOMPOSERS[method](preds), preds, settings, sa_length=sa_length,
+                    sa_plan=sa_plan, fallback_if_longer=job.fallback,
                 )  # fmt: skip
             try:
                 valid = verify(task, result, preds)
             except Exception as error:  # report, do not stop the table
                 valid, result.message = False, f"schedule invalid: {error}"
-            rows.append(dict(domain=domain, task=task_id, method=method, agents=n, exec_length=result.exec_length,
-                             planning_time_s=result.planning_time_s, sa_length=sa.sa_length, valid=valid,
-                             status=result.status, fallback=result.fallback, message=result.message,
-                             accepted=sum(s["status"] == "accepted" for s in result.subgoals),
-                             candidates=result.extra.get("candidates"),
-                             wall_s=time.perf_counter() - start))  # fmt: skip
+        except Exception:  # a crash of one method is a row, not the end of an hour's run
+            rows.append({**common, "method": method, "agents": n, "exec_length": None,
+                         "planning_time_s": None, "sa_length": sa_length, "valid": False,
+                         "status": "error", "message": traceback.format_exc(limit=3),
+                         "wall_s": time.perf_counter() - start})  # fmt: skip
+            _say(f"  {name} {method} N={n}: error")
+            continue
+        rows.append({**common, "method": method, "agents": n, "exec_length": result.exec_length,
+                     "planning_time_s": result.planning_time_s, "sa_length": sa_length,
+                     "valid": valid, "status": result.status, "exact": result.exact,
+                     "lower_bound": result.lower_bound, "fallback_if_longer": job.fallback,
+                     "fallback": result.fallback, "message": result.message,
+                     "accepted": sum(s["status"] == "accepted" for s in result.subgoals),
+                     "candidates": result.extra.get("candidates"),
+                     "wall_s": time.perf_counter() - start})  # fmt: skip
+        _say(f"  {name} {method} N={n}: {result.status}, length {result.exec_length}, "
+             f"planning {result.planning_time_s:.1f} s, {rows[-1]['wall_s']:.1f} s")  # fmt: skip
     return rows
 
 
-def mean(values: list[float]) -> float:
+# ---------------------------------------------------------------------------- the tables
+
+
+def mean(values: Iterable[float]) -> float:
+    values = list(values)
     return statistics.fmean(values) if values else float("nan")
+
+
+def exec_ratio(row: Mapping[str, Any]) -> float | None:
+    """Execution length / SA length of a valid row (None when either is missing)."""
+    ok = row["valid"] and row["sa_length"] and row["exec_length"] is not None
+    return row["exec_length"] / row["sa_length"] if ok else None
+
+
+def single_agent_rows(rows: Iterable[Row], methods: Sequence[str]) -> list[Row]:
+    """The N = 1 row of every method: with one agent each method is the SA plan."""
+    return [
+        {**r, "method": m, "n1_is_sa": True} for r in rows if r["method"] == "sa" for m in methods
+    ]
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One method at one (domain, N): means over that domain's tasks."""
+
+    length: float  # mean execution length of the valid rows
+    ratio: float  # mean of the per-task exec/SA of the valid rows
+    time_s: float  # mean planning time
+    tasks: int
+    failed: int  # rows without a valid schedule (planner timeout, no plan, invalid schedule)
+    longer_than_sa: int  # valid rows whose schedule is longer than the SA plan
+    inexact: int  # valid rows scored at the scorer's node budget (length: an upper bound)
+
+
+def cell(rows: Sequence[Row]) -> Cell:
+    valid = [r for r in rows if r["valid"] and r["exec_length"] is not None]
+    times = [r["planning_time_s"] for r in rows if r["planning_time_s"] is not None]
+    return Cell(
+        length=mean(r["exec_length"] for r in valid),
+        ratio=mean(x for x in map(exec_ratio, valid) if x is not None),
+        time_s=mean(times),
+        tasks=len(rows),
+        failed=len(rows) - len(valid),
+        longer_than_sa=sum(
+            bool(r["sa_length"]) and r["exec_length"] > r["sa_length"] for r in valid
+        ),
+        inexact=sum(r.get("exact") is False for r in valid),
+    )
+
+
+def summarise(
+    rows: Iterable[Row], methods: Sequence[str], ns: Sequence[int]
+) -> dict[tuple[str, int, str], Cell]:
+    """``(domain, N, method)`` -> :class:`Cell`, over ``sa`` and ``methods`` (N = 1: the SA
+    rows). Only tasks whose SA row is present count, so every cell covers the same tasks."""
+    rows = list(rows)
+    sa = [r for r in rows if r["method"] == "sa"]
+    have_sa = {(r["domain"], r["task"]) for r in sa}
+    by: dict[tuple[str, int, str], list[Row]] = defaultdict(list)
+    for r in [*single_agent_rows(sa, methods), *rows]:
+        if (r["domain"], r["task"]) in have_sa and (r["method"] in methods or r["method"] == "sa"):
+            by[(r["domain"], int(r["agents"]), r["method"])].append(r)
+    domains = sorted({r["domain"] for r in sa})
+    table = {}
+    for domain in domains:
+        for n in ns:
+            for m in ["sa", *methods]:
+                group = by[(domain, 1, "sa")] if m == "sa" else by[(domain, n, m)]
+                if group:
+                    table[(domain, n, m)] = cell(group)
+    return table
+
+
+def macro_ratio(table: Mapping[tuple[str, int, str], Cell], method: str, n: int) -> float:
+    """Mean over the domains of the per-domain mean exec/SA (nan if a domain lacks it)."""
+    ratios = [c.ratio for (d, k, m), c in table.items() if k == n and m == method]
+    return statistics.fmean(ratios) if ratios else float("nan")
+
+
+def no_longer_than_ma(
+    table: Mapping[tuple[str, int, str], Cell], method: str, n: int
+) -> tuple[list[str], int]:
+    """The domains where ``method``'s mean exec/SA is at most MA's at N (or where MA solved
+    no task and ``method`` did), and how many domains have both."""
+    domains = sorted({d for (d, k, m) in table if k == n and m == method})
+    both = [d for d in domains if (d, n, "ma") in table]
+
+    def wins(domain: str) -> bool:
+        mine, ma = table[(domain, n, method)].ratio, table[(domain, n, "ma")].ratio
+        return mine <= ma + 1e-9 or (ma != ma and mine == mine)
+
+    return [d for d in both if wins(d)], len(both)
+
+
+def _f(x: float, digits: int) -> str:
+    return "" if x != x else f"{x:.{digits}f}"
+
+
+def macro_time(table: Mapping[tuple[str, int, str], Cell], method: str, n: int) -> float:
+    """Mean over the domains of the per-domain mean planning time."""
+    times = [c.time_s for (d, k, m), c in table.items() if k == n and m == method]
+    return statistics.fmean(times) if times else float("nan")
+
+
+def overview(table: Mapping[tuple[str, int, str], Cell], methods: Sequence[str], ns: Sequence[int],
+             star: Mapping[str, str]) -> list[str]:  # fmt: skip
+    """Method x N rows, domains across: mean exec/SA, its macro mean, the macro planning time
+    and its ratio to MA's (the compact form of the per-domain table, as issue 11 shows it)."""
+    domains = sorted({d for d, _, _ in table})
+    head = ["method", "N", *domains, "macro", "planning time s", "time / MA"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for n in ns:
+        for m in ["sa"] if n == 1 else methods:
+            ratios = [_f(table[(d, n, m)].ratio, 3) if (d, n, m) in table else "" for d in domains]
+            ma_time = macro_time(table, "ma", n) if n > 1 else float("nan")
+            ratio = macro_time(table, m, n) / ma_time if m != "ma" else float("nan")
+            cells = [star.get(m, m), str(n), *ratios, _f(macro_ratio(table, m, n), 3)]
+            lines.append(
+                "| " + " | ".join([*cells, _f(macro_time(table, m, n), 2), _f(ratio, 3)]) + " |"
+            )
+    return lines
+
+
+def _length(cell: Cell | None, tasks: int) -> str:
+    if cell is None:
+        return ""
+    return _f(cell.length, 1) + ("" if cell.tasks == tasks else f" ({cell.tasks} tasks)")
+
+
+def _time_ratio(cell: Cell | None, ma: Cell | None) -> str:
+    return _f(cell.time_s / ma.time_s, 3) if cell and ma and ma.time_s else ""
+
+
+def report(
+    rows: Iterable[Row],
+    methods: Sequence[str],
+    ns: Sequence[int],
+    targets: Mapping[int, float] | None = None,
+    default: str | None = None,
+) -> str:
+    """The per-domain side-by-side table, then the macro exec/SA per N (``targets``: the
+    goals of the offline ``default`` decomposer) and the domains no longer than MA."""
+    table = summarise(rows, methods, ns)
+    domains = sorted({d for d, _, _ in table})
+    ts = [m for m in methods if m != "ma"]
+    has_ma = "ma" in methods
+    star = {m: f"{m}*" if m == default else m for m in methods}
+    lines = ["exec length / SA length, mean over each domain's tasks (N = 1: the SA plan):", ""]
+    lines += [*overview(table, methods, ns, star), ""]
+    head = ["domain", "N", "tasks", "SA len", *(f"{star[m]} len" for m in methods)]
+    head += [f"{star[m]}/SA" for m in methods]
+    head += ["SA time s", *(f"{star[m]} time s" for m in methods)]
+    head += [f"{star[m]}/MA time" for m in ts] if has_ma else []
+    head += ["longer than SA", "inexact", "failed"]
+    lines += ["Per domain and N, side by side (means over the domain's tasks):", ""]
+    lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for domain in domains:
+        sa = table[(domain, 1, "sa")]
+        for n in ns:
+            got = {m: table.get((domain, n, m)) for m in methods}
+            cells = [domain, str(n), str(sa.tasks), _f(sa.length, 1)]
+            # a method run on fewer tasks than SA says on how many
+            cells += [_length(c, sa.tasks) for c in got.values()]
+            cells += [_f(c.ratio, 3) if c else "" for c in got.values()]
+            cells += [_f(sa.time_s, 2)] + [_f(c.time_s, 2) if c else "" for c in got.values()]
+            if has_ma:
+                cells += [_time_ratio(got[m], got["ma"]) for m in ts]
+            longer = sum(c.longer_than_sa for m, c in got.items() if c and m != "ma")
+            # at N = 1 every method is the one SA row: count its failures once
+            present = [c for c in got.values() if c]
+            inexact = sum(c.inexact for c in present)
+            failed = sa.failed if n == 1 else sum(c.failed for c in present)
+            cells += [str(longer), str(inexact), str(failed)]
+            lines.append("| " + " | ".join(cells) + " |")
+    lines += [
+        "",
+        "N = 1: every method is the SA plan (shown as such, not run). Lengths and "
+        "ratios are over the valid rows; failed: no valid schedule (planner timeout, no "
+        "plan, invalid schedule), its planning time still counts; inexact: scored at the "
+        "scorer's node budget (the length is an upper bound). A blank macro: some domain "
+        "has no solved task.",
+    ]
+    if default in methods:
+        lines += [f"* the offline default decomposer (conf/config.yaml): {default}"]
+    lines += ["", "Macro exec/SA (mean over domains of the per-task mean):", ""]
+    head = ["N", "target", *(star[m] for m in methods)]
+    head += [f"{star[m]}: domains <= MA" for m in ts] if has_ma else []
+    lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for n in ns:
+        target = (targets or {}).get(n)
+        cells = [str(n), "" if target is None else f"{target:.2f}"]
+        cells += [_f(macro_ratio(table, m, n), 3) for m in methods]
+        if has_ma:
+            for m in ts:
+                wins, total = no_longer_than_ma(table, m, n)
+                cells.append(f"{len(wins)}/{total}")
+        lines.append("| " + " | ".join(cells) + " |")
+    if has_ma and ts:
+        lines += ["", "Domains where each method is no longer than MA (mean exec/SA):", ""]
+        for n in ns:
+            if n == 1:
+                continue
+            parts = [f"{m}: {', '.join(no_longer_than_ma(table, m, n)[0]) or '-'}" for m in ts]
+            lines.append(f"- N = {n}: " + "; ".join(parts))
+    return "\n".join(lines)
+
+
+def report_all(
+    rows: Sequence[Row], methods: Sequence[str], ns: Sequence[int], default: str | None
+) -> str:
+    """One :func:`report` per data root (the issue's targets apply to the 100 tasks only)."""
+    out = []
+    for label in sorted({str(r.get("data", LEGACY["data"])) for r in rows}):
+        part = [r for r in rows if str(r.get("data", LEGACY["data"])) == label]
+        tasks = sorted({(r["domain"], r["task"]) for r in part if r["method"] == "sa"})
+        counts: dict[str, int] = defaultdict(int)
+        for d, _ in tasks:
+            counts[d] += 1
+        out.append(f"## data root {label}: {len(tasks)} tasks ("
+                   + ", ".join(f"{d} {k}" for d, k in sorted(counts.items())) + ")\n")  # fmt: skip
+        targets = TARGETS if label == LEGACY["data"] else None
+        present = [m for m in methods if any(r["method"] == m for r in part)]
+        out.append(report(part, present, ns, targets, default) + "\n")
+    return "\n".join(out)
+
+
+# ---------------------------------------------------------------------------- running
 
 
 def task_ids(spec: str, available: list[int]) -> list[int]:
@@ -118,12 +461,21 @@ def task_ids(spec: str, available: list[int]) -> list[int]:
     return [t for t in available if int(lo) <= t <= int(hi or lo)]
 
 
+def _load_rows(paths: Iterable[str]) -> list[Row]:
+    return [r for p in paths for r in json.loads(Path(p).read_text())]
+
+
+def _clock(seconds: float) -> str:
+    minutes, secs = divmod(int(seconds), 60)
+    return f"{minutes // 60}:{minutes % 60:02d}:{secs:02d}"
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument("--data", default=str(DEFAULT_DATA_ROOT))
-    parser.add_argument("--domains", nargs="*")
+    parser.add_argument("--data", nargs="+", default=[str(DEFAULT_DATA_ROOT)], help="data roots")
+    parser.add_argument("--domains", nargs="*", help=f"default: {' '.join(BENCHMARK_DOMAINS)}")
     parser.add_argument("--tasks", default="1-20", help="a range 1-20 or a list 1,6,11,16")
     parser.add_argument("--agents", nargs="*", type=int, default=[1, 2, 3, 4])
     parser.add_argument("--methods", nargs="*", default=list(METHODS), choices=METHODS)
@@ -132,127 +484,91 @@ def main() -> int:
     parser.add_argument("--alias", default="lama-first")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", default="outputs/bench/methods.json")
+    parser.add_argument("--resume", action="store_true", help="keep the rows already in --out")
+    parser.add_argument("--reuse", nargs="*", default=[], help="rows JSON files of earlier runs")
     parser.add_argument(
-        "--reuse", help="rows JSON of an earlier run: its rows of methods not run now (e.g. MA)"
+        "--reuse-methods",
+        nargs="*",
+        default=list(REUSED_BY_DEFAULT),
+        help="methods whose rows --reuse takes (default: sa ma, which no decomposer changes)",
     )
     parser.add_argument(
         "--report", nargs="*", help="print the tables of these rows JSON files, run nothing"
     )
     args = parser.parse_args()
-    domains = args.domains or list_domains(Path(args.data))
+    ns = sorted(set(args.agents) | {1})
     if args.report:
-        rows = [r for f in args.report for r in json.loads(Path(f).read_text())]
-        done = {(r["domain"], r["task"]) for r in rows if r["method"] == "sa"}
-        rows = [r for r in rows if (r["domain"], r["task"]) in done]
-        methods = [m for m in args.methods if any(r["method"] == m for r in rows)]
-        print(f"# {' '.join(sys.argv)}\n# {len(done)} tasks\n")
-        print(report(rows, domains, sorted({r["agents"] for r in rows}), methods))
+        # one row per key: a later file's row replaces an earlier one's
+        shown = list({row_key(r): r for r in _load_rows(args.report)}.values())
+        if args.domains:
+            shown = [r for r in shown if r["domain"] in args.domains]
+        print(f"# {' '.join(sys.argv)}\n")
+        print(report_all(shown, [m for m in METHODS if m in args.methods], ns, offline_default()))
         return 0
-    # task-major order: a run stopped early still covers every domain
-    jobs = sorted(
-        ((d, t) for d in domains for t in task_ids(args.tasks, list_tasks(d, Path(args.data)))),
-        key=lambda job: (job[1], job[0]),
-    )
-    rows: list[dict[str, Any]] = []
-    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+
+    fallback, out = not args.no_fallback, Path(args.out)
+    old = _load_rows(args.reuse)
+    known = reusable_rows(old, args.reuse_methods, args.alias, args.time_limit, fallback)
+    for row in known.values():
+        row.setdefault("reused_from", "--reuse")
+    earlier: list[Row] = json.loads(out.read_text()) if args.resume and out.is_file() else []
+    # rows of this very run: every method
+    known.update(reusable_rows(earlier, ("sa", *METHODS), args.alias, args.time_limit, fallback))
+    jobs = []
+    for data in args.data:
+        label = data_label(Path(data))
+        available = list_domains(Path(data))
+        domains = [d for d in (args.domains or BENCHMARK_DOMAINS) if d in available]
+        for domain in domains:
+            for t in task_ids(args.tasks, list_tasks(domain, Path(data))):
+                of_task = tuple(r for k, r in known.items() if k[:3] == (label, domain, t))
+                jobs.append(Job(data, label, domain, t, tuple(ns), tuple(args.methods), args.alias,
+                                args.time_limit, fallback, of_task))  # fmt: skip
+    # task-major order (a run stopped early still covers every domain), larger roots last
+    jobs.sort(key=lambda j: (args.data.index(j.data), j.task, j.domain))
+    # a resumed --out keeps its rows of tasks outside this run (other roots, domains, tasks)
+    ours = {(j.label, j.domain, j.task) for j in jobs}
+    rows: list[Row] = [r for r in earlier if row_key(r)[:3] not in ours]
+    start = time.perf_counter()
+    _say(f"{len(jobs)} tasks, {len(known)} rows reused; rows to {out}")
     with ProcessPoolExecutor(args.workers) as pool:
-        futures = [
-            pool.submit(job, args.data, d, t, args.agents, args.time_limit, args.alias,
-                        args.methods, not args.no_fallback)
-            for d, t in jobs
-        ]  # fmt: skip
+        futures = {pool.submit(run_job, job): job for job in jobs}
         for done, future in enumerate(as_completed(futures), start=1):
-            rows += future.result()
-            Path(args.out).write_text(json.dumps(rows, indent=1))  # partial results survive
-            print(f"\r{done}/{len(jobs)} tasks", end="", file=sys.stderr, flush=True)
-    print(file=sys.stderr)
-    methods = list(args.methods)
-    if args.reuse:
-        ran = {(r["domain"], r["task"]) for r in rows}
-        old = [
-            r for r in json.loads(Path(args.reuse).read_text()) if (r["domain"], r["task"]) in ran
-        ]
-        rows += [r for r in old if r["method"] not in ("sa", *methods)]
-        methods = [m for m in METHODS if m in methods or any(r["method"] == m for r in old)]
-    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.out).write_text(json.dumps(rows, indent=1))
+            job = futures[future]
+            try:
+                got = future.result()
+            except Exception as error:  # e.g. an unreadable task: the others go on
+                _say(
+                    f"[{done}/{len(jobs)}] {job.label}:{job.domain}/p{job.task:02d} FAILED: {error}"
+                )
+                continue
+            rows += got
+            write_json_atomic(out, rows, indent=1)  # finished tasks survive a crash or a stop
+            reused = sum(r in job.known for r in got)
+            elapsed = time.perf_counter() - start
+            # rough: later tasks are larger, so the estimate errs short
+            left = elapsed / done * (len(jobs) - done)
+            _say(f"[{done}/{len(jobs)}] {job.label}:{job.domain}/p{job.task:02d}: "
+                 f"{len(got) - reused} rows planned, {reused} reused; "
+                 f"elapsed {_clock(elapsed)}, left ~{_clock(left)}")  # fmt: skip
+    methods = [m for m in METHODS if m in args.methods]
     print(f"# {' '.join(sys.argv)}")
     print(f"# planner {args.alias}, search time limit {args.time_limit:g} s (TwoStep: limit/N per "
-          f"agent); fallback_if_longer={not args.no_fallback}; tasks {args.tasks}\n")  # fmt: skip
-    if args.reuse:
-        print(
-            f"# rows of {', '.join(m for m in methods if m not in args.methods)} from {args.reuse}\n"
-        )
-    print(report(rows, domains, sorted(set(args.agents)), methods))
-    invalid_total = sum(not r["valid"] for r in rows)
-    print(f"\nrows: {len(rows)}, not valid (failed or invalid schedule): {invalid_total}")
-    return 1 if invalid_total else 0
-
-
-def report(
-    rows: list[dict[str, Any]], domains: list[str], ns: list[int], methods: list[str]
-) -> str:
-    """The per-domain table, then the macro exec/SA per N (mean over domains)."""
-    by: dict[tuple[str, str, int], list[dict[str, Any]]] = defaultdict(list)
-    for row in rows:
-        by[(row["domain"], row["method"], row["agents"])].append(row)
-
-    def ratio(row: dict[str, Any]) -> float | None:
-        ok = row["valid"] and row["sa_length"]
-        return row["exec_length"] / row["sa_length"] if ok else None
-
-    def mean_ratio(rs: list[dict[str, Any]]) -> float:
-        return mean([x for x in map(ratio, rs) if x is not None])
-
-    lines = []
-    head = "| domain | N | " + " | ".join(f"{m} len" for m in ["sa", *methods])
-    head += " | " + " | ".join(f"{m}/SA" for m in methods)
-    head += " | SA time s | " + " | ".join(f"{m} time s" for m in methods)
-    ts = [m for m in methods if m != "ma"]
-    if "ma" in methods:
-        head += " | " + " | ".join(f"{m}/MA time" for m in ts)
-    head += " | longer than SA | invalid |"
-    lines += [head, "|" + "---|" * (head.count("|") - 1)]
-    macro: dict[tuple[str, int], list[float]] = defaultdict(list)
-    for domain in domains:
-        sa = by[(domain, "sa", 1)]
-        sa_len = mean([r["exec_length"] for r in sa if r["valid"]])
-        sa_time = mean([r["planning_time_s"] for r in sa])
-        for n in ns:
-            if n == 1:
-                lines.append(f"| {domain} | 1 | {sa_len:.1f} |" + " |" * (head.count("|") - 4)
-                             + f" {sum(not r['valid'] for r in sa)} |")  # fmt: skip
-                continue
-            group = {m: by[(domain, m, n)] for m in methods}
-            lens = [mean([r["exec_length"] for r in group[m] if r["valid"]]) for m in methods]
-            ratios = [mean_ratio(group[m]) for m in methods]
-            for m, x in zip(methods, ratios, strict=True):
-                macro[(m, n)].append(x)
-            times = [mean([r["planning_time_s"] for r in group[m]]) for m in methods]
-            cells = [f"{x:.1f}" for x in lens] + [f"{x:.3f}" for x in ratios]
-            cells += [f"{sa_time:.2f}"] + [f"{x:.2f}" for x in times]
-            if "ma" in methods:
-                ma_t = times[methods.index("ma")]
-                cells += [f"{times[methods.index(m)] / ma_t:.3f}" for m in ts]
-            longer = sum(
-                1 for m in ts for r in group[m] if r["valid"] and r["exec_length"] > r["sa_length"]
-            )
-            bad = sum(not r["valid"] for m in methods for r in group[m])
-            lines.append(f"| {domain} | {n} | | " + " | ".join(cells) + f" | {longer} | {bad} |")
-    lines += ["", "Macro exec/SA (mean over domains of the per-task mean):", ""]
-    lines += ["| N | target | " + " | ".join(methods) + " | " + " | ".join(
-        f"{m}: domains <= MA" for m in ts if "ma" in methods) + " |"]  # fmt: skip
-    lines += ["|" + "---|" * (2 + len(methods) + (len(ts) if "ma" in methods else 0))]
-    for n in ns:
-        if n == 1:
-            continue
-        cells = [f"{statistics.fmean(macro[(m, n)]):.3f}" for m in methods]
-        if "ma" in methods:
-            ma = macro[("ma", n)]
-            cells += [f"{sum(x <= y + 1e-9 for x, y in zip(macro[(m, n)], ma, strict=True))}/{len(ma)}"
-                      for m in ts]  # fmt: skip
-        lines.append(f"| {n} | {TARGETS.get(n, float('nan')):.2f} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+          f"agent); fallback_if_longer={fallback}; tasks {args.tasks}; "
+          f"{sum('reused_from' in r for r in rows)} rows reused\n")  # fmt: skip
+    print(report_all(rows, methods, ns, offline_default()))
+    unsolved = sum(not r["valid"] for r in rows)
+    # a timeout is a result; a schedule that fails re-validation or a crash is a bug
+    broken = [
+        r
+        for r in rows
+        if r["status"] == "error" or r.get("message", "").startswith("schedule invalid")
+    ]
+    inexact = sum(r.get("exact") is False for r in rows)
+    print(f"\nrows: {len(rows)}; not valid: {unsolved} (of which invalid schedules or crashes: "
+          f"{len(broken)}); scored inexactly (node budget: the length is an upper bound): "
+          f"{inexact}")  # fmt: skip
+    return 1 if broken else 0
 
 
 if __name__ == "__main__":
