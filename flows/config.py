@@ -43,7 +43,7 @@ class MethodConfig:
 
 @dataclass
 class DecomposerConfig:
-    name: str = "goal-split"  # goal-split | expert | llm | plan-split | plan-deal | portfolio
+    name: str = "plan-deal"  # goal-split | expert | llm | plan-split | plan-deal | portfolio
     link_degree: int = 2
     cut: str = "best"  # plan-deal: free | holding | best (both, the shorter kept)
 

@@ -27,7 +27,7 @@ from tests.test_plan_split import (
 from twostep import plan_deal
 from twostep.benchmark import load_task
 from twostep.pipeline import run_single_agent, run_twostep
-from twostep.plan_deal import PlanDeal, deal_plan, eliminate_actions
+from twostep.plan_deal import PlanDeal, deal_plan, eliminate_actions, eliminate_joint
 from twostep.portfolio import Portfolio
 from twostep.strips import Grounder
 
@@ -58,6 +58,26 @@ def test_action_elimination_drops_what_the_goal_does_not_need(tmp_path: Path) ->
     assert [str(a) for a in cleaned] == list(TWO_TOWERS_PLAN)
     # a plan with nothing to spare is left alone
     assert eliminate_actions(task.problem, cleaned) == cleaned
+
+
+def test_joint_elimination_uses_each_agents_own_arm(tmp_path: Path) -> None:
+    # Two agents. Agent 1 picks e up, parks it on f, takes it back and puts it down before
+    # doing the real work. Dropping its first (pickup e) makes (stack e f), (unstack e f)
+    # and (putdown e) inapplicable, so they go with it, and the goal still holds: agent 1
+    # keeps only its last four actions. Agent 0's chain is needed for the goal and stays.
+    task = _blocks(tmp_path, TWO_TOWERS)
+    g = Grounder(task.problem).ground
+    joint = [
+        (0, g("(pickup b)")), (1, g("(pickup e)")), (0, g("(stack b c)")), (1, g("(stack e f)")),
+        (0, g("(pickup a)")), (1, g("(unstack e f)")), (0, g("(stack a b)")),
+        (1, g("(putdown e)")), (1, g("(pickup e)")), (1, g("(stack e f)")),
+        (1, g("(pickup d)")), (1, g("(stack d e)")),
+    ]  # fmt: skip
+    kept = eliminate_joint(task.problem, joint, 2, BW)
+    assert [(a, str(x)) for a, x in kept] == [
+        (0, "(pickup b)"), (0, "(stack b c)"), (0, "(pickup a)"), (0, "(stack a b)"),
+        (1, "(pickup e)"), (1, "(stack e f)"), (1, "(pickup d)"), (1, "(stack d e)"),
+    ]  # fmt: skip
 
 
 def test_termes_agents_walk_to_their_pieces(tmp_path: Path, data_root: Path) -> None:
@@ -122,6 +142,22 @@ def test_portfolio_keeps_the_deal_when_it_is_shortest(tmp_path: Path) -> None:
     assert run.exec_length == min(r["exec_length"] for r in rows if r["exec_length"])
     # plan-deal is tried with N agents only
     assert [r["agents"] for r in rows if r["decomposer"] == "plan-deal"] == [2]
+
+
+def test_walk_links_kept_when_no_walk_exists(data_root: Path) -> None:
+    # termes p13 with 4 agents: in the walk-free order a ramp goes before an agent has
+    # crossed it and the replay finds no walk (this failed before the retry); with the
+    # walks' links kept the deal succeeds and re-validates.
+    import yaml
+
+    preds = yaml.safe_load((Path(__file__).parents[1] / "conf/domain/termes.yaml").read_text())
+    preds = preds["agent_predicates"]
+    task = load_task("termes", 13, data_root)
+    sa = run_single_agent(task, FAST)
+    run = run_twostep(task, 4, PlanDeal(preds), preds, FAST, sa_plan=sa.planner_calls[0].result)
+    assert run.fallback is None and run.exec_length is not None
+    assert sa.exec_length is not None and run.exec_length < sa.exec_length
+    _check(task.problem, run, preds)
 
 
 @pytest.mark.parametrize("agents", [2, 4])

@@ -31,6 +31,11 @@ agents take turns on the SA plan itself:
    in the current environment, to a place where that action applies (often nowhere: it
    is already there). The replay is a sequential run of all agents' plans, checked step
    by step, so a valid joint schedule exists; the parallel scorer then finds the shortest.
+   When no walk exists (the walk-free order of step 1 let a piece take a ramp away before
+   another agent crossed it), the deal is made again with the walks' causal links kept.
+4. *Joint clean-up*: action elimination again, over the replay with one copy of the
+   agent facts per agent (:func:`eliminate_joint`): detours a single agent needed (a
+   block parked on another to free its only arm) go.
 
 Every action of an agent's plan is an action of Fast Downward's SA plan, or a shortest
 walk found by the search above; the joint schedule is re-validated like every other.
@@ -98,9 +103,17 @@ def is_walking(
 
 
 class Walker:
-    """Shortest walks of one agent: breadth-first over the domain's walking actions."""
+    """Shortest walks of one agent: breadth-first over the domain's walking actions.
 
-    def __init__(self, problem: Problem, agent_predicates: Collection[str]):
+    ``universe`` holds every environment fact a walk may meet (the facts of the SA plan's
+    states: a replay only runs that plan's actions, and walks change no environment
+    fact). The walking actions that could apply where an agent stands are found once per
+    place, by joining their preconditions against it, and filtered by the current state.
+    """
+
+    def __init__(
+        self, problem: Problem, agent_predicates: Collection[str], universe: frozenset[Fact]
+    ):
         self.problem = problem
         self.grounder = Grounder(problem)
         self.agent_predicates = frozenset(agent_predicates)
@@ -113,22 +126,35 @@ class Walker:
                     for a in (*s.add, *s.delete))
         ]  # fmt: skip
         self.objects = problem.all_objects
+        self.universe = environment_part(universe, agent_predicates)
+        self._candidates: dict[frozenset[Fact], list[GroundAction]] = {}
 
-    def successors(self, state: frozenset[Fact]) -> Iterator[GroundAction]:
-        by_predicate: dict[str, list[Fact]] = defaultdict(list)
-        for fact in state:
-            by_predicate[fact[0]].append(fact)
-        for schema in self.schemas:
-            for binding in _bindings(schema, by_predicate, self.objects, self.problem):
-                text = (
-                    "(" + " ".join((schema.name, *(binding[v] for v, _ in schema.parameters))) + ")"
-                )
-                try:
-                    action = self.grounder.ground(text)
-                except PlanError:
-                    continue
-                if action.applicable(state):
-                    yield action
+    def candidates(self, own: frozenset[Fact]) -> list[GroundAction]:
+        """Walking actions whose preconditions hold in the universe plus ``own``."""
+        found = self._candidates.get(own)
+        if found is None:
+            state = self.universe | own
+            by_predicate: dict[str, list[Fact]] = defaultdict(list)
+            for fact in state:
+                by_predicate[fact[0]].append(fact)
+            found = []
+            for schema in self.schemas:
+                for binding in _bindings(schema, by_predicate, self.objects, self.problem):
+                    names = (binding[v] for v, _ in schema.parameters)
+                    try:
+                        action = self.grounder.ground("(" + " ".join((schema.name, *names)) + ")")
+                    except PlanError:
+                        continue
+                    if action.applicable(state):
+                        found.append(action)
+            self._candidates[own] = found
+        return found
+
+    def successors(
+        self, environment: frozenset[Fact], own: frozenset[Fact]
+    ) -> Iterator[GroundAction]:
+        state = environment | own
+        return (a for a in self.candidates(own) if a.applicable(state))
 
     def walk_to(
         self, environment: frozenset[Fact], own: frozenset[Fact], target: GroundAction
@@ -147,7 +173,7 @@ class Walker:
                 return path[::-1]
             if len(parents) > WALK_LIMIT:
                 break
-            for action in self.successors(environment | node):
+            for action in self.successors(environment, node):
                 child = agent_part(action.apply(environment | node), self.agent_predicates)
                 if child not in parents:
                     parents[child] = (node, action)
@@ -249,14 +275,41 @@ def deal_plan(
     cut: str = "free",
     order: str = "critical",
 ) -> Deal:
-    """Steps 1-3 of the module docstring for one SA plan and ``agents`` agents."""
+    """Steps 1-3 of the module docstring for one SA plan and ``agents`` agents.
+
+    The order of step 1 leaves walking out; when the replay then finds no walk (a ramp
+    taken away before an agent crossed it), the deal is made again with the walks' own
+    causal links kept, each walk standing for the acting action it leads to.
+    """
     grounded = eliminate_actions(problem, Grounder(problem).ground_plan(plan))
+    try:
+        return _deal(problem, grounded, agents, agent_predicates, cut, order, keep_walks=False)
+    except DealError:
+        return _deal(problem, grounded, agents, agent_predicates, cut, order, keep_walks=True)
+
+
+def _deal(
+    problem: Problem,
+    grounded: list[GroundAction],
+    agents: int,
+    agent_predicates: Collection[str],
+    cut: str,
+    order: str,
+    keep_walks: bool,
+) -> Deal:
     positional = positional_predicates(problem.domain)
     walking = [is_walking(a, agent_predicates, positional) for a in grounded]
-    # the order the acting actions need; walks are found again at replay (step 3)
     acting = [i for i in range(len(grounded)) if not walking[i]]
-    sub_edges, _ = plan_order(problem, [grounded[i] for i in acting], agent_predicates)
-    edges = {(acting[i], acting[j]) for i, j in sub_edges}
+    if keep_walks:  # a walk's links bind the acting action it leads to (else the one before)
+        edges_all, _ = plan_order(problem, grounded, agent_predicates)
+        leads = {}
+        for i in range(len(grounded)):
+            after = [j for j in acting if j >= i]
+            leads[i] = after[0] if after else max((j for j in acting if j < i), default=i)
+        edges = {(leads[i], leads[j]) for i, j in edges_all if leads[i] != leads[j]}
+    else:  # the order the acting actions need; walks are found again at replay (step 3)
+        sub_edges, _ = plan_order(problem, [grounded[i] for i in acting], agent_predicates)
+        edges = {(acting[i], acting[j]) for i, j in sub_edges}
     pieces = [[i for i in p if not walking[i]]
               for p in pieces_of(problem, grounded, agent_predicates, edges, cut)]  # fmt: skip
     pieces = [p for p in pieces if p]
@@ -301,7 +354,7 @@ def deal_plan(
                 for st in sa_states]  # fmt: skip
     resting = agent_part(problem.init, agent_predicates) - standing[0]
     at = [standing[0]] * agents
-    walker = Walker(problem, agent_predicates)
+    walker = Walker(problem, agent_predicates, frozenset().union(*sa_states))
     walk_cache: dict[tuple[frozenset[Fact], int], int] = {}
 
     def walk_length(position: frozenset[Fact], i: int, default: int) -> int:
@@ -365,10 +418,9 @@ def deal_plan(
     pending = sorted(range(len(pieces)), key=lambda p: (start[p], p))
     environment = environment_part(problem.init, agent_predicates)
     own_state = [agent_part(problem.init, agent_predicates)] * agents
-    plans: list[list[str]] = [[] for _ in range(agents)]
     replayed: list[int] = []
     done: set[int] = set()
-    walks = 0
+    joint: list[tuple[int, GroundAction]] = []  # the replay: (agent, action) in order
     while pending:
         for p in pending:
             if not preds[p] <= done:
@@ -381,19 +433,20 @@ def deal_plan(
         else:
             raise DealError(f"piece {pending[0]}: no agent can walk to where it applies")
         a = owner[p]
-        plans[a].extend(str(step) for step in path)
+        joint.extend((a, step) for step in path)
         environment = environment_part(state, agent_predicates)
         own_state[a] = agent_part(state, agent_predicates)
-        walks += len(path) - len(pieces[p])
         pending.remove(p)
         done.add(p)
         replayed.append(p)
-    goal_agent = frozenset(f for f in problem.goal.positive if f[0] in agent_predicates)
-    for a in range(agents):  # agent-specific goal literals hold in every agent's copy
-        if goal_agent and not goal_agent <= own_state[a]:
-            raise DealError(f"agent {a} ends without {sorted(goal_agent - own_state[a])}")
-    if not problem.goal.holds(environment | own_state[0]):
+    if not _joint_goal(problem, environment, own_state):
         raise DealError("the dealt plans do not reach the goal")
+    # 4. what several agents no longer need (a block parked for want of a second hand)
+    joint = eliminate_joint(problem, joint, agents, agent_predicates)
+    walks = sum(is_walking(step, agent_predicates, positional) for _, step in joint)
+    plans: list[list[str]] = [[] for _ in range(agents)]
+    for a, step in joint:
+        plans[a].append(str(step))
     return Deal(
         [pieces[p] for p in replayed],
         [owner[p] for p in replayed],
@@ -402,6 +455,53 @@ def deal_plan(
         walks,
         len(grounded),
     )
+
+
+def _joint_goal(
+    problem: Problem, environment: frozenset[Fact], own: Sequence[frozenset[Fact]]
+) -> bool:
+    """The goal holds: environment literals once, agent-specific ones in every copy."""
+    return all(problem.goal.holds(environment | mine) for mine in own)
+
+
+def eliminate_joint(
+    problem: Problem,
+    joint: Sequence[tuple[int, GroundAction]],
+    agents: int,
+    agent_predicates: Collection[str],
+) -> list[tuple[int, GroundAction]]:
+    """:func:`eliminate_actions` over a run of several agents, each with its own copy of
+    the agent-specific facts: drop an action, and every later one that no longer applies,
+    whenever the goal still holds. With more hands, a single agent's detours (a block
+    parked on another to free the arm) are often no longer needed."""
+    start_own = agent_part(problem.init, agent_predicates)
+    steps = list(joint)
+
+    def run(
+        env: frozenset[Fact], own: list[frozenset[Fact]], rest: Sequence[tuple[int, GroundAction]]
+    ) -> tuple[frozenset[Fact], list[frozenset[Fact]], list[tuple[int, GroundAction]]]:
+        own = list(own)
+        kept = []
+        for a, action in rest:
+            state = env | own[a]
+            if action.applicable(state):
+                state = action.apply(state)
+                env = environment_part(state, agent_predicates)
+                own[a] = agent_part(state, agent_predicates)
+                kept.append((a, action))
+        return env, own, kept
+
+    env = environment_part(problem.init, agent_predicates)
+    own = [start_own] * agents
+    i = 0
+    while i < len(steps):
+        end_env, end_own, kept = run(env, own, steps[i + 1 :])
+        if _joint_goal(problem, end_env, end_own):
+            steps[i:] = kept
+            continue
+        env, own, _ = run(env, own, steps[i : i + 1])
+        i += 1
+    return steps
 
 
 def _replay(
@@ -499,6 +599,8 @@ def run_plan_deal(
     deal_time = score_time = 0.0
     best: tuple[ParallelExecution, list[list[str]]] | None = None
     tried: list[dict[str, object]] = []
+    scored: dict[tuple[tuple[str, ...], ...], int] = {}
+    chosen = 0
     variants = [(c, o) for c in deal.cuts for o in ORDERS]
     for cut, order in variants if sa_steps is not None and agents > 1 else ():
         assert sa_steps is not None
@@ -515,6 +617,12 @@ def run_plan_deal(
         plans = [p for p in dealt.plans if p]
         row.update(pieces=len(dealt.pieces), walks=dealt.walks, cleaned_sa_length=dealt.cleaned,
                    agents_used=len(plans))  # fmt: skip
+        key = tuple(map(tuple, plans))
+        if key in scored:  # another cut or order dealt the same plans
+            row.update(same_as=scored[key], exec_length=tried[scored[key]].get("exec_length"))
+            tried.append(row)
+            continue
+        scored[key] = len(tried)
         score_start = time.perf_counter()
         try:
             execution = steps.score(problem, plans, agent_predicates, mode)
@@ -524,9 +632,12 @@ def run_plan_deal(
             row["exec_length"] = execution.length
             if best is None or execution.length < best[0].length:
                 best = (execution, plans)
+                chosen = len(tried)
         score_time += time.perf_counter() - score_start
         tried.append(row)
     run.score_time_s = score_time
+    if best is not None:
+        tried[chosen]["chosen"] = True
     run.extra["deal"] = tried
     if best is not None and fallback_if_longer and sa_steps and best[0].length > len(sa_steps):
         run.fallback = f"joint schedule longer than SA ({best[0].length} > {len(sa_steps)})"
