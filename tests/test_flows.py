@@ -119,7 +119,8 @@ def artifact_paths(shared: dict[str, Path], run_id: str) -> list[str]:
 def test_job_is_recorded_then_reused_without_planning(
     shared: dict[str, Path], tmp_path: Path
 ) -> None:
-    cfg = job_cfg(shared, tmp_path, "method=twostep", "task=2", "agents=2")
+    # goal-split: a helper and a main agent to plan (the default plan-deal plans SA only)
+    cfg = job_cfg(shared, tmp_path, "method=twostep", "decomposer=goal-split", "task=2", "agents=2")
     first = execute_job(cfg, tmp_path / "job1")
     assert first.status == "success" and not first.reused
     assert first.stats.plan_calls == 3  # SA for sa_length, one helper, the main agent
@@ -444,6 +445,7 @@ def test_flow_caches_planner_calls_across_runs(
         shared,
         tmp_path,
         "method=twostep",
+        "decomposer=goal-split",  # SA, a helper and a main agent: three planner calls
         "task=2",
         "orchestration.prefect=true",
         f"orchestration.prefect_api_url={prefect_server}",
