@@ -530,7 +530,7 @@ def main() -> int:
     ours = {(j.label, j.domain, j.task) for j in jobs}
     rows: list[Row] = [r for r in earlier if row_key(r)[:3] not in ours]
     start = time.perf_counter()
-    _say(f"{len(jobs)} tasks, {len(known)} rows reused; rows to {out}")
+    _say(f"{len(jobs)} tasks, {sum(len(j.known) for j in jobs)} earlier rows known; rows to {out}")
     with ProcessPoolExecutor(args.workers) as pool:
         futures = {pool.submit(run_job, job): job for job in jobs}
         for done, future in enumerate(as_completed(futures), start=1):
