@@ -21,7 +21,7 @@ $(VENV)/.synced: pyproject.toml uv.lock
 setup: $(VENV)/.synced
 
 demo: setup
-	$(VENV)/bin/twostep domain=blocksworld task=6 method=twostep decomposer=goal-split agents=2
+	$(VENV)/bin/twostep domain=blocksworld task=6 method=twostep agents=2
 
 test: setup
 	$(VENV)/bin/pytest -q

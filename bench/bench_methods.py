@@ -54,6 +54,7 @@ from twostep.generators import DOMAINS as BENCHMARK_DOMAINS
 from twostep.pipeline import RunResult, check_run, run_multi_agent, run_single_agent, run_twostep
 from twostep.planner import PlannerSettings
 from twostep.planner.results import PlanResult, Status
+from twostep.plan_deal import PlanDeal
 from twostep.portfolio import Portfolio
 
 REPO = Path(__file__).resolve().parent.parent
@@ -64,6 +65,7 @@ CONF = REPO / "conf"
 DECOMPOSERS: dict[str, Callable[[list[str]], Decomposer]] = {
     "goal-split": GoalSplitDecomposer,
     "plan-split": PlanSplitDecomposer,
+    "plan-deal": PlanDeal,
     "portfolio": Portfolio,
 }
 METHODS = ("ma", *DECOMPOSERS)

@@ -30,7 +30,7 @@ class JobError(Exception):
 
 
 METHODS = ("sa", "ma", "twostep")
-DECOMPOSERS = ("goal-split", "expert", "llm", "plan-split", "portfolio")
+DECOMPOSERS = ("goal-split", "expert", "llm", "plan-split", "plan-deal", "portfolio")
 
 
 def planner_settings(cfg: TwostepConfig) -> PlannerSettings:
@@ -62,6 +62,11 @@ def open_decomposer(cfg: TwostepConfig) -> Iterator[Decomposer]:
         from twostep.decomposers.plan_split import PlanSplitDecomposer
 
         yield PlanSplitDecomposer(agent_predicates)
+    elif name == "plan-deal":
+        # Method-level too: run_twostep hands a PlanDeal to twostep.plan_deal.run_plan_deal.
+        from twostep.plan_deal import PlanDeal
+
+        yield PlanDeal(agent_predicates, cfg.decomposer.cut)
     elif name == "portfolio":
         # Method-level: run_twostep hands a Portfolio to twostep.portfolio.run_portfolio.
         from twostep.portfolio import Portfolio

@@ -43,8 +43,9 @@ class MethodConfig:
 
 @dataclass
 class DecomposerConfig:
-    name: str = "goal-split"  # goal-split | expert | llm | plan-split | portfolio
+    name: str = "plan-deal"  # goal-split | expert | llm | plan-split | plan-deal | portfolio
     link_degree: int = 2
+    cut: str = "best"  # plan-deal: free | holding | best (both, the shorter kept)
 
 
 class ExecutorName(enum.StrEnum):

@@ -175,7 +175,11 @@ def format_summary(result: RunResult | Mapping[str, Any]) -> str:
         parts.append(f"sa_length={r['sa_length']}")
     parts.append(f"planning_time={float(r.get('planning_time_s') or 0.0):.2f}s")
     subgoals = r.get("subgoals") or []
-    if r.get("decomposer"):
+    chosen = [d for d in r.get("deal") or [] if d.get("chosen")]
+    if chosen:  # plan-deal: pieces, not subgoals
+        d = chosen[0]
+        parts.append(f"dealt {d.get('pieces')} pieces ({d.get('walks')} walking steps)")
+    elif r.get("decomposer"):
         accepted = sum(1 for s in subgoals if s.get("status") == "accepted")
         parts.append(f"subgoals={accepted}/{len(subgoals)} accepted")
     if r.get("fallback"):

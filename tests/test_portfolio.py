@@ -70,7 +70,7 @@ def test_portfolio_finds_partial_progress_and_fewer_agents(tmp_path: Path) -> No
     members += [f"{m}-chunks" for m in members[:3]]
     assert [(r["decomposer"], r["agents"]) for r in rows] == [
         (m, n) for n in (3, 2) for m in members
-    ]
+    ] + [("plan-deal", 3)]
     assert rows[0]["accepted"] == 1 and rows[0]["exec_length"] < 10
     assert rows[1]["same_as"] == 0  # blocksworld: the same pieces either way
     # goal literals only: clearing b achieves none, so no helper and the SA plan

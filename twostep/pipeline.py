@@ -351,10 +351,27 @@ def run_twostep(
     plan at hand, a joint schedule longer than SA gives way to the SA plan (``fallback``
     says so). Whenever the run uses the SA plan, its planner time counts in planning time
     (``extra["sa_time_included_s"]``). A :class:`~twostep.portfolio.Portfolio` decomposer
-    runs :func:`~twostep.portfolio.run_portfolio` instead.
+    runs :func:`~twostep.portfolio.run_portfolio` instead, and a
+    :class:`~twostep.plan_deal.PlanDeal` :func:`~twostep.plan_deal.run_plan_deal` (it deals
+    the SA plan's pieces to the agents instead of proposing subgoals).
     """
+    from twostep.plan_deal import PlanDeal, run_plan_deal
     from twostep.portfolio import Portfolio, run_portfolio  # it calls this function
 
+    if isinstance(decomposer, PlanDeal):
+        return run_plan_deal(
+            task,
+            agents,
+            decomposer,
+            agent_predicates,
+            settings,
+            mode,
+            seed,
+            sa_length,
+            steps,
+            sa_plan,
+            fallback_if_longer,
+        )
     if isinstance(decomposer, Portfolio):
         chosen = run_portfolio(
             task,

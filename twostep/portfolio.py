@@ -8,8 +8,10 @@ scores it exactly like any run, and returns the run with the shortest execution 
 (ties: the earlier candidate). Every candidate's planner time counts in the planning time,
 the SA plan's once; ``extra["candidates"]`` (result.json ``candidates``) lists every
 candidate with its length. Candidates whose helper subgoals equal an earlier candidate's
-are not planned again (same subgoals, same run, whatever the number of agents). With ``fallback_if_longer`` the SA plan is
-itself the last candidate: a winner longer than SA gives way to it.
+are not planned again (same subgoals, same run, whatever the number of agents). With
+``fallback_if_longer`` the SA plan is itself the last candidate: a winner longer than SA
+gives way to it. plan-deal is a member too: it deals the SA plan's pieces to the agents
+instead of proposing subgoals (:mod:`twostep.plan_deal`), and costs no planner call.
 
 The portfolio is a decomposer only in name: ``run_twostep`` hands a :class:`Portfolio` to
 :func:`run_portfolio`, since choosing needs the whole pipeline, not just subgoals.
@@ -26,6 +28,7 @@ from twostep.benchmark import BenchmarkTask
 from twostep.decomposers.base import Decomposer, DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.decomposers.plan_split import PlanSplitDecomposer
+from twostep.plan_deal import PlanDeal
 from twostep.planner import PlannerSettings, PlanResult
 from twostep.subgoals import SubgoalStatus
 
@@ -56,8 +59,9 @@ class Portfolio:
     """The candidates for N agents: each member with N, N-1, ..., 2 agents.
 
     Default members: plan-split cut at free states, plan-split cut by what the agent holds
-    (with partial progress, and with goal literals only), goal-split, and the three
-    plan-splits again with consecutive stretches instead of the list schedule.
+    (with partial progress, and with goal literals only), goal-split, the three
+    plan-splits again with consecutive stretches instead of the list schedule, and
+    plan-deal (:mod:`twostep.plan_deal`, with N agents only, tried last).
     """
 
     name = "portfolio"
@@ -77,10 +81,18 @@ class Portfolio:
             PlanSplitDecomposer(agent_predicates, assign="chunks"),
             PlanSplitDecomposer(agent_predicates, cut="holding", assign="chunks"),
             PlanSplitDecomposer(agent_predicates, cut="holding", keep="goal", assign="chunks"),
+            PlanDeal(agent_predicates),
         ]
 
     def candidates(self, agents: int) -> list[Candidate]:
-        return [Candidate(d, n) for n in range(agents, 1, -1) for d in self.members]
+        """Every TwoStep member with N, N-1, ..., 2 agents, then plan-deal with N agents
+        (its list schedule leaves agents idle where fewer do better). Ties go to the
+        earlier candidate, so TwoStep's own hand-off wins a tie."""
+        subgoals = [d for d in self.members if not isinstance(d, PlanDeal)]
+        deals = [d for d in self.members if isinstance(d, PlanDeal)]
+        return [Candidate(d, n) for n in range(agents, 1, -1) for d in subgoals] + [
+            Candidate(d, agents) for d in deals
+        ]
 
     def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]:
         """Never asked by the pipeline (see the module docstring); no subgoal of its own."""
@@ -113,6 +125,14 @@ def run_portfolio(
     seen: dict[tuple[str | None, ...], int] = {}
     planning = 0.0
     for candidate in portfolio.candidates(agents):
+        if isinstance(candidate.decomposer, PlanDeal):  # plans, not subgoals: no dedup key
+            run = run_twostep(
+                task, candidate.agents, candidate.decomposer, agent_predicates, settings,
+                mode, seed, sa_length, steps, sa_plan=sa_plan, fallback_if_longer=False,
+            )  # fmt: skip
+            planning += run.planning_time_s - float(run.extra.get("sa_time_included_s", 0.0))
+            _add_candidate(rows, runs, run, candidate)
+            continue
         request = DecompositionRequest(
             task, candidate.agents, seed, sa_plan=_steps_of(sa_plan, candidate.decomposer)
         )
@@ -120,10 +140,15 @@ def run_portfolio(
         proposals = proposals[: candidate.agents - 1]
         pddl = tuple(p.pddl for p in proposals if p.status == SubgoalStatus.PROPOSED)
         key = pddl  # same subgoals, same run (only the per-agent time limit would differ)
-        row: dict[str, Any] = {"decomposer": candidate.decomposer.name, "agents": candidate.agents}
         if key in seen:
-            row.update(same_as=seen[key], exec_length=rows[seen[key]]["exec_length"])
-            rows.append(row)
+            rows.append(
+                {
+                    "decomposer": candidate.decomposer.name,
+                    "agents": candidate.agents,
+                    "same_as": seen[key],
+                    "exec_length": rows[seen[key]]["exec_length"],
+                }
+            )
             continue
         seen[key] = len(rows)
         run = run_twostep(
@@ -141,15 +166,7 @@ def run_portfolio(
         )
         included = float(run.extra.get("sa_time_included_s", 0.0))  # counted once, below
         planning += run.planning_time_s - included
-        row.update(
-            exec_length=run.exec_length if run.success else None,
-            planning_time_s=round(run.planning_time_s - included, 4),
-            fallback=run.fallback,
-            accepted=sum(s["status"] == SubgoalStatus.ACCEPTED for s in run.subgoals),
-        )
-        rows.append(row)
-        runs.append(run)
-        run.extra["candidate"] = len(rows) - 1
+        _add_candidate(rows, runs, run, candidate)
     solved = [r for r in runs if r.success and r.exec_length is not None]
     best: RunResult | None = min(solved, key=lambda r: r.exec_length or 0, default=None)
     sa_steps = _steps_of(sa_plan, None)
@@ -183,6 +200,25 @@ def run_portfolio(
     best.planning_time_s = planning + sa_time
     best.wall_time_s = time.perf_counter() - start
     return best
+
+
+def _add_candidate(
+    rows: list[dict[str, Any]], runs: list[RunResult], run: RunResult, candidate: Candidate
+) -> None:
+    """One candidate's row for result.json ``candidates`` (its own planning time only)."""
+    included = float(run.extra.get("sa_time_included_s", 0.0))
+    rows.append(
+        {
+            "decomposer": candidate.decomposer.name,
+            "agents": candidate.agents,
+            "exec_length": run.exec_length if run.success else None,
+            "planning_time_s": round(run.planning_time_s - included, 4),
+            "fallback": run.fallback,
+            "accepted": sum(s["status"] == SubgoalStatus.ACCEPTED for s in run.subgoals),
+        }
+    )
+    runs.append(run)
+    run.extra["candidate"] = len(rows) - 1
 
 
 def _steps_of(sa_plan: PlanResult | None, decomposer: Decomposer | None) -> tuple[str, ...] | None:

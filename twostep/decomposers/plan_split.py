@@ -138,6 +138,17 @@ def free_states(
     return result
 
 
+def free_pieces(
+    problem: Problem, plan: Sequence[GroundAction], agent_predicates: Collection[str]
+) -> list[list[int]]:
+    """Step 2, ``cut="free"``: the stretches between free states (every action alone when
+    the plan has no agent facts at all)."""
+    cuts = free_states(problem, plan, agent_predicates)
+    if not any(f[0] in agent_predicates for a in plan for f in a.facts):
+        cuts = list(range(len(plan) + 1))  # no agent state at all: every action alone
+    return [list(range(a, b)) for a, b in itertools.pairwise(cuts) if b > a]
+
+
 def holding_pieces(
     problem: Problem, plan: Sequence[GroundAction], agent_predicates: Collection[str]
 ) -> list[list[int]]:
@@ -285,10 +296,7 @@ def split_plan(
                     durations[acting_piece[after[0]]] += 1
         pieces = acting
     else:
-        cuts = free_states(problem, grounded, agent_predicates)
-        if not any(f[0] in agent_predicates for a in grounded for f in a.facts):
-            cuts = list(range(len(grounded) + 1))  # no agent state at all: every action alone
-        pieces = [list(range(a, b)) for a, b in itertools.pairwise(cuts) if b > a]
+        pieces = free_pieces(problem, grounded, agent_predicates)
         for members in pieces:
             durations[members[0]] = len(members)
     pieces = _topological_pieces(pieces, edges)
