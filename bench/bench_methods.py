@@ -52,9 +52,9 @@ from twostep.decomposers.plan_split import PlanSplitDecomposer
 from twostep.files import write_json_atomic
 from twostep.generators import DOMAINS as BENCHMARK_DOMAINS
 from twostep.pipeline import RunResult, check_run, run_multi_agent, run_single_agent, run_twostep
+from twostep.plan_deal import PlanDeal
 from twostep.planner import PlannerSettings
 from twostep.planner.results import PlanResult, Status
-from twostep.plan_deal import PlanDeal
 from twostep.portfolio import Portfolio
 
 REPO = Path(__file__).resolve().parent.parent
