@@ -52,9 +52,9 @@ from twostep.decomposers.plan_split import PlanSplitDecomposer
 from twostep.files import write_json_atomic
 from twostep.generators import DOMAINS as BENCHMARK_DOMAINS
 from twostep.pipeline import RunResult, check_run, run_multi_agent, run_single_agent, run_twostep
+from twostep.plan_deal import PlanDeal
 from twostep.planner import PlannerSettings
 from twostep.planner.results import PlanResult, Status
-from twostep.plan_deal import PlanDeal
 from twostep.portfolio import Portfolio
 
 REPO = Path(__file__).resolve().parent.parent
@@ -532,7 +532,7 @@ def main() -> int:
     ours = {(j.label, j.domain, j.task) for j in jobs}
     rows: list[Row] = [r for r in earlier if row_key(r)[:3] not in ours]
     start = time.perf_counter()
-    _say(f"{len(jobs)} tasks, {len(known)} rows reused; rows to {out}")
+    _say(f"{len(jobs)} tasks, {sum(len(j.known) for j in jobs)} earlier rows known; rows to {out}")
     with ProcessPoolExecutor(args.workers) as pool:
         futures = {pool.submit(run_job, job): job for job in jobs}
         for done, future in enumerate(as_completed(futures), start=1):

@@ -18,6 +18,10 @@ import pytest
 
 from bench import bench_methods as bm
 from tests.conftest import DATA, REPO
+from twostep.cli.data import compare_files
+from twostep.generators import scale_files
+
+LARGE = [("blocksworld", 30, 3), ("grippers", 40, 3), ("tyreworld", 40, 1)]
 
 
 def row(domain: str, task: int, method: str, agents: int, length: int | None, sa: int,
@@ -181,3 +185,13 @@ def test_overview_has_a_row_per_method_and_n_with_the_domains_across() -> None:
     assert ("ma", "2", "0.750", "0.800", "0.775", "4.00", "") in lines
     # SA: A (1 + 3) / 2 = 2, B 2
     assert ("sa", "1", "1.000", "1.000", "1.000", "2.00", "") in lines
+
+
+@pytest.mark.parametrize(("domain", "size", "count"), LARGE)
+def test_large_tasks_are_what_the_documented_command_writes(
+    domain: str, size: int, count: int
+) -> None:
+    # data/large/README.md: twostep-data scale --domain D --size S --count C (seed 0)
+    folder = DATA / "large" / domain
+    assert compare_files(folder, scale_files(domain, size, count)) == []
+    assert bm.list_tasks(domain, DATA / "large") == list(range(1, count + 1))
