@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import itertools
+import time
 from collections.abc import Sequence
 
 from twostep.execution.compiled import CompiledStep, CompiledTask
+from twostep.execution.symmetry import Symmetry
 
 
 class PairProjection:
@@ -122,27 +124,41 @@ sharing cells give N (N - 1) / 2 projections of thousands of nodes each: seconds
 
 
 def interacting_pairs(
-    task: CompiledTask, node_budget: int | None = PAIR_NODE_BUDGET
+    task: CompiledTask,
+    node_budget: int | None = PAIR_NODE_BUDGET,
+    symmetry: Symmetry | None = None,
+    deadline: float | None = None,
 ) -> list[PairProjection]:
     """Projections for the pairs of agents whose plans share a fact one of them writes.
 
-    Pairs are built in order until ``node_budget`` projection nodes are explored; the
-    rest are left out, which keeps the bound admissible (each pair only raises it) but
-    gives up their dead-end detection.
+    Pairs are built in order until ``node_budget`` projection nodes are explored or the
+    clock passes ``deadline`` (a ``time.perf_counter`` value); the rest are left out,
+    which keeps the bound admissible (each pair only raises it) but gives up their
+    dead-end detection. With a ``symmetry``, pairs the symmetry maps onto each other are
+    kept all or none, so the bound has the same value on every node of an orbit.
     """
-    pairs = []
-    left = node_budget
+    groups: dict[object, list[tuple[int, int]]] = {}
     for i, j in itertools.combinations(range(len(task.steps)), 2):
         reads_i, writes_i = task.reads_from[i][0], task.writes_from[i][0]
         reads_j, writes_j = task.reads_from[j][0], task.writes_from[j][0]
         if writes_i & (reads_j | writes_j) or writes_j & reads_i:
-            try:
+            key = (i, j) if symmetry is None else symmetry.pair_type(i, j)
+            groups.setdefault(key, []).append((i, j))
+    pairs = []
+    left = node_budget
+    for members in groups.values():
+        built = []
+        try:
+            for i, j in members:
+                if deadline is not None and time.perf_counter() >= deadline:
+                    raise ProjectionTooLarge
                 pair = PairProjection(task, i, j, left)
-            except ProjectionTooLarge:
-                break
-            pairs.append(pair)
-            if left is not None:
-                left -= len(pair.explored)
+                built.append(pair)
+                if left is not None:
+                    left -= len(pair.explored)
+        except ProjectionTooLarge:
+            break
+        pairs += built
     return pairs
 
 
@@ -253,13 +269,21 @@ class LowerBound:
     action), the contention bound of :class:`ContentionBound` and the pair projections of
     :class:`PairProjection`; None for a dead end. Each part drops by at most one per real
     step, so the maximum is consistent too. ``pairs=False`` skips the projections (cheap
-    to build, no dead-end detection), ``contention=False`` the contention bound.
+    to build, no dead-end detection), ``contention=False`` the contention bound;
+    ``symmetry`` and ``deadline`` go to :func:`interacting_pairs`.
     """
 
-    def __init__(self, task: CompiledTask, pairs: bool = True, contention: bool = True):
+    def __init__(
+        self,
+        task: CompiledTask,
+        pairs: bool = True,
+        contention: bool = True,
+        symmetry: Symmetry | None = None,
+        deadline: float | None = None,
+    ):
         self.lengths = task.lengths
         self.contention = ContentionBound(task) if contention else None
-        self.pairs = interacting_pairs(task) if pairs else []
+        self.pairs = interacting_pairs(task, symmetry=symmetry, deadline=deadline) if pairs else []
 
     def __call__(self, indices: Sequence[int], state: int) -> int | None:
         bound = max((n - i for n, i in zip(self.lengths, indices, strict=True)), default=0)

@@ -12,6 +12,9 @@ from dataclasses import dataclass
 from twostep.pddl import Fact, Goal
 from twostep.strips import GroundAction
 
+Node = tuple[tuple[int, ...], int]
+"""A search node: each agent's next plan index and the environment state."""
+
 
 @dataclass(frozen=True)
 class CompiledStep:
