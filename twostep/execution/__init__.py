@@ -66,14 +66,24 @@ One job per module:
 """
 
 from twostep.execution.check import check_schedule
-from twostep.execution.model import MODES, ParallelExecution, Schedule, ScheduleError, split_state
+from twostep.execution.model import (
+    DEFAULT_SEARCH_BUDGET,
+    MODES,
+    ParallelExecution,
+    Schedule,
+    ScheduleError,
+    SearchBudget,
+    split_state,
+)
 from twostep.execution.parallel import parallel_length
 
 __all__ = [
+    "DEFAULT_SEARCH_BUDGET",
     "MODES",
     "ParallelExecution",
     "Schedule",
     "ScheduleError",
+    "SearchBudget",
     "check_schedule",
     "parallel_length",
     "split_state",

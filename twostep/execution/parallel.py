@@ -7,8 +7,13 @@ from collections.abc import Collection, Sequence
 from twostep.execution.check import check_schedule
 from twostep.execution.compiled import compile_task
 from twostep.execution.diagnosis import check_agent_copies, diagnose
-from twostep.execution.model import MODES, ParallelExecution
-from twostep.execution.search import DEFAULT_MAX_NODES, DEFAULT_TIME_LIMIT_S, search
+from twostep.execution.model import (
+    DEFAULT_MAX_NODES,
+    DEFAULT_TIME_LIMIT_S,
+    MODES,
+    ParallelExecution,
+)
+from twostep.execution.search import search
 from twostep.pddl import Fact, Goal
 from twostep.strips import GroundAction
 

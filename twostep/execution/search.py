@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 from twostep.execution.bounds import LowerBound
 from twostep.execution.compiled import CompiledTask, Node
+from twostep.execution.model import DEFAULT_MAX_NODES, DEFAULT_TIME_LIMIT_S
 from twostep.execution.symmetry import Permutation, Symmetry, relabel
 
 
@@ -192,16 +193,6 @@ class SearchResult:
     """A proven lower bound on the shortest makespan (``len(sets)`` when exact)."""
 
 
-DEFAULT_MAX_NODES = 2_000
-"""Node budget of :func:`search`. A node costs about 0.1 ms with 4 agents and up to 5 ms
-with 14 sharing two cells (pair bounds for every pair), so this stays within seconds."""
-
-DEFAULT_TIME_LIMIT_S = 10.0
-"""Time budget of :func:`search` in seconds: a backstop for the node budget on machines or
-tasks where nodes are slow. Unlike the node budget it makes the answer depend on the
-machine, so the node budget is the one that usually stops the search."""
-
-
 def search(
     task: CompiledTask,
     mode: str,
@@ -232,8 +223,7 @@ def search(
     the symmetry reduction, the greedy schedule and the budgets (for benchmarks only).
     """
     deadline = None if time_limit_s is None or plain else time.perf_counter() + time_limit_s
-    lengths = task.lengths
-    start: Node = (tuple(0 for _ in lengths), task.initial)
+    start: Node = (tuple(0 for _ in task.lengths), task.initial)
     incumbent = None if plain else greedy_schedule(task, mode)
     expanded = 0
     if incumbent is not None:
@@ -251,8 +241,6 @@ def search(
                 if cheap >= len(incumbent):
                     return SearchResult(incumbent, expanded, True, len(incumbent))
     symmetry = None if plain else Symmetry(task)
-    if symmetry is not None and not symmetry:
-        symmetry = None
     bound = LowerBound(
         task,
         pairs=not plain,
@@ -260,6 +248,43 @@ def search(
         symmetry=symmetry,
         deadline=None if incumbent is None else deadline,
     )
+    return astar(
+        task,
+        mode,
+        bound,
+        symmetry,
+        prune=not plain,
+        incumbent=incumbent,
+        expanded=expanded,
+        max_nodes=max_nodes,
+        deadline=deadline,
+    )
+
+
+def astar(
+    task: CompiledTask,
+    mode: str,
+    bound: LowerBound,
+    symmetry: Symmetry | None = None,
+    *,
+    prune: bool = True,
+    incumbent: list[tuple[int, ...]] | None = None,
+    expanded: int = 0,
+    max_nodes: int | None = None,
+    deadline: float | None = None,
+) -> SearchResult:
+    """The A* part of :func:`search`, from the start node with the given bound.
+
+    ``symmetry``: search canonical nodes only (None: every node). ``incumbent``: a known
+    schedule, returned as soon as the frontier proves it optimal, or with ``exact=False``
+    once ``max_nodes`` more nodes are expanded or the clock passes ``deadline`` (a
+    ``time.perf_counter`` value); without one both limits are ignored. ``expanded`` is
+    the count so far (the greedy runs).
+    """
+    if symmetry is not None and not symmetry:
+        symmetry = None  # no interchangeable agents: skip the canonical forms
+    lengths = task.lengths
+    start: Node = (tuple(0 for _ in lengths), task.initial)
     h0 = bound(*start)
     if h0 is None:
         return SearchResult(None, expanded, True, 0)
@@ -294,7 +319,7 @@ def search(
                 node, chosen, permutation = parent[node]
                 path.append((chosen, permutation))
             return SearchResult(relabel(len(lengths), path[::-1]), expanded, True, g)
-        for chosen in successor_sets(task, indices, state, mode, prune=not plain):
+        for chosen in successor_sets(task, indices, state, mode, prune):
             child = advance(task, indices, state, chosen)
             permutation = None
             if symmetry is not None:
