@@ -273,9 +273,10 @@ def test_symmetry_reduction_keeps_the_brute_force_optimum(case) -> None:
     assert parallel_length(plans, init, goal, (), max_nodes=None).length == expected
 
 
-def two_hub_tracks(hubs: list[tuple[int, int]], length: int):
+def two_hub_tracks_text(hubs: list[tuple[int, int]], length: int) -> tuple[str, list[list[str]]]:
     """Carts on private tracks of ``length`` moves; cart c crosses the shared cells ``hub``
-    at position hubs[c][0] and ``hub2`` at hubs[c][1] (the bench's staggered case)."""
+    at position hubs[c][0] and ``hub2`` at hubs[c][1] (the bench's staggered case).
+    Returns the problem text (domain TRACKS) and each cart's plan."""
     cells, init, goal, plans = [], ["(ready)", "(free hub)", "(free hub2)"], [], []
     for cart, (first, second) in enumerate(hubs):
         track = [f"k{cart}-{i}" for i in range(length + 1)]
@@ -292,6 +293,11 @@ def two_hub_tracks(hubs: list[tuple[int, int]], length: int):
         f"{' '.join(cells)} - cell) (:init {' '.join(sorted(set(init)))}) "
         f"(:goal (and {' '.join(goal)})))"
     )
+    return text, plans
+
+
+def two_hub_tracks(hubs: list[tuple[int, int]], length: int):
+    text, plans = two_hub_tracks_text(hubs, length)
     prob = problem(TRACKS, text)
     return prob, ground(prob, *plans)
 
