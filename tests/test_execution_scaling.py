@@ -29,7 +29,12 @@ from tests.test_execution import (
 )
 from tests.test_independent_checks import _brute_force, cases
 from twostep.execution import ScheduleError, check_schedule, parallel_length
-from twostep.execution.bounds import ContentionBound, LowerBound
+from twostep.execution.bounds import (
+    ContentionBound,
+    LowerBound,
+    PairProjection,
+    interacting_pairs,
+)
 from twostep.execution.compiled import compile_task
 from twostep.execution.search import advance, astar, bound_dive, greedy_schedule
 from twostep.execution.symmetry import Symmetry, relabel
@@ -356,3 +361,19 @@ def test_agents_queueing_for_one_room_are_one_class(agents: int, work: int) -> N
     found = astar(task, "exact", LowerBound(task, symmetry=symmetry), symmetry)
     assert found.sets is not None and len(found.sets) == agents * (work + 2)
     check_schedule(_as_steps(plans, found.sets), plans, prob.init, prob.goal, ())
+
+
+def test_pairs_mapped_by_the_symmetry_share_one_exact_projection() -> None:
+    prob, plans = two_hub_tracks(STAGGERED, 14)
+    task = compile_task(plans, prob.init, prob.goal, ["ready"])
+    lookups = interacting_pairs(task, symmetry=Symmetry(task))
+    # Every interacting pair is looked up; three classes give six kinds of pair.
+    assert len(lookups) == 15 and len({id(pair) for pair, _, _ in lookups}) == 6
+    own = {(a, b): PairProjection(task, a, b) for _, a, b in lookups}
+    found = parallel_length(plans, prob.init, prob.goal, ["ready"], max_nodes=None)
+    node = (tuple(0 for _ in plans), task.initial)
+    for step in (*found.steps, ()):
+        for pair, a, b in lookups:
+            # The shared table, read with this pair's indices, equals the pair's own.
+            assert pair.at(node[0][a], node[0][b], node[1]) == own[(a, b)](*node)
+        node = advance(task, *node, tuple(agent for agent, _ in step))
