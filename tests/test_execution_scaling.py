@@ -276,6 +276,13 @@ def test_symmetry_reduction_keeps_the_brute_force_optimum(case) -> None:
     # The schedule mapped back from canonical labels to the real agents must re-validate.
     check_schedule(_as_steps(plans, reduced.sets), plans, init, goal, ())
     assert parallel_length(plans, init, goal, (), max_nodes=None).length == expected
+    # Paper mode's successors (one agent, or all) are relabelling-invariant too.
+    paper = astar(task, "paper", LowerBound(task, symmetry=symmetry), symmetry)
+    paper_unreduced = astar(task, "paper", LowerBound(task))
+    assert (paper.sets is None) == (paper_unreduced.sets is None)
+    if paper.sets is not None and paper_unreduced.sets is not None:
+        assert len(paper.sets) == len(paper_unreduced.sets) >= expected
+        check_schedule(_as_steps(plans, paper.sets), plans, init, goal, ())
 
 
 def two_hub_tracks_text(hubs: list[tuple[int, int]], length: int) -> tuple[str, list[list[str]]]:
