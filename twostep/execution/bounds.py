@@ -311,13 +311,29 @@ class LowerBound:
         self.lengths = task.lengths
         self.contention = ContentionBound(task) if contention else None
         self.pairs = interacting_pairs(task, symmetry=symmetry, deadline=deadline) if pairs else []
+        # contact_until[a]: past this index agent a touches no fact another agent touches.
+        # A pair with such an agent is past its last contact, where its projection is the
+        # longer remaining plan (no more than the first part of the bound): skipped.
+        touched = [task.reads_from[a][0] | task.writes_from[a][0] for a in range(len(task.steps))]
+        self.contact_until = []
+        for agent, plan in enumerate(task.steps):
+            others = 0
+            for other, facts in enumerate(touched):
+                if other != agent:
+                    others |= facts
+            last = [k for k, step in enumerate(plan) if step.touched & others]
+            self.contact_until.append(last[-1] + 1 if last else 0)
 
     def __call__(self, indices: Sequence[int], state: int) -> int | None:
         bound = max((n - i for n, i in zip(self.lengths, indices, strict=True)), default=0)
         if self.contention is not None:
             bound = max(bound, self.contention(indices, state))
+        until = self.contact_until
         for pair, first, second in self.pairs:
-            steps = pair.at(indices[first], indices[second], state)
+            k, m = indices[first], indices[second]
+            if k >= until[first] or m >= until[second]:
+                continue
+            steps = pair.at(k, m, state)
             if steps is None:
                 return None
             bound = max(bound, steps)
