@@ -106,7 +106,7 @@ class PairProjection:
         # Keys keep only the shared facts the pair touches: its private facts follow from
         # its indices, and facts it never touches never change the answer. Pairs that a
         # symmetry maps onto each other then have the same table (see interacting_pairs).
-        touched = [task.reads_from[a][0] | task.writes_from[a][0] for a in range(len(task.steps))]
+        touched = task.touched
         pair_touches = touched[first] | touched[second]
         others_touch = 0
         for agent, facts in enumerate(touched):
@@ -314,8 +314,8 @@ class LowerBound:
         # contact_until[a]: past this index agent a touches no fact another agent touches.
         # A pair with such an agent is past its last contact, where its projection is the
         # longer remaining plan (no more than the first part of the bound): skipped.
-        touched = [task.reads_from[a][0] | task.writes_from[a][0] for a in range(len(task.steps))]
         self.contact_until = []
+        touched = task.touched
         for agent, plan in enumerate(task.steps):
             others = 0
             for other, facts in enumerate(touched):

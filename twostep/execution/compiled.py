@@ -66,6 +66,14 @@ class CompiledTask:
     def lengths(self) -> tuple[int, ...]:
         return tuple(len(plan) for plan in self.steps)
 
+    @property
+    def touched(self) -> tuple[int, ...]:
+        """touched[i]: the facts agent i's plan reads or writes anywhere."""
+        return tuple(
+            reads[0] | writes[0]
+            for reads, writes in zip(self.reads_from, self.writes_from, strict=True)
+        )
+
 
 def compile_task(
     plans: Sequence[Sequence[GroundAction]],

@@ -51,12 +51,11 @@ class Symmetry:
 
     def __init__(self, task: CompiledTask) -> None:
         agents = len(task.steps)
-        touched = [task.reads_from[i][0] | task.writes_from[i][0] for i in range(agents)]
         once = twice = 0
-        for mask in touched:
+        for mask in task.touched:
             twice |= once & mask
             once |= mask
-        private = [mask & ~twice for mask in touched]
+        private = [mask & ~twice for mask in task.touched]
         self.private = private
         shapes: dict[object, list[int]] = {}
         for agent in range(agents):
@@ -132,14 +131,6 @@ class Symmetry:
             for agent in members:
                 state |= self.private_state[agent][moved[agent]]
         return (tuple(moved), state), tuple(permutation)
-
-    def pair_type(self, first: int, second: int) -> tuple[tuple[str, int], tuple[str, int]]:
-        """The same value for two pairs of agents that the symmetry maps onto each other."""
-        kinds = sorted(
-            ("class", self.class_of[a]) if a in self.class_of else ("agent", a)
-            for a in (first, second)
-        )
-        return kinds[0], kinds[1]
 
 
 def relabel(
