@@ -73,7 +73,7 @@ def _parser() -> argparse.ArgumentParser:
         type=_limit(int),
         default=DEFAULT_SEARCH_BUDGET.max_nodes,
         metavar="N",
-        help="exact mode's search budget in expanded nodes, 'none' for no limit; past it "
+        help="the search's budget in expanded nodes, 'none' for no limit; past it "
         "the best schedule found is printed with exact=false and a proven lower_bound "
         f"(default: {DEFAULT_SEARCH_BUDGET.max_nodes})",
     )
