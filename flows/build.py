@@ -4,7 +4,8 @@ decomposer a job's config names, and the check that they exist and fit together.
 Each library setting has one name in the config (``flows/config.py``, whose defaults
 are the library dataclasses' defaults) and is mapped here once; ``planner.time_limit_s``
 is the planner's ``search_time_limit_s``; :func:`llm_settings` maps the ``llm`` group to
-the LLM client's settings.
+the LLM client's settings; :func:`search_budget` maps ``score_max_nodes`` and
+``score_time_limit_s`` to the scorer's budget.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from twostep.decomposers.base import Decomposer
 if TYPE_CHECKING:
     from twostep.llm import LLMSettings
 from twostep.embodied import ExecutorSettings
+from twostep.execution import SearchBudget
 from twostep.planner import PlannerSettings
 
 
@@ -38,6 +40,15 @@ def planner_settings(cfg: TwostepConfig) -> PlannerSettings:
         alias=cfg.planner.alias,
         search_time_limit_s=float(cfg.planner.time_limit_s),
         memory_limit_mb=cfg.planner.memory_limit_mb,
+    )
+
+
+def search_budget(cfg: TwostepConfig) -> SearchBudget:
+    """The exact scorer's budget: ``score_max_nodes`` and ``score_time_limit_s``."""
+    max_nodes, time_limit_s = cfg.score_max_nodes, cfg.score_time_limit_s
+    return SearchBudget(
+        max_nodes=None if max_nodes is None else int(max_nodes),
+        time_limit_s=None if time_limit_s is None else float(time_limit_s),
     )
 
 

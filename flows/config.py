@@ -19,6 +19,7 @@ from typing import Any, cast
 from hydra.core.config_store import ConfigStore
 
 from twostep.embodied import ExecutorSettings
+from twostep.execution import DEFAULT_SEARCH_BUDGET
 from twostep.llm.client import LLMSettings
 from twostep.planner import PlannerSettings
 
@@ -162,6 +163,9 @@ class TwostepConfig:
     agents: int = 2
     seed: int = 0
     score_mode: str = "exact"
+    # twostep.execution.SearchBudget: the exact scorer's node and time budget (null: none)
+    score_max_nodes: int | None = DEFAULT_SEARCH_BUDGET.max_nodes
+    score_time_limit_s: float | None = DEFAULT_SEARCH_BUDGET.time_limit_s
     compare_sa: bool = True
 
 

@@ -21,6 +21,7 @@ from flows.build import (
     load_job_task,
     open_decomposer,
     planner_settings,
+    search_budget,
 )
 from flows.config import TwostepConfig
 from twostep.benchmark import BenchmarkTask
@@ -57,6 +58,7 @@ def run_job(
         if stats is not None:
             stats.add(task_load_s=time.perf_counter() - start)
     settings = planner_settings(cfg)
+    steps = steps.with_search_budget(search_budget(cfg))
     method = cfg.method.name
     agents = int(cfg.agents)
     seed = int(cfg.seed)

@@ -46,7 +46,7 @@ from prefect.utilities.annotations import quote
 
 from flows.job import StepStats
 from twostep import pipeline, planner
-from twostep.execution import ParallelExecution
+from twostep.execution import DEFAULT_SEARCH_BUDGET, ParallelExecution, SearchBudget
 from twostep.pddl import Fact, Problem
 from twostep.pipeline import Steps
 from twostep.planner import PlannerSettings, PlanResult, Status
@@ -116,9 +116,13 @@ def progress_task(
 
 @task(name="score", cache_policy=NO_CACHE, persist_result=False)
 def score_task(
-    problem: Problem, plans: Sequence[Sequence[str]], agent_predicates: Collection[str], mode: str
+    problem: Problem,
+    plans: Sequence[Sequence[str]],
+    agent_predicates: Collection[str],
+    mode: str,
+    budget: SearchBudget,
 ) -> ParallelExecution:
-    return pipeline.score(problem, plans, agent_predicates, mode)
+    return pipeline.score(problem, plans, agent_predicates, mode, budget)
 
 
 # ----------------------------------------------------------------- LLM
@@ -257,12 +261,14 @@ def prefect_steps(stats: StepStats, submit: bool = False) -> Steps:
         plans: Sequence[Sequence[str]],
         agent_predicates: Collection[str],
         mode: str = "exact",
+        budget: SearchBudget = DEFAULT_SEARCH_BUDGET,
     ) -> ParallelExecution:
         execution: ParallelExecution = score_task(
             quote(problem),  # type: ignore[call-overload]
             [list(p) for p in plans],
             list(agent_predicates),
             mode,
+            budget,
         )
         return execution
 

@@ -60,6 +60,10 @@ def value_problems(cfg: Any) -> list[str]:
         problems.append(f"agents={cfg.agents} must be at least 1")
     if cfg.planner.memory_limit_mb is not None and int(cfg.planner.memory_limit_mb) <= 0:
         problems.append(f"planner.memory_limit_mb={cfg.planner.memory_limit_mb} must be > 0")
+    if cfg.score_max_nodes is not None and int(cfg.score_max_nodes) < 0:
+        problems.append(f"score_max_nodes={cfg.score_max_nodes} must be >= 0 (or null)")
+    if cfg.score_time_limit_s is not None:
+        problems.append(_positive("score_time_limit_s", cfg.score_time_limit_s))
     if int(cfg.llm.max_retries) < 0:
         problems.append(f"llm.max_retries={cfg.llm.max_retries} must be >= 0")
     return [p for p in problems if p]

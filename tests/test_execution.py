@@ -17,6 +17,7 @@ from twostep.execution import (
     parallel_length,
     split_state,
 )
+from twostep.execution.check import EnvironmentPart, may_interfere
 from twostep.pddl import Fact, Goal, Problem, parse_goal, parse_problem
 from twostep.strips import GroundAction, Grounder
 
@@ -527,3 +528,35 @@ def test_random_cases_against_oracles() -> None:
         assert paper.length == expected_paper
         assert max(map(len, plans)) <= exact.length <= paper.length <= sum(map(len, plans))
     assert valid >= 150  # the generator must mostly produce schedulable cases
+
+
+def test_interference_screen_agrees_with_the_plain_pairwise_rule() -> None:
+    """check_schedule screens a step in linear time before naming the interfering pair;
+    the screen must flag exactly the steps in which some pair interferes (the oracle's
+    rule above), on random actions over a few facts, with and without agent facts."""
+    rng = random.Random(11)
+    pool = [("e", str(i)) for i in range(4)] + [("h", "0")]
+
+    def facts(most: int) -> frozenset[Fact]:
+        return frozenset(rng.sample(pool, rng.randint(0, most)))
+
+    flagged = 0
+    for trial in range(2000):
+        predicates = ("h",) if trial % 2 else ()
+        actions = []
+        for k in range(rng.randint(2, 5)):
+            add = facts(2)
+            actions.append(GroundAction("a", (str(k),), facts(2), facts(1), add, facts(2) - add))
+
+        def environment_of(action: GroundAction, predicates=predicates) -> EnvironmentPart:
+            return EnvironmentPart(
+                *(
+                    split_state(f, predicates)[0]
+                    for f in (action.pre_positive, action.pre_negative, action.add, action.delete)
+                )
+            )
+
+        expected = any(interfere(a, b, predicates) for a, b in itertools.combinations(actions, 2))
+        assert may_interfere(actions, environment_of) == expected
+        flagged += expected
+    assert 200 < flagged < 1800  # both answers are exercised

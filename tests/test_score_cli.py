@@ -10,6 +10,8 @@ from pathlib import Path
 import pytest
 
 from tests.test_execution import BLOCKSWORLD as DOMAIN
+from tests.test_execution import TRACKS
+from tests.test_execution_scaling import STAGGERED, two_hub_tracks_text
 from twostep.cli.score import EXIT_BAD_INPUT, EXIT_INVALID_PLANS, EXIT_VALID, main
 
 PROBLEM = """
@@ -62,6 +64,9 @@ def test_valid_plans_print_length_and_schedule(
             [["agent1", "(stack b3 b1)"]],
         ],
         "valid": True,
+        "exact": True,
+        "lower_bound": 3,
+        "gap": 0,
     }
     # Without agent predicates the arm is shared and nothing runs in parallel.
     code, out, _ = run(argv, capsys)
@@ -166,3 +171,31 @@ def test_parsed_tasks_are_cached_by_content(
     nocache = tmp_path / "unused"
     run([*argv[:-2], "--cache-dir", str(nocache), "--no-cache"], capsys)
     assert not nocache.exists()
+
+
+def test_budget_options_and_a_stated_gap(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text, plans = two_hub_tracks_text(STAGGERED, 14)
+    (tmp_path / "domain.pddl").write_text(TRACKS)
+    (tmp_path / "problem.pddl").write_text(text)
+    argv = [str(tmp_path / "domain.pddl"), str(tmp_path / "problem.pddl")]
+    for cart, plan in enumerate(plans):
+        (tmp_path / f"cart{cart}.plan").write_text("\n".join(plan) + "\n")
+        argv.append(str(tmp_path / f"cart{cart}.plan"))
+    argv += ["--agent-predicates", "ready", "--no-cache"]
+    code, out, err = run([*argv, "--max-nodes", "none", "--time-limit", "none"], capsys)
+    full = json.loads(out)
+    assert (code, full["exact"], full["gap"], err) == (EXIT_VALID, True, 0, "")
+    assert full["lower_bound"] == full["exec_length"]
+    # No search at all: a valid schedule whose optimality is not proven, and says so.
+    code, out, err = run([*argv, "--max-nodes", "0", "--time-limit", "none"], capsys)
+    cut = json.loads(out)
+    assert code == EXIT_VALID and cut["valid"] and not cut["exact"]
+    assert cut["lower_bound"] < full["exec_length"] <= cut["exec_length"]
+    assert cut["gap"] == cut["exec_length"] - cut["lower_bound"]
+    assert f"proven lower bound {cut['lower_bound']} (gap {cut['gap']})" in err
+    with pytest.raises(SystemExit) as exited:
+        main([*argv, "--max-nodes", "-3"])
+    assert exited.value.code == EXIT_BAD_INPUT
+    assert "must be >= 0" in capsys.readouterr().err

@@ -20,10 +20,11 @@ with status ``llm_error``; only unusable subgoals lead to the single-agent fallb
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Callable, Collection, Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass, field, replace
+from typing import Any, Protocol
 
 from twostep.benchmark import BenchmarkTask
 from twostep.decomposers.base import (
@@ -39,7 +40,14 @@ from twostep.decomposers.llm import (
     generate_subgoal,
     translate_subgoal,
 )
-from twostep.execution import ParallelExecution, ScheduleError, check_schedule, parallel_length
+from twostep.execution import (
+    DEFAULT_SEARCH_BUDGET,
+    ParallelExecution,
+    ScheduleError,
+    SearchBudget,
+    check_schedule,
+    parallel_length,
+)
 from twostep.multiagent import compile_multi_agent_problem, split_plan
 from twostep.pddl import Fact, Goal, Problem
 from twostep.pddl.model import ActionOrigin
@@ -159,11 +167,21 @@ def score(
     plans: Sequence[Sequence[str]],
     agent_predicates: Collection[str],
     mode: str = "exact",
+    budget: SearchBudget = DEFAULT_SEARCH_BUDGET,
 ) -> ParallelExecution:
-    """Parallel execution length of per-agent plans given in hand-off order."""
+    """Parallel execution length of per-agent plans given in hand-off order; ``budget``
+    bounds the exact search (past it the result says ``exact=False``)."""
     grounder = Grounder(problem)
     grounded = [grounder.ground_plan(p) for p in plans]
-    return parallel_length(grounded, problem.init, problem.goal, agent_predicates, mode)
+    return parallel_length(
+        grounded,
+        problem.init,
+        problem.goal,
+        agent_predicates,
+        mode,
+        max_nodes=budget.max_nodes,
+        time_limit_s=budget.time_limit_s,
+    )
 
 
 def check_run(problem: Problem, run: RunResult, agent_predicates: Collection[str]) -> None:
@@ -230,6 +248,19 @@ def progress(
     return progress_state(problem.init, Grounder(problem).ground_plan(plan_steps), agent_predicates)
 
 
+class ScoreStep(Protocol):
+    """:func:`score`'s signature; :meth:`Steps.with_search_budget` binds ``budget``."""
+
+    def __call__(
+        self,
+        problem: Problem,
+        plans: Sequence[Sequence[str]],
+        agent_predicates: Collection[str],
+        mode: str = ...,
+        budget: SearchBudget = ...,
+    ) -> ParallelExecution: ...
+
+
 @dataclass(frozen=True)
 class Steps:
     """The pipeline's steps as replaceable functions.
@@ -246,9 +277,11 @@ class Steps:
     translate: TranslateStep = translate_subgoal
     plan: Callable[[Problem, PlannerSettings], PlanResult] = plan
     progress: Callable[[Problem, Sequence[str], Collection[str]], frozenset[Fact]] = progress
-    score: Callable[[Problem, Sequence[Sequence[str]], Collection[str], str], ParallelExecution] = (
-        score
-    )
+    score: ScoreStep = score
+
+    def with_search_budget(self, budget: SearchBudget) -> Steps:
+        """These steps with every score call bounded by ``budget`` (a job's config)."""
+        return replace(self, score=functools.partial(self.score, budget=budget))
 
 
 DIRECT = Steps()

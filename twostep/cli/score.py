@@ -1,12 +1,19 @@
 """``twostep-score``: the parallel execution length of per-agent plan files.
 
     twostep-score DOMAIN PROBLEM PLAN [PLAN ...] [--agent-predicates P,Q] [--mode exact|paper]
+                  [--max-nodes N|none] [--time-limit S|none]
 
 Plan files are in Fast Downward's format (one ``(action args)`` per line, ``;`` comments),
 one per agent, given in hand-off order; agents are named ``agent0``, ``agent1``, ... in the
 order of the PLAN arguments. Prints one JSON object on stdout::
 
-    {"exec_length": 5, "schedule": [[["agent0", "(pickup b1)"], ...], ...], "valid": true}
+    {"exec_length": 5, "schedule": [[["agent0", "(pickup b1)"], ...], ...], "valid": true,
+     "exact": true, "lower_bound": 5, "gap": 0}
+
+``exact`` is false when the search stopped at its budget (``--max-nodes`` nodes or
+``--time-limit`` seconds): the schedule is still valid, ``exec_length`` is then an upper
+bound and ``lower_bound`` a proven lower bound on the shortest length, ``gap`` their
+difference (stderr says so too).
 
 Exit codes: 0 valid, 1 the plans cannot be executed (stderr says which agent, step and
 precondition), 2 bad input (malformed PDDL, unreadable or malformed plan file).
@@ -18,9 +25,10 @@ import argparse
 import json
 import os
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
-from twostep.execution import MODES, ScheduleError, parallel_length
+from twostep.execution import DEFAULT_SEARCH_BUDGET, MODES, ScheduleError, parallel_length
 from twostep.pddl import PDDLError, load_problem
 from twostep.strips import Grounder, PlanError, read_plan
 
@@ -61,6 +69,23 @@ def _parser() -> argparse.ArgumentParser:
         "(the paper's Algorithm 1). Default: exact",
     )
     parser.add_argument(
+        "--max-nodes",
+        type=_limit(int),
+        default=DEFAULT_SEARCH_BUDGET.max_nodes,
+        metavar="N",
+        help="the search's budget in expanded nodes, 'none' for no limit; past it "
+        "the best schedule found is printed with exact=false and a proven lower_bound "
+        f"(default: {DEFAULT_SEARCH_BUDGET.max_nodes})",
+    )
+    parser.add_argument(
+        "--time-limit",
+        type=_limit(float),
+        default=DEFAULT_SEARCH_BUDGET.time_limit_s,
+        metavar="S",
+        help="the search's time budget in seconds, 'none' for no limit "
+        f"(default: {DEFAULT_SEARCH_BUDGET.time_limit_s:g})",
+    )
+    parser.add_argument(
         "--cache-dir",
         type=Path,
         default=default_cache_dir(),
@@ -70,6 +95,23 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--no-cache", action="store_true", help="always parse the PDDL files")
     return parser
+
+
+def _limit(kind: type[int] | type[float]) -> Callable[[str], int | float | None]:
+    """An argparse type: a number >= 0 of ``kind``, or ``none`` for no limit."""
+
+    def parse(text: str) -> int | float | None:
+        if text.strip().lower() == "none":
+            return None
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a number or 'none', got {text!r}") from None
+        if value < 0:
+            raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
+        return value
+
+    return parse
 
 
 def default_cache_dir() -> Path:
@@ -108,7 +150,15 @@ def main(argv: list[str] | None = None) -> int:
         except PlanError as error:
             return _fail(f"{path}: {error}")
     try:
-        result = parallel_length(plans, problem.init, problem.goal, agent_predicates, args.mode)
+        result = parallel_length(
+            plans,
+            problem.init,
+            problem.goal,
+            agent_predicates,
+            args.mode,
+            max_nodes=args.max_nodes,
+            time_limit_s=args.time_limit,
+        )
     except ScheduleError as error:
         if error.precondition is not None and error.agent is not None:
             message = (
@@ -121,7 +171,24 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{PROG}: invalid plans: {message}", file=sys.stderr)
         return EXIT_INVALID_PLANS
     schedule = [[[f"agent{agent}", action] for agent, action in step] for step in result.steps]
-    print(json.dumps({"exec_length": result.length, "schedule": schedule, "valid": True}))
+    print(
+        json.dumps(
+            {
+                "exec_length": result.length,
+                "schedule": schedule,
+                "valid": True,
+                "exact": result.exact,
+                "lower_bound": result.lower_bound,
+                "gap": result.gap,
+            }
+        )
+    )
+    if not result.exact:
+        print(
+            f"{PROG}: the search stopped at its budget: length {result.length} is not proven "
+            f"shortest; proven lower bound {result.lower_bound} (gap {result.gap})",
+            file=sys.stderr,
+        )
     return EXIT_VALID
 
 

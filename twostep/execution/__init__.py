@@ -26,22 +26,30 @@ Interference (Graphplan, extended to negative preconditions)
 
 Search
     Both modes run A* over (plan indices, environment state) with unit step cost. The bound
-    h is the larger of the longest remaining plan and, for every pair of agents whose plans
-    interact, the exact makespan of those two plans with the other agents abstracted away
-    (:class:`~twostep.execution.bounds.PairProjection`, solved once up front, then a dict lookup per node). Both
-    parts are admissible and consistent, so the first goal node popped is optimal and a
-    closed set is safe; a pair that cannot reach its goal marks a dead end, which also
-    refutes impossible cases quickly. The pair bound is what sees a main agent waiting for
-    a helper's effect, the usual shape of hand-off plans. Ties on f go to the node with
-    more progress (larger g, then fewer actions left), so cases without contention go
-    straight down.
+    h is the largest of the longest remaining plan, the contention bound below and, for
+    every pair of agents whose plans interact, the exact makespan of those two plans with
+    the other agents abstracted away (:class:`~twostep.execution.bounds.PairProjection`,
+    solved once up front, then a dict lookup per node). Every part is admissible, so the
+    first goal node popped is optimal (a node reached again with a smaller g is expanded
+    again, which keeps this true over canonical nodes); a pair that cannot reach its goal
+    marks a dead end, which also refutes impossible cases quickly. The pair bound is what
+    sees a main agent waiting for a helper's effect, the usual shape of hand-off plans.
+    Ties on f go to the node with more progress (larger g, then fewer actions left), so
+    cases without contention go straight down.
 
     A greedy list schedule (longest remaining plan first) gives an upper bound first; a
     contention bound (:class:`~twostep.execution.bounds.ContentionBound`: agents that
     consume the same exclusive fact, such as a free cell, take turns) often meets it at
     the start, and then no search runs (N carts queueing at one hub). Otherwise A* stops
-    when f reaches the greedy length, or after a node budget (``max_nodes``): then the
-    greedy schedule comes back with ``exact=False`` and the proven ``lower_bound``.
+    when f reaches the greedy length, or at its budget (:class:`SearchBudget`: ``max_nodes``
+    expanded nodes, ``time_limit_s`` seconds): then the greedy schedule comes back with
+    ``exact=False`` and the proven ``lower_bound``.
+
+    Interchangeable agents (:class:`~twostep.execution.symmetry.Symmetry`: plans of the
+    same shape up to their private facts, like carts driving their own tracks through
+    the same hubs) make many nodes equivalent; A* visits one canonical node per
+    relabelling of them, and pairs of agents the relabelling maps onto each other share
+    one pair projection.
 
     * ``paper`` -- the successors of the paper's recursion: one agent alone, or all agents
       that still have actions together. Its memoised recursion computes the shortest path in
@@ -56,24 +64,36 @@ independently of the search, and :func:`parallel_length` runs it on every result
 
 One job per module:
 
-- :mod:`twostep.execution.model`      :class:`ParallelExecution`, :class:`ScheduleError`, modes
+- :mod:`twostep.execution.model`      :class:`ParallelExecution`, :class:`ScheduleError`, modes,
+  :class:`SearchBudget`
 - :mod:`twostep.execution.diagnosis`  why no schedule exists (agent copies, hand-off run)
 - :mod:`twostep.execution.compiled`   plans as bit sets over numbered facts
 - :mod:`twostep.execution.bounds`     the A* lower bound (remaining plans, contention, pairs)
+- :mod:`twostep.execution.symmetry`   interchangeable agents and canonical nodes
 - :mod:`twostep.execution.search`     greedy upper bound, budgeted A* with each mode's successors
 - :mod:`twostep.execution.check`      :func:`check_schedule`, the independent re-validation
 - :mod:`twostep.execution.parallel`   :func:`parallel_length`, which ties them together
 """
 
 from twostep.execution.check import check_schedule
-from twostep.execution.model import MODES, ParallelExecution, Schedule, ScheduleError, split_state
+from twostep.execution.model import (
+    DEFAULT_SEARCH_BUDGET,
+    MODES,
+    ParallelExecution,
+    Schedule,
+    ScheduleError,
+    SearchBudget,
+    split_state,
+)
 from twostep.execution.parallel import parallel_length
 
 __all__ = [
+    "DEFAULT_SEARCH_BUDGET",
     "MODES",
     "ParallelExecution",
     "Schedule",
     "ScheduleError",
+    "SearchBudget",
     "check_schedule",
     "parallel_length",
     "split_state",

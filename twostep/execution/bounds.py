@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import itertools
+import time
 from collections.abc import Sequence
 
 from twostep.execution.compiled import CompiledStep, CompiledTask
+from twostep.execution.symmetry import Symmetry
 
 
 class PairProjection:
@@ -92,20 +94,37 @@ class PairProjection:
                 if child not in children:
                     frontier.append(child)
         # Every move advances k + m, so deciding nodes by decreasing k + m sees children first.
-        self.explored = children.keys()
-        self.distance: dict[tuple[int, int, int], int] = {}
+        distance: dict[tuple[int, int, int], int] = {}
         for node in sorted(children, key=lambda n: -(n[0] + n[1])):
             if node in settled:
                 steps = settled[node]
             else:
-                reachable = [self.distance[c] for c in children[node] if c in self.distance]
+                reachable = [distance[c] for c in children[node] if c in distance]
                 steps = 1 + min(reachable) if reachable else None
             if steps is not None:
-                self.distance[node] = steps
+                distance[node] = steps
+        # Keys keep only the shared facts the pair touches: its private facts follow from
+        # its indices, and facts it never touches never change the answer. Pairs that a
+        # symmetry maps onto each other then have the same table (see interacting_pairs).
+        touched = task.touched
+        pair_touches = touched[first] | touched[second]
+        others_touch = 0
+        for agent, facts in enumerate(touched):
+            if agent not in (first, second):
+                others_touch |= facts
+        private = (touched[first] ^ touched[second]) & ~others_touch
+        self.key_mask = key_mask = tracked & pair_touches & ~private
+        self.explored = {(k, m, state & key_mask) for k, m, state in children}
+        self.distance = {(k, m, state & key_mask): d for (k, m, state), d in distance.items()}
 
     def __call__(self, indices: Sequence[int], state: int) -> int | None:
         """Steps the pair still needs, or None when the node is a dead end."""
-        node = (indices[self.first], indices[self.second], state & self.tracked)
+        return self.at(indices[self.first], indices[self.second], state)
+
+    def at(self, first_index: int, second_index: int, state: int) -> int | None:
+        """:meth:`__call__` with the pair's two indices given: for this pair, or for a
+        pair the symmetry maps onto it (its agents in the same order)."""
+        node = (first_index, second_index, state & self.key_mask)
         steps = self.distance.get(node)
         if steps is None and node not in self.explored:
             return 0  # unreachable in theory; a bound of 0 is always safe
@@ -121,29 +140,53 @@ PAIR_NODE_BUDGET = 20_000
 sharing cells give N (N - 1) / 2 projections of thousands of nodes each: seconds)."""
 
 
+PairLookup = tuple[PairProjection, int, int]
+"""A projection and the two agents whose indices it is looked up with (in its order)."""
+
+
 def interacting_pairs(
-    task: CompiledTask, node_budget: int | None = PAIR_NODE_BUDGET
-) -> list[PairProjection]:
+    task: CompiledTask,
+    node_budget: int | None = PAIR_NODE_BUDGET,
+    symmetry: Symmetry | None = None,
+    deadline: float | None = None,
+) -> list[PairLookup]:
     """Projections for the pairs of agents whose plans share a fact one of them writes.
 
-    Pairs are built in order until ``node_budget`` projection nodes are explored; the
-    rest are left out, which keeps the bound admissible (each pair only raises it) but
-    gives up their dead-end detection.
+    With a ``symmetry``, pairs it maps onto each other (same classes of interchangeable
+    agents) share one projection, built for the first of them: the tables agree once the
+    agents are matched up (keys hold only shared facts, which the symmetry fixes).
+    Projections are built in order until ``node_budget`` projection nodes are explored or
+    the clock passes ``deadline`` (a ``time.perf_counter`` value); the pairs left get no
+    projection, which keeps the bound admissible (each pair only raises it) but gives up
+    their dead-end detection. Every pair of a kind is kept or none, so the bound has the
+    same value on every node of an orbit.
     """
-    pairs = []
-    left = node_budget
+
+    def kind(agent: int) -> tuple[int, int]:
+        if symmetry is not None and agent in symmetry.class_of:
+            return 0, symmetry.class_of[agent]
+        return 1, agent
+
+    kinds: dict[tuple[tuple[int, int], tuple[int, int]], list[tuple[int, int]]] = {}
     for i, j in itertools.combinations(range(len(task.steps)), 2):
         reads_i, writes_i = task.reads_from[i][0], task.writes_from[i][0]
         reads_j, writes_j = task.reads_from[j][0], task.writes_from[j][0]
         if writes_i & (reads_j | writes_j) or writes_j & reads_i:
-            try:
-                pair = PairProjection(task, i, j, left)
-            except ProjectionTooLarge:
-                break
-            pairs.append(pair)
-            if left is not None:
-                left -= len(pair.explored)
-    return pairs
+            first, second = (i, j) if kind(i) <= kind(j) else (j, i)
+            kinds.setdefault((kind(first), kind(second)), []).append((first, second))
+    lookups: list[PairLookup] = []
+    left = node_budget
+    for members in kinds.values():
+        if deadline is not None and time.perf_counter() >= deadline:
+            break
+        try:
+            pair = PairProjection(task, *members[0], left)
+        except ProjectionTooLarge:
+            break
+        if left is not None:
+            left -= len(pair.explored)
+        lookups += [(pair, first, second) for first, second in members]
+    return lookups
 
 
 class ContentionBound:
@@ -253,20 +296,44 @@ class LowerBound:
     action), the contention bound of :class:`ContentionBound` and the pair projections of
     :class:`PairProjection`; None for a dead end. Each part drops by at most one per real
     step, so the maximum is consistent too. ``pairs=False`` skips the projections (cheap
-    to build, no dead-end detection), ``contention=False`` the contention bound.
+    to build, no dead-end detection), ``contention=False`` the contention bound;
+    ``symmetry`` and ``deadline`` go to :func:`interacting_pairs`.
     """
 
-    def __init__(self, task: CompiledTask, pairs: bool = True, contention: bool = True):
+    def __init__(
+        self,
+        task: CompiledTask,
+        pairs: bool = True,
+        contention: bool = True,
+        symmetry: Symmetry | None = None,
+        deadline: float | None = None,
+    ):
         self.lengths = task.lengths
         self.contention = ContentionBound(task) if contention else None
-        self.pairs = interacting_pairs(task) if pairs else []
+        self.pairs = interacting_pairs(task, symmetry=symmetry, deadline=deadline) if pairs else []
+        # contact_until[a]: past this index agent a touches no fact another agent touches.
+        # A pair with such an agent is past its last contact, where its projection is the
+        # longer remaining plan (no more than the first part of the bound): skipped.
+        self.contact_until = []
+        touched = task.touched
+        for agent, plan in enumerate(task.steps):
+            others = 0
+            for other, facts in enumerate(touched):
+                if other != agent:
+                    others |= facts
+            last = [k for k, step in enumerate(plan) if step.touched & others]
+            self.contact_until.append(last[-1] + 1 if last else 0)
 
     def __call__(self, indices: Sequence[int], state: int) -> int | None:
         bound = max((n - i for n, i in zip(self.lengths, indices, strict=True)), default=0)
         if self.contention is not None:
             bound = max(bound, self.contention(indices, state))
-        for pair in self.pairs:
-            steps = pair(indices, state)
+        until = self.contact_until
+        for pair, first, second in self.pairs:
+            k, m = indices[first], indices[second]
+            if k >= until[first] or m >= until[second]:
+                continue
+            steps = pair.at(k, m, state)
             if steps is None:
                 return None
             bound = max(bound, steps)

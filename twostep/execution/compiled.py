@@ -12,6 +12,9 @@ from dataclasses import dataclass
 from twostep.pddl import Fact, Goal
 from twostep.strips import GroundAction
 
+Node = tuple[tuple[int, ...], int]
+"""A search node: each agent's next plan index and the environment state."""
+
 
 @dataclass(frozen=True)
 class CompiledStep:
@@ -62,6 +65,14 @@ class CompiledTask:
     @property
     def lengths(self) -> tuple[int, ...]:
         return tuple(len(plan) for plan in self.steps)
+
+    @property
+    def touched(self) -> tuple[int, ...]:
+        """touched[i]: the facts agent i's plan reads or writes anywhere."""
+        return tuple(
+            reads[0] | writes[0]
+            for reads, writes in zip(self.reads_from, self.writes_from, strict=True)
+        )
 
 
 def compile_task(

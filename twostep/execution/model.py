@@ -9,6 +9,31 @@ from twostep.pddl import Fact
 
 MODES = ("exact", "paper")
 
+DEFAULT_MAX_NODES = 2_000
+"""Node budget of the search. A node costs about 0.1 ms with 4 agents and up to 1 ms
+with 16 sharing two cells (pair bounds for every pair), so this stays within seconds."""
+
+DEFAULT_TIME_LIMIT_S = 10.0
+"""Time budget of the search in seconds: a backstop for the node budget on machines or
+tasks where nodes are slow. Unlike the node budget it makes the answer depend on the
+machine, so the node budget is the one that usually stops the search."""
+
+
+@dataclass(frozen=True)
+class SearchBudget:
+    """How much search the exact scorer may spend once it has a schedule in hand.
+
+    Past either limit it returns the best schedule found with ``exact=False`` and a
+    proven ``lower_bound`` (see :func:`~twostep.execution.parallel_length`); None: no
+    limit. Both defaults keep a pipeline run from hanging on a hard schedule.
+    """
+
+    max_nodes: int | None = DEFAULT_MAX_NODES
+    time_limit_s: float | None = DEFAULT_TIME_LIMIT_S
+
+
+DEFAULT_SEARCH_BUDGET = SearchBudget()
+
 Schedule = tuple[tuple[tuple[int, str], ...], ...]
 """Per time step, the (agent index, action text) pairs that act in it, in agent order."""
 

@@ -7,8 +7,13 @@ from collections.abc import Collection, Sequence
 from twostep.execution.check import check_schedule
 from twostep.execution.compiled import compile_task
 from twostep.execution.diagnosis import check_agent_copies, diagnose
-from twostep.execution.model import MODES, ParallelExecution
-from twostep.execution.search import DEFAULT_MAX_NODES, search
+from twostep.execution.model import (
+    DEFAULT_MAX_NODES,
+    DEFAULT_TIME_LIMIT_S,
+    MODES,
+    ParallelExecution,
+)
+from twostep.execution.search import search
 from twostep.pddl import Fact, Goal
 from twostep.strips import GroundAction
 
@@ -21,12 +26,13 @@ def _parallel_length(
     mode: str,
     plain: bool = False,
     max_nodes: int | None = DEFAULT_MAX_NODES,
+    time_limit_s: float | None = DEFAULT_TIME_LIMIT_S,
 ) -> ParallelExecution:
     if mode not in MODES:
         raise ValueError(f"unknown mode {mode!r}; expected one of {', '.join(MODES)}")
     check_agent_copies(plans, init, goal, agent_predicates)
     task = compile_task(plans, init, goal, agent_predicates)
-    found = search(task, mode, plain, max_nodes)
+    found = search(task, mode, plain, max_nodes, time_limit_s)
     sets = found.sets
     if sets is None:
         raise diagnose(plans, init, goal, agent_predicates)
@@ -52,6 +58,7 @@ def parallel_length(
     agent_predicates: Collection[str],
     mode: str = "exact",
     max_nodes: int | None = DEFAULT_MAX_NODES,
+    time_limit_s: float | None = DEFAULT_TIME_LIMIT_S,
 ) -> ParallelExecution:
     """The shortest joint schedule of per-agent plans that reaches ``goal``.
 
@@ -61,9 +68,18 @@ def parallel_length(
     Raises :class:`ScheduleError` when no schedule reaches the goal, naming the agent, the
     1-based step, the action and the failing precondition (or the failing goal literal).
 
-    The search expands at most ``max_nodes`` nodes (None: no limit) once it has a schedule
-    in hand; past that it returns the best schedule found with ``exact=False`` and a proven
-    ``lower_bound`` (see :func:`~twostep.execution.search.search`). The schedule is
-    re-validated by :func:`check_schedule` in every case.
+    The search expands at most ``max_nodes`` nodes and runs at most ``time_limit_s``
+    seconds (None: no limit) once it has a schedule in hand; past either it returns the
+    best schedule found with ``exact=False`` and a proven ``lower_bound`` (see
+    :func:`~twostep.execution.search.search`). The schedule is re-validated by
+    :func:`check_schedule` in every case.
     """
-    return _parallel_length(plans, init, goal, agent_predicates, mode, max_nodes=max_nodes)
+    return _parallel_length(
+        plans,
+        init,
+        goal,
+        agent_predicates,
+        mode,
+        max_nodes=max_nodes,
+        time_limit_s=time_limit_s,
+    )

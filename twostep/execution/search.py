@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import heapq
 import itertools
+import time
 from dataclasses import dataclass
 
 from twostep.execution.bounds import LowerBound
-from twostep.execution.compiled import CompiledTask
-
-Node = tuple[tuple[int, ...], int]
-"""A search node: each agent's next plan index and the environment state."""
+from twostep.execution.compiled import CompiledTask, Node
+from twostep.execution.model import DEFAULT_MAX_NODES, DEFAULT_TIME_LIMIT_S
+from twostep.execution.symmetry import Permutation, Symmetry, relabel
 
 
 def free_agents(task: CompiledTask, indices: tuple[int, ...], movable: list[int]) -> list[int]:
@@ -193,31 +193,37 @@ class SearchResult:
     """A proven lower bound on the shortest makespan (``len(sets)`` when exact)."""
 
 
-DEFAULT_MAX_NODES = 2_000
-"""Node budget of :func:`search`. A node costs about 0.1 ms with 4 agents and up to 5 ms
-with 14 sharing two cells (pair bounds for every pair), so this stays within seconds."""
-
-
 def search(
-    task: CompiledTask, mode: str, plain: bool = False, max_nodes: int | None = DEFAULT_MAX_NODES
+    task: CompiledTask,
+    mode: str,
+    plain: bool = False,
+    max_nodes: int | None = DEFAULT_MAX_NODES,
+    time_limit_s: float | None = DEFAULT_TIME_LIMIT_S,
 ) -> SearchResult:
     """A* over (plan indices, environment state) with an anytime stop.
 
     First a greedy schedule (:func:`greedy_schedule`, then :func:`bound_dive` when that is
     not proven optimal) gives an upper bound; when the cheap bounds (longest remaining
-    plan, contention) already meet it at the start, it is optimal and no search runs. Otherwise A* runs with the pair projections too and stops
-    at the first goal node (optimal), when the smallest f on the frontier reaches the
-    greedy length (the greedy schedule is optimal), or after ``max_nodes`` expansions: then
-    the greedy schedule is returned with ``exact=False`` and the smallest f on the frontier
-    as lower bound (every path to a goal passes a frontier node, and f never overestimates).
-    Without a greedy schedule the budget does not apply (there is nothing to return), so
-    plans that only work interleaved are still searched to the end.
+    plan, contention) already meet it at the start, it is optimal and no search runs.
+    Otherwise A* runs with the pair projections too, over canonical nodes
+    (:class:`~twostep.execution.symmetry.Symmetry`: one node per relabelling of
+    interchangeable agents), and stops at the first goal node (optimal), when the smallest
+    f on the frontier reaches the greedy length (the greedy schedule is optimal), or after
+    ``max_nodes`` expansions or ``time_limit_s`` seconds (None: no limit): then the greedy
+    schedule is returned with ``exact=False`` and the smallest f on the frontier as lower
+    bound (every path to a goal passes a frontier node, and f never overestimates). The
+    time limit also cuts the building of pair projections short (the bound stays
+    admissible without them). Without a greedy schedule neither budget applies (there is
+    nothing to return), so plans that only work interleaved are still searched to the end.
+
+    A node is expanded again when it is reached with a smaller g, so the result stays
+    optimal even where the bound is not consistent across a relabelling.
 
     ``plain`` turns off every bound but the longest remaining plan, the dominance pruning,
-    the greedy schedule and the budget (for benchmarks only).
+    the symmetry reduction, the greedy schedule and the budgets (for benchmarks only).
     """
-    lengths = task.lengths
-    start: Node = (tuple(0 for _ in lengths), task.initial)
+    deadline = None if time_limit_s is None or plain else time.perf_counter() + time_limit_s
+    start: Node = (tuple(0 for _ in task.lengths), task.initial)
     incumbent = None if plain else greedy_schedule(task, mode)
     expanded = 0
     if incumbent is not None:
@@ -227,57 +233,111 @@ def search(
         assert cheap is not None
         if cheap >= len(incumbent):
             return SearchResult(incumbent, expanded, True, len(incumbent))
-        dive = bound_dive(task, mode, cheap_bound, len(incumbent) - 1)
-        if dive is not None:
-            expanded += len(dive) + 1
-            incumbent = dive
-            if cheap >= len(incumbent):
-                return SearchResult(incumbent, expanded, True, len(incumbent))
-    bound = LowerBound(task, pairs=not plain, contention=not plain)
+        if not _past(deadline):
+            dive = bound_dive(task, mode, cheap_bound, len(incumbent) - 1)
+            if dive is not None:
+                expanded += len(dive) + 1
+                incumbent = dive
+                if cheap >= len(incumbent):
+                    return SearchResult(incumbent, expanded, True, len(incumbent))
+    symmetry = None if plain else Symmetry(task)
+    bound = LowerBound(
+        task,
+        pairs=not plain,
+        contention=not plain,
+        symmetry=symmetry,
+        deadline=None if incumbent is None else deadline,
+    )
+    return astar(
+        task,
+        mode,
+        bound,
+        symmetry,
+        prune=not plain,
+        incumbent=incumbent,
+        expanded=expanded,
+        max_nodes=max_nodes,
+        deadline=deadline,
+    )
+
+
+def astar(
+    task: CompiledTask,
+    mode: str,
+    bound: LowerBound,
+    symmetry: Symmetry | None = None,
+    *,
+    prune: bool = True,
+    incumbent: list[tuple[int, ...]] | None = None,
+    expanded: int = 0,
+    max_nodes: int | None = None,
+    deadline: float | None = None,
+) -> SearchResult:
+    """The A* part of :func:`search`, from the start node with the given bound.
+
+    ``symmetry``: search canonical nodes only (None: every node). ``incumbent``: a known
+    schedule, returned as soon as the frontier proves it optimal, or with ``exact=False``
+    once ``max_nodes`` more nodes are expanded or the clock passes ``deadline`` (a
+    ``time.perf_counter`` value); without one both limits are ignored. ``expanded`` is
+    the count so far (the greedy runs).
+    """
+    if symmetry is not None and not symmetry:
+        symmetry = None  # no interchangeable agents: skip the canonical forms
+    lengths = task.lengths
+    start: Node = (tuple(0 for _ in lengths), task.initial)
     h0 = bound(*start)
     if h0 is None:
         return SearchResult(None, expanded, True, 0)
     best: dict[Node, int] = {start: 0}
-    parent: dict[Node, tuple[Node, tuple[int, ...]]] = {}
-    closed: set[Node] = set()
+    parent: dict[Node, tuple[Node, tuple[int, ...], Permutation | None]] = {}
+    closed: dict[Node, int] = {}
     counter = itertools.count()
     # Ties on f go to more progress: larger g (so smaller h), then fewer actions left.
     frontier = [(h0, 0, sum(lengths), next(counter), start)]
     budget = None if incumbent is None or max_nodes is None else expanded + max_nodes
+    if incumbent is None:
+        deadline = None
     while frontier:
         f, minus_g, left, _, node = frontier[0]
         if incumbent is not None and (
-            f >= len(incumbent) or (budget is not None and expanded >= budget)
+            f >= len(incumbent) or (budget is not None and expanded >= budget) or _past(deadline)
         ):
             proven = min(f, len(incumbent))
             return SearchResult(incumbent, expanded, proven == len(incumbent), max(h0, proven))
         heapq.heappop(frontier)
-        if node in closed:
-            continue
-        closed.add(node)
-        expanded += 1
         g = -minus_g
+        if closed.get(node, g + 1) <= g or best.get(node, g) < g:
+            continue  # expanded already with this g or less, or a better entry is queued
+        closed[node] = g
+        expanded += 1
         indices, state = node
         if left == 0:
             if not goal_holds(task, state):
                 continue
-            sets = []
+            path = []
             while node in parent:
-                node, chosen = parent[node]
-                sets.append(chosen)
-            return SearchResult(sets[::-1], expanded, True, g)
-        for chosen in successor_sets(task, indices, state, mode, prune=not plain):
+                node, chosen, permutation = parent[node]
+                path.append((chosen, permutation))
+            return SearchResult(relabel(len(lengths), path[::-1]), expanded, True, g)
+        for chosen in successor_sets(task, indices, state, mode, prune):
             child = advance(task, indices, state, chosen)
-            if child in closed or best.get(child, g + 2) <= g + 1:
+            permutation = None
+            if symmetry is not None:
+                child, permutation = symmetry.canonical(child)
+            if best.get(child, g + 2) <= g + 1:
                 continue
             h_child = bound(*child)
             if h_child is None:
-                closed.add(child)  # a dead end stays one
+                best[child] = -1  # a dead end stays one: never queued again
                 continue
             best[child] = g + 1
-            parent[child] = (node, chosen)
+            parent[child] = (node, chosen, permutation)
             entry = (g + 1 + h_child, -g - 1, left - len(chosen), next(counter), child)
             heapq.heappush(frontier, entry)
     if incumbent is not None:  # every other path was refuted: the greedy one is optimal
         return SearchResult(incumbent, expanded, True, len(incumbent))
     return SearchResult(None, expanded, True, 0)
+
+
+def _past(deadline: float | None) -> bool:
+    return deadline is not None and time.perf_counter() >= deadline
