@@ -5,6 +5,7 @@
     report.md          the whole report (figures linked, every table, notes, failed runs)
     summary.csv        per domain, series, N: mean/std over seeds, success rate, counts
     changes.csv        TwoStep vs SA / MA per N (normalised, as the paper), paper's figures
+    planning_time.csv  TwoStep vs MA planning time per domain and N (:mod:`.planning_time`)
     table1.csv         expert vs decomposers on the annotated tasks (+ the paper's rows)
     per_seed.csv       per domain, series, N, seed: the task averages the stds come from
     per_task.csv       per domain, series, N, task: mean/std over seeds
@@ -23,6 +24,7 @@ import pandas as pd
 
 from twostep.report.aggregate import METRIC_NAMES, Report
 from twostep.report.paper import ANNOTATED_TASKS, TABLE1_AGENTS, TABLE1_DOMAINS
+from twostep.report.planning_time import planning_time_view, view_rows
 from twostep.report.plots import plot_report
 from twostep.report.table2 import (
     PAPER_TIME_LIMIT_S,
@@ -202,6 +204,23 @@ def _changes_section(report: Report) -> str:
     return explanation + "\n\n" + markdown_table(headers, rows)
 
 
+def _planning_time_section(report: Report) -> list[str]:
+    """TwoStep vs MA planning time per domain and N, when the report has both."""
+    view = planning_time_view(report.summary, report.runs)
+    if view.empty:
+        return []
+    intro = (
+        "Mean planning time (s) per domain of SA (N = 1), MA and TwoStep (N), and TwoStep's "
+        "change against MA, negative = TwoStep plans faster; the paper's figure (normalised "
+        "across domains) beside the 'all' row, which averages the domains' means. Exec = "
+        "execution length (steps). 'MA at limit': MA runs whose planner call used its whole "
+        "time limit; 'TwoStep no helper': TwoStep runs with no accepted helper subgoal, which "
+        "return the SA plan (its planner time counts)."
+    )
+    headers, rows = view_rows(view)
+    return ["## TwoStep against MA: planning time per domain", intro, markdown_table(headers, rows)]
+
+
 def _table1_cell(row: dict[str, object], domain: str) -> str:
     text = format_mean_std(
         row.get(f"{domain}_mean"),
@@ -330,6 +349,7 @@ def render_markdown(report: Report, title: str, source: str, figures: Sequence[P
         _summary_section(report) if len(report.summary) else "No run could be placed.",
         "## Change against SA and MA",
         _changes_section(report),
+        *_planning_time_section(report),
         "## Expert subgoals versus decomposers (paper's Table I)",
         _table1_section(report),
         *_table2_sections(report),
@@ -379,6 +399,7 @@ def write_report(
     paths = [
         _write_csv(report.summary, out_dir / "summary.csv"),
         _write_csv(report.changes, out_dir / "changes.csv"),
+        _write_csv(planning_time_view(report.summary, report.runs), out_dir / "planning_time.csv"),
         _write_csv(report.table1, out_dir / "table1.csv"),
         *([_write_csv(report.table2, out_dir / "table2.csv")] if not report.table2.empty else []),
         _write_csv(report.per_seed, out_dir / "per_seed.csv"),
