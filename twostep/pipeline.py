@@ -391,33 +391,13 @@ def run_twostep(
     from twostep.plan_deal import PlanDeal, run_plan_deal
     from twostep.portfolio import Portfolio, run_portfolio  # it calls this function
 
-    if isinstance(decomposer, PlanDeal):
-        return run_plan_deal(
-            task,
-            agents,
-            decomposer,
-            agent_predicates,
-            settings,
-            mode,
-            seed,
-            sa_length,
-            steps,
-            sa_plan,
-            fallback_if_longer,
-        )
-    if isinstance(decomposer, Portfolio):
-        chosen = run_portfolio(
-            task,
-            agents,
-            decomposer,
-            agent_predicates,
-            settings,
-            mode,
-            seed,
-            sa_length,
-            steps,
-            sa_plan,
-            fallback_if_longer,
+    # decomposers that need the whole pipeline, not just subgoals, run their own
+    rest = (agent_predicates, settings, mode, seed, sa_length, steps, sa_plan, fallback_if_longer)
+    if isinstance(decomposer, PlanDeal | Portfolio):
+        chosen = (
+            run_plan_deal(task, agents, decomposer, *rest)
+            if isinstance(decomposer, PlanDeal)
+            else run_portfolio(task, agents, decomposer, *rest)
         )
         chosen.origins = task.problem.domain.origins
         return chosen

@@ -234,21 +234,7 @@ def eliminate_actions(problem: Problem, plan: Sequence[GroundAction]) -> list[Gr
     """Greedy action elimination: drop an action, and every later one that no longer
     applies, whenever the goal still holds without them (Fink and Yang's well-justified
     plans, greedy variant). The result is a valid plan no longer than ``plan``."""
-    actions = list(plan)
-    prefix_state = problem.init
-    i = 0
-    while i < len(actions):
-        state, kept = prefix_state, []
-        for action in actions[i + 1 :]:
-            if action.applicable(state):
-                state = action.apply(state)
-                kept.append(action)
-        if problem.goal.holds(state):
-            actions[i:] = kept
-            continue
-        prefix_state = actions[i].apply(prefix_state)
-        i += 1
-    return actions
+    return [action for _, action in eliminate_joint(problem, [(0, a) for a in plan], 1, ())]
 
 
 def pieces_of(
@@ -470,7 +456,7 @@ def eliminate_joint(
     agents: int,
     agent_predicates: Collection[str],
 ) -> list[tuple[int, GroundAction]]:
-    """:func:`eliminate_actions` over a run of several agents, each with its own copy of
+    """Greedy action elimination over a run of several agents, each with its own copy of
     the agent-specific facts: drop an action, and every later one that no longer applies,
     whenever the goal still holds. With more hands, a single agent's detours (a block
     parked on another to free the arm) are often no longer needed."""
