@@ -16,6 +16,8 @@ $(VENV)/.synced: pyproject.toml uv.lock
 	# --compile-bytecode: the machines set PYTHONDONTWRITEBYTECODE=1, so without .pyc files
 	# every process recompiles every module it imports (halves a run's start-up: STACK-NOTES).
 	$(PYTHON) -m uv sync --frozen --extra dev --compile-bytecode --quiet
+	# An empty MLflow store made once by MLflow: a new store is a copy (ms), not a migration (s).
+	$(VENV)/bin/python -m flows.tracking_sqlite
 	touch $@
 
 setup: $(VENV)/.synced

@@ -264,7 +264,7 @@ def execute_job(
 
         # A warm SQLite store takes the run's rows directly (milliseconds); otherwise
         # MLflow is imported in a helper process while the job runs.
-        light = SqliteJobLog.open(uri, experiment)
+        light = SqliteJobLog.open(uri, experiment, cfg.mlflow.artifact_location)
         if light is None:
             from flows.tracking_worker import TrackingWorker
 

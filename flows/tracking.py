@@ -130,6 +130,12 @@ def _client(tracking_uri: str) -> Any:
     for name in ("mlflow", "alembic"):
         logging.getLogger(name).setLevel(logging.WARNING)
 
+    if tracking_uri.startswith("sqlite:///"):  # a new store: copied, not migrated
+        from flows.tracking_sqlite import seed_store
+
+        path = Path(tracking_uri[len("sqlite:///") :])
+        if not path.exists():
+            seed_store(path)
     return MlflowClient(tracking_uri=tracking_uri)
 
 
@@ -154,6 +160,16 @@ def experiment_name_for(overrides: Iterable[str]) -> str:
     return name
 
 
+def experiment_location(artifact_root: str | None, name: str) -> str | None:
+    """Where experiment ``name`` keeps its artifacts: one folder per experiment under a
+    local artifact root, named so a person finds it (a URI root is MLflow's to extend)."""
+    if not artifact_root or "://" in artifact_root:
+        return artifact_root
+    slug = re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_")[:80]
+    digest = hashlib.sha256(name.encode()).hexdigest()[:8]
+    return (Path(artifact_root).resolve() / f"{slug}-{digest}").as_uri()
+
+
 class Tracker:
     """One MLflow store: experiments, the sweep's parent run, job runs."""
 
@@ -170,12 +186,7 @@ class Tracker:
             if found.lifecycle_stage == "deleted":
                 self.client.restore_experiment(found.experiment_id)
             return str(found.experiment_id)
-        location = self.artifact_location
-        if location and "://" not in location:
-            # One folder per experiment under the artifact root, named so a person finds it.
-            slug = re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_")[:80]
-            digest = hashlib.sha256(name.encode()).hexdigest()[:8]
-            location = (Path(location).resolve() / f"{slug}-{digest}").as_uri()
+        location = experiment_location(self.artifact_location, name)
         try:
             return str(self.client.create_experiment(name, artifact_location=location))
         except Exception:

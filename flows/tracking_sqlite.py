@@ -11,29 +11,39 @@ the run's end) in one transaction, and copies the artifacts as MLflow's local ar
 repository does. The contents are MLflow's: tests/test_tracking_sqlite.py compares
 every row with what MLflow itself writes for the same record.
 
-Anything else answers ``None`` and the caller logs with MLflow as before: no store or
-no experiment yet (the first run creates them), another schema, a run to be logged
-again (an earlier attempt failed), or a name or value MLflow would reject (so its
-error message stays MLflow's).
+A store that does not exist yet is seeded from a template: an empty store that MLflow
+itself created and migrated once per environment (:func:`make_template`, run by ``make
+setup``; it lives in the virtual environment, beside the MLflow that made it). Creating a
+store through MLflow runs its whole migration history (4-5 s); copying the template takes
+milliseconds, and the run's experiment is then added as MLflow adds it (one row). Without
+a template the first run creates the store through MLflow, as before.
+
+Anything else answers ``None`` and the caller logs with MLflow as before: no template and
+no store, another schema, an experiment deleted or without a local artifact root, a run
+to be logged again (an earlier attempt failed), or a name or value MLflow would reject (so
+its error message stays MLflow's).
 """
 
 from __future__ import annotations
 
 import math
+import os
 import posixpath
 import re
 import shutil
 import sqlite3
+import sys
+import tempfile
 import time
 import uuid
 from collections.abc import Mapping
-from contextlib import closing
+from contextlib import closing, suppress
 from pathlib import Path
 from typing import Any
 from urllib.parse import urlparse
 from urllib.request import url2pathname
 
-from flows.tracking import JOB_KEY, KIND, STATUS, job_tags, metric_points
+from flows.tracking import JOB_KEY, KIND, STATUS, experiment_location, job_tags, metric_points
 
 # The alembic revision of MLflow 3.17.2's tracking schema (test_tracking_sqlite checks it
 # against the installed MLflow): another schema is written by MLflow itself.
@@ -45,6 +55,89 @@ _MAX_KEY = 250
 _MAX_PARAM_VALUE = 6000
 _MAX_TAG_VALUE = 8000
 _MAX_DOUBLE = 1.7976931348623157e308  # what MLflow stores for +-inf
+
+
+def template_path() -> Path:
+    """The empty store of the installed MLflow, inside this environment."""
+    return Path(sys.prefix) / "share" / "twostep" / f"mlflow-{SCHEMA_VERSION}.db"
+
+
+def make_template(target: Path | None = None) -> Path:
+    """Have MLflow create and migrate an empty store, and keep it as the template."""
+    target = target or template_path()
+    if target.is_file():
+        return target
+    from flows.tracking import _client
+
+    with tempfile.TemporaryDirectory() as folder:
+        db = Path(folder) / "mlflow.db"
+        _client(f"sqlite:///{db}").search_experiments()  # MLflow creates the store here
+        with closing(sqlite3.connect(db)) as con:
+            version = con.execute("SELECT version_num FROM alembic_version").fetchall()
+        if version != [(SCHEMA_VERSION,)]:
+            raise RuntimeError(f"MLflow created schema {version}, not {SCHEMA_VERSION}")
+        target.parent.mkdir(parents=True, exist_ok=True)
+        partial = target.with_name(f".{target.name}.{uuid.uuid4().hex}")
+        shutil.copyfile(db, partial)
+        os.replace(partial, target)
+    return target
+
+
+def seed_store(path: Path) -> bool:
+    """Copy the template to ``path`` if no store is there yet (False: no template).
+
+    The Default experiment (id 0) gets the artifact folder MLflow gives it, ``mlruns/0``
+    under the working directory, and the current time. Two processes seeding at once
+    both succeed: the first copy is linked into place, the other is dropped."""
+    template = template_path()
+    if not template.is_file():
+        return False
+    path.parent.mkdir(parents=True, exist_ok=True)
+    partial = path.with_name(f".{path.name}.{uuid.uuid4().hex}")
+    try:
+        shutil.copyfile(template, partial)
+        now = _millis()
+        with closing(sqlite3.connect(partial)) as db:
+            db.execute(
+                "UPDATE experiments SET artifact_location = ?, creation_time = ?,"
+                " last_update_time = ? WHERE experiment_id = 0",
+                (str(Path("mlruns").resolve() / "0"), now, now),
+            )
+            db.commit()
+        with suppress(FileExistsError):  # never over a store another process put there
+            os.link(partial, path)
+    finally:
+        partial.unlink(missing_ok=True)
+    return True
+
+
+def _experiment_rows(db: sqlite3.Connection, name: str) -> list[tuple[Any, ...]]:
+    return db.execute(
+        "SELECT experiment_id, lifecycle_stage, artifact_location, workspace"
+        " FROM experiments WHERE name = ?",
+        (name,),
+    ).fetchall()
+
+
+def _create_experiment(db: sqlite3.Connection, name: str, location: str) -> list[tuple[Any, ...]]:
+    """The experiment's row as MLflow's ``create_experiment`` writes it (no tags)."""
+    if not _valid_name(name) or len(name) > 256:
+        return []
+    db.execute("BEGIN IMMEDIATE")
+    try:
+        if not _experiment_rows(db, name):  # else a parallel job created it first
+            now = _millis()
+            db.execute(
+                "INSERT INTO experiments (name, artifact_location, lifecycle_stage,"
+                " creation_time, last_update_time, workspace)"
+                " VALUES (?, ?, 'active', ?, ?, 'default')",
+                (name, location, now, now),
+            )
+    except BaseException:
+        db.execute("ROLLBACK")
+        raise
+    db.execute("COMMIT")
+    return _experiment_rows(db, name)
 
 
 def _valid_name(name: str) -> bool:
@@ -76,24 +169,30 @@ class SqliteJobLog:
         self.artifact_location = artifact_location
 
     @classmethod
-    def open(cls, tracking_uri: str, experiment: str) -> SqliteJobLog | None:
-        """The store and experiment, if this module can log into them (see above)."""
+    def open(
+        cls, tracking_uri: str, experiment: str, artifact_root: str | None = None
+    ) -> SqliteJobLog | None:
+        """The store and experiment, if this module can log into them (see above).
+
+        A missing store is seeded from the template; a missing experiment is added when
+        ``artifact_root`` (``mlflow.artifact_location``) is a local folder."""
         if not tracking_uri.startswith("sqlite:///"):
             return None
         path = Path(tracking_uri[len("sqlite:///") :])
-        if not path.is_file():
+        if not path.is_file() and not seed_store(path):
             return None
         try:
             with closing(cls._connect(path)) as db:
                 version = db.execute("SELECT version_num FROM alembic_version").fetchall()
-                rows = db.execute(
-                    "SELECT experiment_id, lifecycle_stage, artifact_location, workspace"
-                    " FROM experiments WHERE name = ?",
-                    (experiment,),
-                ).fetchall()
+                if version != [(SCHEMA_VERSION,)]:
+                    return None
+                rows = _experiment_rows(db, experiment)
+                location = experiment_location(artifact_root, experiment)
+                if not rows and location is not None and _artifact_root(location) is not None:
+                    rows = _create_experiment(db, experiment, location)
         except sqlite3.Error:
             return None
-        if version != [(SCHEMA_VERSION,)] or len(rows) != 1:
+        if len(rows) != 1:
             return None
         experiment_id, stage, location, workspace = rows[0]
         if stage != "active" or workspace != "default" or not isinstance(location, str):
@@ -229,3 +328,13 @@ class SqliteJobLog:
             " VALUES (?, ?, ?, ?, ?, ?)",
             [(k, v, t, s, n, run_id) for k, v, t, s, n in latest.values()],
         )
+
+
+if __name__ == "__main__":  # `make setup`: the template store for this environment
+    from flows.environment import quiet_defaults
+
+    quiet_defaults()  # offline: no telemetry from MLflow
+    try:
+        print(f"MLflow store template: {make_template()}")
+    except Exception as error:  # a run then creates its first store through MLflow
+        print(f"no MLflow store template ({type(error).__name__}: {error})", file=sys.stderr)

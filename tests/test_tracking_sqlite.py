@@ -17,8 +17,9 @@ from typing import Any
 
 import pytest
 
+from flows import tracking_sqlite
 from flows.tracking import Tracker, log_job_run
-from flows.tracking_sqlite import SCHEMA_VERSION, SqliteJobLog
+from flows.tracking_sqlite import SCHEMA_VERSION, SqliteJobLog, make_template, seed_store
 
 EXPERIMENT = "twostep"
 
@@ -176,3 +177,71 @@ def test_what_mlflow_must_handle_is_left_to_it(store: dict[str, Any], tmp_path: 
     with sqlite3.connect(other) as db:
         db.execute("UPDATE alembic_version SET version_num = 'somethingelse'")
     assert SqliteJobLog.open(f"sqlite:///{other}", EXPERIMENT) is None
+
+
+@pytest.fixture(scope="module")
+def template(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """An empty store made by MLflow as `make setup` makes it (seconds: once per module)."""
+    return make_template(tmp_path_factory.mktemp("template") / "template.db")
+
+
+def schema(db_path: Path) -> list[tuple[str, list[str]]]:
+    """Every table and index; a statement's lines sorted, since MLflow's own migrations
+    write a table's CHECK constraints in varying order from one store to the next."""
+    with sqlite3.connect(db_path) as db:
+        rows = db.execute("SELECT name, sql FROM sqlite_master WHERE sql IS NOT NULL")
+        return sorted((name, sorted(sql.splitlines())) for name, sql in rows)
+
+
+def test_a_seeded_store_is_the_store_mlflow_creates(
+    store: dict[str, Any], template: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(tracking_sqlite, "template_path", lambda: template)
+    monkeypatch.chdir(tmp_path)
+    seeded = tmp_path / "out" / "mlflow.db"
+    assert seed_store(seeded)
+    assert schema(seeded) == schema(store["base"] / "mlflow.db")  # tables, indexes, version
+    with sqlite3.connect(seeded) as db:
+        assert db.execute("SELECT version_num FROM alembic_version").fetchall() == [
+            (SCHEMA_VERSION,)
+        ]
+        (default,) = db.execute(
+            "SELECT name, artifact_location, lifecycle_stage FROM experiments"
+        ).fetchall()
+    # MLflow gives the Default experiment mlruns/0 under the working directory
+    assert default == ("Default", str(tmp_path / "mlruns" / "0"), "active")
+    before = seeded.stat().st_ino
+    assert seed_store(seeded) and seeded.stat().st_ino == before  # never over a store
+
+
+def test_the_experiment_is_added_as_mlflow_adds_it(
+    store: dict[str, Any], template: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(tracking_sqlite, "template_path", lambda: template)
+    base = tmp_path / "out"
+    uri = f"sqlite:///{base / 'mlflow.db'}"
+    light = SqliteJobLog.open(uri, EXPERIMENT, str(base / "mlruns"))  # seeds, then adds
+    assert light is not None
+
+    def experiment(db_path: Path, root: Path) -> tuple[Any, ...]:
+        with sqlite3.connect(db_path) as db:
+            (row,) = db.execute(
+                "SELECT experiment_id, name, artifact_location, lifecycle_stage, workspace,"
+                " creation_time = last_update_time FROM experiments WHERE name = ?",
+                (EXPERIMENT,),
+            ).fetchall()
+            tags = db.execute("SELECT * FROM experiment_tags").fetchall()
+        return (*row[:2], row[2].replace(root.as_uri(), "<root>"), *row[3:], tags)
+
+    assert experiment(base / "mlflow.db", base) == experiment(
+        store["base"] / "mlflow.db", store["base"]
+    )
+    # MLflow reads the store, the experiment and a run logged into it as its own
+    run_id = light.log(record("seeded", store["base"], status="success", error=None))
+    assert run_id is not None
+    client = Tracker(uri).client
+    found = client.get_experiment_by_name(EXPERIMENT)
+    assert found is not None and str(found.experiment_id) == str(light.experiment_id)
+    assert client.get_run(run_id).info.status == "FINISHED"
+    # without a local artifact root the experiment is left to MLflow
+    assert SqliteJobLog.open(uri, "another", None) is None
