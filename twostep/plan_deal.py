@@ -237,6 +237,11 @@ def eliminate_actions(problem: Problem, plan: Sequence[GroundAction]) -> list[Gr
     return [action for _, action in eliminate_joint(problem, [(0, a) for a in plan], 1, ())]
 
 
+def clean_plan(problem: Problem, plan: Sequence[str]) -> list[GroundAction]:
+    """Step 0: the SA plan, grounded, after action elimination."""
+    return eliminate_actions(problem, Grounder(problem).ground_plan(plan))
+
+
 def pieces_of(
     problem: Problem,
     grounded: Sequence[GroundAction],
@@ -260,14 +265,17 @@ def deal_plan(
     agent_predicates: Collection[str],
     cut: str = "free",
     order: str = "critical",
+    cleaned: Sequence[GroundAction] | None = None,
 ) -> Deal:
-    """Steps 1-3 of the module docstring for one SA plan and ``agents`` agents.
+    """Steps 0-4 of the module docstring for one SA plan and ``agents`` agents;
+    ``cleaned`` is step 0's result when the caller has it (:func:`clean_plan`: one
+    clean-up serves every cut and order).
 
     The order of step 1 leaves walking out; when the replay then finds no walk (a ramp
     taken away before an agent crossed it), the deal is made again with the walks' own
     causal links kept, each walk standing for the acting action it leads to.
     """
-    grounded = eliminate_actions(problem, Grounder(problem).ground_plan(plan))
+    grounded = list(cleaned) if cleaned is not None else clean_plan(problem, plan)
     try:
         return _deal(problem, grounded, agents, agent_predicates, cut, order, keep_walks=False)
     except DealError:
@@ -587,13 +595,16 @@ def run_plan_deal(
     tried: list[dict[str, object]] = []
     scored: dict[tuple[tuple[str, ...], ...], int] = {}
     chosen = 0
+    cleaned: list[GroundAction] | None = None  # step 0 once, for every cut and order
     variants = [(c, o) for c in deal.cuts for o in ORDERS]
     for cut, order in variants if sa_steps is not None and agents > 1 else ():
         assert sa_steps is not None
         deal_start = time.perf_counter()
         row: dict[str, object] = {"cut": cut, "order": order}
         try:
-            dealt = deal_plan(problem, sa_steps, agents, agent_predicates, cut, order)
+            if cleaned is None:
+                cleaned = clean_plan(problem, sa_steps)
+            dealt = deal_plan(problem, sa_steps, agents, agent_predicates, cut, order, cleaned)
         except (DealError, PlanError) as error:
             row["error"] = str(error)
             tried.append(row)
