@@ -179,3 +179,36 @@ def test_real_sa_plans_deal_and_validate(data_root: Path, agents: int) -> None:
         assert run.exec_length <= sa.exec_length
         if run.fallback is None:
             _check(task.problem, run, preds)
+
+
+def test_the_deal_does_not_depend_on_the_hash_seed(data_root: Path, tmp_path: Path) -> None:
+    # termes p02 has walks of equal length over different cells: the walking search must
+    # pick the same one in every process (Python's set order changes with PYTHONHASHSEED;
+    # before the fix three seeds gave three different deals of the same SA plan).
+    import json
+    import os
+    import subprocess
+    import sys
+
+    task = load_task("termes", 2, data_root)
+    sa = run_single_agent(task, FAST).planner_calls[0].result
+    assert sa.plan is not None
+    (tmp_path / "plan.json").write_text(json.dumps(list(sa.plan)))
+    script = (
+        "import json, sys\n"
+        "from pathlib import Path\n"
+        "from twostep.benchmark import load_task\n"
+        "from twostep.plan_deal import deal_plan\n"
+        "task = load_task('termes', 2, Path(sys.argv[1]))\n"
+        "plan = json.loads(Path(sys.argv[2]).read_text())\n"
+        "print(json.dumps(deal_plan(task.problem, plan, 3, ['at', 'has-block']).plans))\n"
+    )
+    outputs = {
+        subprocess.run(
+            [sys.executable, "-c", script, str(data_root), str(tmp_path / "plan.json")],
+            capture_output=True, text=True, check=True,
+            env={**os.environ, "PYTHONHASHSEED": seed},
+        ).stdout
+        for seed in ("1", "2", "3")
+    }  # fmt: skip
+    assert len(outputs) == 1 and json.loads(outputs.pop())

@@ -147,6 +147,7 @@ class Walker:
                         continue
                     if action.applicable(state):
                         found.append(action)
+            found.sort(key=str)  # set order varies per process: walks must not
             self._candidates[own] = found
         return found
 
