@@ -47,6 +47,7 @@ spent dealing).
 
 from __future__ import annotations
 
+import bisect
 import time
 from collections import defaultdict, deque
 from collections.abc import Collection, Iterator, Mapping, Sequence
@@ -299,8 +300,8 @@ def _deal(
         edges_all, _ = plan_order(problem, grounded, agent_predicates)
         leads = {}
         for i in range(len(grounded)):
-            after = [j for j in acting if j >= i]
-            leads[i] = after[0] if after else max((j for j in acting if j < i), default=i)
+            k = bisect.bisect_left(acting, i)  # the first acting action from i on
+            leads[i] = acting[k] if k < len(acting) else (acting[-1] if acting else i)
         edges = {(leads[i], leads[j]) for i, j in edges_all if leads[i] != leads[j]}
     else:  # the order the acting actions need; walks are found again at replay (step 3)
         sub_edges, _ = plan_order(problem, [grounded[i] for i in acting], agent_predicates)
