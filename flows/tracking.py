@@ -120,7 +120,10 @@ def _check_writable(folder: Path, what: str, hint: str) -> None:
         raise TrackingError(f"{what} is not writable: {problem} ({hint})")
 
 
-def _client(tracking_uri: str) -> Any:
+def _client(tracking_uri: str, seed: bool = True) -> Any:
+    """MLflow's client; a SQLite store that does not exist yet is seeded from the
+    environment's template (:func:`flows.tracking_sqlite.seed_store`) unless ``seed`` is
+    False (MLflow then creates and migrates it: how the template itself is made)."""
     import logging
 
     from mlflow.tracking import MlflowClient
@@ -130,7 +133,7 @@ def _client(tracking_uri: str) -> Any:
     for name in ("mlflow", "alembic"):
         logging.getLogger(name).setLevel(logging.WARNING)
 
-    if tracking_uri.startswith("sqlite:///"):  # a new store: copied, not migrated
+    if seed and tracking_uri.startswith("sqlite:///"):  # a new store: copied, not migrated
         from flows.tracking_sqlite import seed_store
 
         path = Path(tracking_uri[len("sqlite:///") :])

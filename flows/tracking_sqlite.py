@@ -71,7 +71,7 @@ def make_template(target: Path | None = None) -> Path:
 
     with tempfile.TemporaryDirectory() as folder:
         db = Path(folder) / "mlflow.db"
-        _client(f"sqlite:///{db}").search_experiments()  # MLflow creates the store here
+        _client(f"sqlite:///{db}", seed=False).search_experiments()  # MLflow makes it here
         with closing(sqlite3.connect(db)) as con:
             version = con.execute("SELECT version_num FROM alembic_version").fetchall()
         if version != [(SCHEMA_VERSION,)]:

@@ -26,11 +26,14 @@ EXPERIMENT = "twostep"
 
 @pytest.fixture(scope="module")
 def store(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
-    """A store and experiment created by MLflow (seconds: shared by the module)."""
+    """A store and experiment created by MLflow (seconds: shared by the module), not a copy
+    of the environment's template: it is the reference the copies are compared with."""
     base = tmp_path_factory.mktemp("light")
     uri = f"sqlite:///{base / 'mlflow.db'}"
-    tracker = Tracker(uri, str(base / "mlruns"))
-    experiment_id = tracker.experiment_id(EXPERIMENT)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(tracking_sqlite, "template_path", lambda: base / "no-template.db")
+        tracker = Tracker(uri, str(base / "mlruns"))
+        experiment_id = tracker.experiment_id(EXPERIMENT)
     files = base / "job"
     (files / "plans").mkdir(parents=True)
     (files / "result.json").write_text('{"success": true}')
