@@ -10,7 +10,7 @@ Typical use, from any source of runs::
     report.summary      # per domain, series, N: mean/std over seeds, counts
 """
 
-from twostep.report.aggregate import REPORT_METRICS, Report, build_report, series_label
+from twostep.report.build import REPORT_METRICS, Report, build_report, series_label
 from twostep.report.render import format_console, render_markdown, write_report
 from twostep.report.runs import (
     METRICS,

@@ -1,4 +1,4 @@
-"""Fig. 3-style plots of a :class:`~twostep.report.aggregate.Report` (matplotlib, Agg).
+"""Fig. 3-style plots of a :class:`~twostep.report.build.Report` (matplotlib, Agg).
 
 Per domain: execution length and planning time against N, one line per series (SA is
 N = 1 only: a marker with a dashed reference line across), mean over seeds with a shaded
@@ -22,7 +22,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from twostep.report.aggregate import METRIC_LABELS, REPORT_METRICS, Report
+from twostep.report.build import METRIC_LABELS, REPORT_METRICS, Report
 
 _TWOSTEP_COLORS = (
     "tab:blue",

@@ -1,4 +1,4 @@
-"""Writing a :class:`~twostep.report.aggregate.Report`: CSV files, Markdown, console text.
+"""Writing a :class:`~twostep.report.build.Report`: CSV files, Markdown, console text.
 
 :func:`write_report` puts everything in one directory::
 
@@ -22,7 +22,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from twostep.report.aggregate import METRIC_NAMES, Report
+from twostep.report.build import METRIC_NAMES, Report
 from twostep.report.paper import ANNOTATED_TASKS, TABLE1_AGENTS, TABLE1_DOMAINS
 from twostep.report.planning_time import planning_time_view, view_rows
 from twostep.report.plots import plot_report

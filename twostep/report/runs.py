@@ -26,7 +26,7 @@ metric columns     :data:`METRICS` (float, NaN when not recorded)
 =================  ===================================================================
 
 Rows whose domain, task, method, agents or seed cannot be read are kept (with NA keys):
-:func:`twostep.report.aggregate.build_report` counts and lists them, never drops them.
+:func:`twostep.report.build.build_report` counts and lists them, never drops them.
 """
 
 from __future__ import annotations
