@@ -1,13 +1,17 @@
 """The ``twostep-report`` command: the paper's figures and tables from a sweep's runs.
 
-Reads the job runs of one MLflow experiment (the contract is ``docs/tracking.md``) or
-the ``result.json`` files of a Hydra multirun directory, builds the report with
-:mod:`twostep.report` (pure analysis), writes PNG / CSV / Markdown files, and logs them
-back to MLflow as the artifacts of a report run (tag ``twostep.kind=report``) in the
-same experiment.
+Reads the job runs of one MLflow experiment (the contract is ``docs/tracking.md``), the
+``result.json`` files of a Hydra multirun directory, or a report's own ``runs.csv``;
+builds the report with :mod:`twostep.report` (pure analysis), writes PNG / PDF / SVG /
+CSV / Markdown files, and logs them back to MLflow as the artifacts of a report run (tag
+``twostep.kind=report``) in the same experiment.
 
     twostep-report --experiment NAME [--tracking-uri URI] [--out DIR] [--no-log]
     twostep-report --sweep-dir outputs/multiruns/2026-01-01/12-00-00 [--out DIR]
+    twostep-report --runs-csv docs/report/runs.csv --out docs/report
+
+Table II's task descriptions come from ``titles.yaml`` in the kitchen's data folder
+(``--data-root``, else the runs' ``data.root``, else the package's data).
 
 Exit codes: 0 report written; 1 nothing could be reported (unknown experiment, no runs,
 no successful run); 2 bad command line.
@@ -37,17 +41,20 @@ from urllib.parse import urlparse
 
 import pandas as pd
 
+from twostep.benchmark import DEFAULT_DATA_ROOT
 from twostep.report import (
     METRICS,
     Report,
     ReportInputError,
     build_report,
     format_console,
+    load_runs_from_csv,
     load_runs_from_sweep_dir,
     normalise_runs,
     write_report,
 )
-from twostep.report.runs import params_to_columns
+from twostep.report.runs import PARAM_PREFIX, params_to_columns
+from twostep.report.table2 import TABLE2_DOMAIN, read_task_titles
 
 DEFAULT_TRACKING_URI = "sqlite:///outputs/mlflow.db"
 KIND_TAG = "twostep.kind"
@@ -194,13 +201,13 @@ def report_metrics(report: Report) -> dict[str, float]:
     """Counts and changes of a report as MLflow metric names and values."""
     values: dict[str, float] = {f"report.runs.{k}": float(v) for k, v in report.counts.items()}
     for row in report.changes.to_dict("records"):
-        if pd.isna(row["change_pct"]):
-            continue
         key = (
-            f"change_pct.{_metric_key(str(row['series']))}.vs_{_metric_key(str(row['baseline']))}"
+            f"{_metric_key(str(row['series']))}.vs_{_metric_key(str(row['baseline']))}"
             f".{row['metric']}.n{row['agents']}"
         )
-        values[key] = float(row["change_pct"])
+        for column in ("change_pct", "change_pct_raw"):
+            if not pd.isna(row[column]):
+                values[f"{column}.{key}"] = float(row[column])
     return values
 
 
@@ -242,8 +249,9 @@ def log_report_run(
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="twostep-report",
-        description="Fig. 3, Table I and the percent changes of the TwoStep paper from a "
-        "sweep's runs: PNG, CSV and Markdown files, logged back to MLflow as a report run.",
+        description="Fig. 3, Tables I and II and the percent changes of the TwoStep paper "
+        "from a sweep's runs: PNG/PDF/SVG figures, CSV and Markdown files, logged back to "
+        "MLflow as a report run.",
     )
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--experiment", metavar="NAME", help="MLflow experiment of the sweep")
@@ -252,6 +260,12 @@ def _parser() -> argparse.ArgumentParser:
         metavar="DIR",
         type=Path,
         help="Hydra multirun directory: read every result.json below it (no MLflow needed)",
+    )
+    source.add_argument(
+        "--runs-csv",
+        metavar="FILE",
+        type=Path,
+        help="a report's runs.csv: redraw that report (no MLflow needed)",
     )
     parser.add_argument(
         "--tracking-uri",
@@ -265,8 +279,33 @@ def _parser() -> argparse.ArgumentParser:
         metavar="DIR",
         help="output directory (default: outputs/reports/<experiment or sweep dir>)",
     )
+    parser.add_argument(
+        "--data-root",
+        type=Path,
+        metavar="DIR",
+        help="data root for Table II's task descriptions (<DIR>/alfworld/titles.yaml; "
+        "default: the runs' data.root, else the package's data)",
+    )
     parser.add_argument("--no-log", action="store_true", help="do not log the report run to MLflow")
     return parser
+
+
+def task_titles(runs: pd.DataFrame, data_root: Path | None) -> dict[int, str]:
+    """Table II's task descriptions from the first data root that has them: ``data_root``,
+    the kitchen runs' ``data.root``, the package's data."""
+    column = f"{PARAM_PREFIX}data.root"
+    kitchen = runs[runs["domain"] == TABLE2_DOMAIN]
+    if kitchen.empty:
+        return {}
+    roots = [data_root] if data_root is not None else []
+    if column in kitchen:
+        roots += [Path(str(v)) for v in dict.fromkeys(kitchen[column]) if str(v)]
+    roots.append(DEFAULT_DATA_ROOT)
+    for root in roots:
+        titles = read_task_titles(root / TABLE2_DOMAIN)
+        if titles:
+            return titles
+    return {}
 
 
 def _sweep_name(path: Path) -> str:
@@ -290,6 +329,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             name = _sweep_name(args.sweep_dir)
             source = f"Hydra multirun directory `{args.sweep_dir}`"
             read_line = f"read {len(runs)} job(s) from {args.sweep_dir}"
+        elif args.runs_csv is not None:
+            runs = load_runs_from_csv(args.runs_csv)
+            name = _safe_dir_name(args.runs_csv.resolve().parent.name)
+            source = f"the run table `{args.runs_csv}`"
+            read_line = f"read {len(runs)} run(s) from {args.runs_csv}"
         else:
             loaded = read_mlflow_runs(args.tracking_uri, args.experiment)
             runs, experiment_id, name = loaded.runs, loaded.experiment_id, args.experiment
@@ -297,7 +341,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             read_line = f"read {len(runs)} job run(s) from MLflow experiment '{name}'"
             if loaded.ignored:
                 read_line += f" (skipped {loaded.ignored} sweep/report run(s))"
-        report = build_report(runs)
+        report = build_report(runs, task_titles(runs, args.data_root))
     except ReportInputError as error:
         print(f"twostep-report: {error}", file=sys.stderr)
         return 1
@@ -306,7 +350,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     source_md = f"Source: {source}. Generated {stamp} by `{command}`."
     try:
-        paths = write_report(report, out_dir, f"TwoStep report: {name}", source_md, name)
+        paths = write_report(report, out_dir, f"TwoStep report: {name}", source_md)
     except OSError as error:
         print(f"twostep-report: cannot write to {out_dir}: {_one_line(error)}", file=sys.stderr)
         return 1
@@ -315,7 +359,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(format_console(report))
     figures = sum(1 for p in paths if p.suffix == ".png")
     tables = sum(1 for p in paths if p.suffix == ".csv")
-    print(f"report: {out_dir / 'report.md'} ({figures} figures, {tables} CSV tables)")
+    print(
+        f"report: {out_dir / 'report.md'} ({figures} figures as PNG, PDF and SVG, "
+        f"{tables} CSV tables)"
+    )
 
     if experiment_id is not None and not args.no_log:
         try:
@@ -327,8 +374,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
         else:
             print(f"logged to MLflow: run {run_id} ({KIND_TAG}=report) in experiment '{name}'")
-    elif args.sweep_dir is not None and not args.no_log:
-        print("not logged to MLflow (source is a sweep dir)")
+    elif not args.no_log:
+        print(f"not logged to MLflow (source is a {'sweep dir' if args.sweep_dir else 'CSV'})")
 
     if not report.has_results:
         print(

@@ -1,4 +1,4 @@
-"""Reports: the paper's Fig. 3, Table I and % changes from a table of runs.
+"""Reports: the paper's Fig. 3, Tables I and II and % changes from a table of runs.
 
 Pure analysis (pandas, matplotlib); reading MLflow lives in ``flows/report_cli.py``.
 Typical use, from any source of runs::
@@ -7,6 +7,7 @@ Typical use, from any source of runs::
 
     report = build_report(load_runs_from_sweep_dir(Path("outputs/multiruns/...")))
     write_report(report, Path("outputs/reports/x"), title="...", source="...")
+    report.compared     # the same cells over the tasks every series solved (the figures)
     report.summary      # per domain, series, N: mean/std over seeds, counts
 """
 
@@ -15,6 +16,7 @@ from twostep.report.render import format_console, render_markdown, write_report
 from twostep.report.runs import (
     METRICS,
     ReportInputError,
+    load_runs_from_csv,
     load_runs_from_sweep_dir,
     normalise_runs,
     result_to_row,
@@ -27,6 +29,7 @@ __all__ = [
     "ReportInputError",
     "build_report",
     "format_console",
+    "load_runs_from_csv",
     "load_runs_from_sweep_dir",
     "normalise_runs",
     "render_markdown",

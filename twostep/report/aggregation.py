@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import pandas as pd
 
-from twostep.report.model import CELL_COLUMNS, REPORT_METRICS, SERIES_COLUMNS
+from twostep.report.model import CELL_COLUMNS, CELL_METRICS, REPORT_METRICS, SERIES_COLUMNS
 
 
 def sample_std(values: pd.Series) -> float:
@@ -24,12 +25,12 @@ def span(values: pd.Series) -> str:
 
 def per_seed_means(ok: pd.DataFrame) -> pd.DataFrame:
     keys = [*CELL_COLUMNS, "seed"]
-    columns = [*keys, *REPORT_METRICS, *(f"{m}_n_tasks" for m in REPORT_METRICS)]
+    columns = [*keys, *CELL_METRICS, *(f"{m}_n_tasks" for m in CELL_METRICS)]
     if ok.empty:
         return pd.DataFrame(columns=columns)
     grouped = ok.groupby(keys, dropna=False)
-    out = grouped[list(REPORT_METRICS)].mean()
-    for metric in REPORT_METRICS:
+    out = grouped[list(CELL_METRICS)].mean()
+    for metric in CELL_METRICS:
         out[f"{metric}_n_tasks"] = grouped[metric].count()
     return out.reset_index()[columns]
 
@@ -74,12 +75,12 @@ def cell_summary(identified: pd.DataFrame, per_seed: pd.DataFrame) -> pd.DataFra
     )
     stats = stats.merge(spans, on=list(CELL_COLUMNS), how="left")
     summary = counts.merge(stats, on=list(CELL_COLUMNS), how="left")
-    for metric in REPORT_METRICS:
+    for metric in CELL_METRICS:
         summary[f"{metric}_n_seeds"] = summary[f"{metric}_n_seeds"].fillna(0).astype(int)
     summary["tasks_per_seed"] = summary["tasks_per_seed"].fillna("")
     ordered = [
         *CELL_COLUMNS,
-        *(f"{m}_{s}" for m in REPORT_METRICS for s in ("mean", "std", "n_seeds")),
+        *(f"{m}_{s}" for m in CELL_METRICS for s in ("mean", "std", "n_seeds")),
         "success_rate",
         "n_runs",
         "n_success",
@@ -95,12 +96,12 @@ def cell_summary(identified: pd.DataFrame, per_seed: pd.DataFrame) -> pd.DataFra
 
 def over_seeds(per_seed: pd.DataFrame, keys: list[str]) -> pd.DataFrame:
     """Mean, sample std and count over seeds of per-seed values, per ``keys``."""
-    columns = [*keys, *(f"{m}_{s}" for m in REPORT_METRICS for s in ("mean", "std", "n_seeds"))]
+    columns = [*keys, *(f"{m}_{s}" for m in CELL_METRICS for s in ("mean", "std", "n_seeds"))]
     if per_seed.empty:
         return pd.DataFrame(columns=columns)
     grouped = per_seed.groupby(keys, dropna=False)
     out = pd.DataFrame(index=grouped.size().index)
-    for metric in REPORT_METRICS:
+    for metric in CELL_METRICS:
         out[f"{metric}_mean"] = grouped[metric].mean()
         out[f"{metric}_std"] = grouped[metric].std(ddof=1)
         out[f"{metric}_n_seeds"] = grouped[metric].count()
@@ -114,9 +115,9 @@ def per_task_means(identified: pd.DataFrame, ok: pd.DataFrame) -> pd.DataFrame:
         n_success=("status", lambda s: int((s == "success").sum())),
     )
     if ok.empty:
-        per_seed = pd.DataFrame(columns=[*keys, "seed", *REPORT_METRICS])
+        per_seed = pd.DataFrame(columns=[*keys, "seed", *CELL_METRICS])
     else:
-        per_seed = ok.groupby([*keys, "seed"], dropna=False)[list(REPORT_METRICS)].mean()
+        per_seed = ok.groupby([*keys, "seed"], dropna=False)[list(CELL_METRICS)].mean()
         per_seed = per_seed.reset_index()
     stats = over_seeds(per_seed, keys)
     out = counts.reset_index().merge(stats, on=keys, how="left")
@@ -138,15 +139,29 @@ def eligible_cells(identified: pd.DataFrame, summary: pd.DataFrame) -> pd.Series
 
 
 def normalise(
-    summary: pd.DataFrame, per_seed: pd.DataFrame, eligible: pd.Series
+    summary: pd.DataFrame,
+    per_seed: pd.DataFrame,
+    eligible: pd.Series,
+    length_of: Mapping[str, str] | None = None,
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Per domain and metric, min-max scaled cell means (and per-seed values).
+
+    ``length_of`` names, per domain, the column that measures its execution length
+    (``embodied_length`` for kitchen runs); ``exec_length`` where it is not given. The
+    rows keep the metric name ``exec_length`` and say what was read in ``measured_as``.
+    """
     norm_rows: list[dict[str, Any]] = []
     seed_rows: list[dict[str, Any]] = []
     for metric in REPORT_METRICS:
-        usable = summary[eligible & summary[f"{metric}_mean"].notna()]
-        for domain, sub in usable.groupby("domain"):
-            low = float(sub[f"{metric}_mean"].min())
-            high = float(sub[f"{metric}_mean"].max())
+        for domain, sub in summary[eligible].groupby("domain"):
+            column = metric
+            if metric == REPORT_METRICS[0] and length_of is not None:
+                column = length_of.get(str(domain), metric)
+            sub = sub[sub[f"{column}_mean"].notna()]
+            if sub.empty:
+                continue
+            low = float(sub[f"{column}_mean"].min())
+            high = float(sub[f"{column}_mean"].max())
             scale = high - low
 
             def scaled(value: float, low: float = low, scale: float = scale) -> float:
@@ -158,8 +173,9 @@ def normalise(
                     {
                         **record,
                         "metric": metric,
-                        "mean": float(row[f"{metric}_mean"]),
-                        "normalised": scaled(float(row[f"{metric}_mean"])),
+                        "measured_as": column,
+                        "mean": float(row[f"{column}_mean"]),
+                        "normalised": scaled(float(row[f"{column}_mean"])),
                         "domain_min": low,
                         "domain_max": high,
                     }
@@ -169,19 +185,27 @@ def normalise(
             for _, row in seeds.iterrows():
                 if tuple(row[c] for c in CELL_COLUMNS) not in cells:
                     continue
-                if pd.isna(row[metric]):
+                if pd.isna(row[column]):
                     continue
                 seed_rows.append(
                     {
                         **{c: row[c] for c in CELL_COLUMNS},
                         "seed": row["seed"],
                         "metric": metric,
-                        "normalised": scaled(float(row[metric])),
+                        "normalised": scaled(float(row[column])),
                     }
                 )
     normalised = pd.DataFrame.from_records(
         norm_rows,
-        columns=[*CELL_COLUMNS, "metric", "mean", "normalised", "domain_min", "domain_max"],
+        columns=[
+            *CELL_COLUMNS,
+            "metric",
+            "measured_as",
+            "mean",
+            "normalised",
+            "domain_min",
+            "domain_max",
+        ],
     )
     seed_frame = pd.DataFrame.from_records(
         seed_rows, columns=[*CELL_COLUMNS, "seed", "metric", "normalised"]

@@ -13,7 +13,11 @@
   and the sample standard deviation (ddof = 1) of those per-seed averages over seeds, as
   the paper does for its 3 runs. One seed: no std ("1 seed").
 * **Counts.** Failed, timed-out and still-running runs are counted in every cell.
-* **Normalised panel.** Per domain and metric, the per-domain averages of every series
+* **Compared means.** The figures, the normalised panel and the changes average each cell
+  over the tasks every series of its domain solved, so that a run lost to a timeout
+  never improves a mean; what each series lost is counted and drawn
+  (:mod:`twostep.report.compared`). Kitchen runs are measured by their embodied length.
+* **Normalised panel.** Per domain and metric, the compared averages of every series
   and N are min-max scaled to [0, 1], then averaged across domains (the paper's
   rightmost column of Fig. 3). A cell that covers fewer of the domain's tasks than the
   others (e.g. expert subgoals, 4 tasks) is left out of the scaling, with a note.
@@ -25,10 +29,13 @@
 
 One job per module: :mod:`twostep.report.model` (the :class:`Report`),
 :mod:`twostep.report.series`, :mod:`twostep.report.aggregation` (means and normalisation),
-:mod:`twostep.report.tables` (changes and Table I), :mod:`twostep.report.notes`.
+:mod:`twostep.report.compared` (the tasks compared), :mod:`twostep.report.tables` (changes
+and Table I), :mod:`twostep.report.table2`, :mod:`twostep.report.notes`.
 """
 
 from __future__ import annotations
+
+from collections.abc import Mapping
 
 import pandas as pd
 
@@ -40,6 +47,7 @@ from twostep.report.aggregation import (
     per_seed_means,
     per_task_means,
 )
+from twostep.report.compared import common_tasks, compared_tables
 from twostep.report.model import (
     CELL_COLUMNS,
     METRIC_LABELS,
@@ -48,7 +56,7 @@ from twostep.report.model import (
     SERIES_COLUMNS,
     Report,
 )
-from twostep.report.notes import report_notes
+from twostep.report.notes import coverage_notes, report_notes
 from twostep.report.runs import ReportInputError, normalise_runs
 from twostep.report.series import (
     assign_series,
@@ -74,6 +82,16 @@ __all__ = [
 ]
 
 
+def _in_order(cells: pd.DataFrame, rank: Mapping[str, int]) -> pd.DataFrame:
+    """Cells by domain, then series in display order, then N."""
+    return (
+        cells.assign(_rank=cells["series"].map(rank))
+        .sort_values(["domain", "_rank", "agents"])
+        .drop(columns="_rank")
+        .reset_index(drop=True)
+    )
+
+
 def superseded_runs(table: pd.DataFrame) -> pd.Series:
     """True for older runs of a job that was run again (same ``job_key``).
 
@@ -93,10 +111,11 @@ def superseded_runs(table: pd.DataFrame) -> pd.Series:
     return flags
 
 
-def build_report(runs: pd.DataFrame) -> Report:
+def build_report(runs: pd.DataFrame, task_titles: Mapping[int, str] | None = None) -> Report:
     """All of a report's tables from a run table (see :mod:`twostep.report.runs`).
 
-    Raises :class:`ReportInputError` when there is no run at all.
+    ``task_titles`` (task number -> a short description) heads Table II's columns when
+    given. Raises :class:`ReportInputError` when there is no run at all.
     """
     if runs is None or len(runs) == 0:
         raise ReportInputError("no runs to report")
@@ -115,22 +134,31 @@ def build_report(runs: pd.DataFrame) -> Report:
     summary = cell_summary(identified, per_seed)
     order = series_order(table)
     rank = {name: i for i, name in enumerate(order)}
-    summary = (
-        summary.assign(_rank=summary["series"].map(rank))
-        .sort_values(["domain", "_rank", "agents"])
-        .drop(columns="_rank")
-        .reset_index(drop=True)
-    )
+    summary = _in_order(summary, rank)
     per_task = per_task_means(identified, ok)
     eligible = eligible_cells(identified, summary)
-    normalised, seed_norm = normalise(summary, per_seed, eligible)
+    full = {
+        tuple(row)
+        for row, keep in zip(
+            summary[list(CELL_COLUMNS)].itertuples(index=False), eligible, strict=True
+        )
+        if keep
+    }
+    coverage = common_tasks(identified, full)
+    compared, compared_per_seed = compared_tables(identified, coverage)
+    compared = _in_order(compared, rank)
+    compared_eligible = eligible_cells(identified, compared)
+    length_of = dict(zip(coverage["domain"], coverage["length_metric"], strict=True))
+    normalised, seed_norm = normalise(compared, compared_per_seed, compared_eligible, length_of)
     cross = cross_domain_means(normalised, seed_norm)
     series_frame = identified[list(SERIES_COLUMNS)].drop_duplicates()
     series_frame = series_frame.assign(_rank=series_frame["series"].map(rank)).sort_values("_rank")
     changes = changes_against_baselines(normalised, series_frame, values_of)
     table1 = table_one(identified, series_frame)
     table2 = table_two(
-        identified, [(str(s), str(m)) for s, m in series_frame[["series", "method"]].values]
+        identified,
+        [(str(s), str(m)) for s, m in series_frame[["series", "method"]].values],
+        titles=task_titles,
     )
 
     current = table[~table["superseded"]]
@@ -146,11 +174,14 @@ def build_report(runs: pd.DataFrame) -> Report:
         "superseded": int(table["superseded"].sum()),
     }
     notes = report_notes(table, summary, per_seed, eligible, cross, variant_params, between)
+    notes += coverage_notes(coverage)
     return Report(
         runs=table,
         per_seed=per_seed,
         per_task=per_task,
         summary=summary,
+        compared=compared,
+        coverage=coverage,
         normalised=normalised,
         cross_domain=cross,
         changes=changes,

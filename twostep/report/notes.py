@@ -102,3 +102,23 @@ def report_notes(
             f"({span(cross['n_domains'])}); changes use only the domains both sides have."
         )
     return notes
+
+
+def coverage_notes(coverage: pd.DataFrame) -> list[str]:
+    """What the compared means leave out, per domain (:mod:`twostep.report.compared`)."""
+    notes: list[str] = []
+    for row in coverage.itertuples(index=False):
+        if row.left_out_tasks or row.lost_cells:
+            left_out = f" (left out: task {row.left_out_tasks})" if row.left_out_tasks else ""
+            notes.append(
+                f"{row.domain}: figures, normalised averages and changes compare the "
+                f"{row.n_compared} of {row.n_tasks} tasks every series solved{left_out}; "
+                f"{row.lost_cells}."
+            )
+    measured = coverage[coverage["length_metric"] != "exec_length"]
+    if len(measured):
+        notes.append(
+            "Execution length in " + ", ".join(measured["domain"]) + " is the embodied length "
+            "(environment steps in the kitchen) in the figures, normalised averages and changes."
+        )
+    return notes

@@ -1,84 +1,266 @@
-"""Fig. 3-style plots of a :class:`~twostep.report.build.Report` (matplotlib, Agg).
+"""Fig. 3 of a :class:`~twostep.report.model.Report` as figures ready for a paper.
 
-Per domain: execution length and planning time against N, one line per series (SA is
-N = 1 only: a marker with a dashed reference line across), mean over seeds with a shaded
-band of +- 1 std over seeds. Overview: all domains side by side plus the cross-domain
-panel of min-max normalised averages, as in the paper. Figures are built on
-:class:`matplotlib.figure.Figure` with an Agg canvas: no pyplot, no global state.
+``fig3_<domain>`` (one column wide): execution length and planning time against N for
+every series; with two or more domains also ``fig3_normalised`` (one column): the
+cross-domain panel of min-max normalised averages, and ``fig3_overview`` (two columns
+wide): every domain and the normalised panel, as the paper's Fig. 3. Each is written as PNG, PDF and SVG
+(:mod:`twostep.report.style` owns sizes, fonts, colours and markers).
+
+What the marks mean:
+
+* Points are the *compared* means (:mod:`twostep.report.compared`): mean over seeds of each
+  seed's average over the tasks every series of the domain solved; band (lines) or error
+  bar (bars) = ±1 sample std over seeds. Kitchen domains draw their embodied length.
+* A hollow marker or hollow bar: the series lost runs in that cell (failed, timed out,
+  unfinished or without a length); the legend counts them per series, e.g.
+  ``MA (1 timeout)``. An ``x`` on the axis: the cell solved no task.
+* Lines when some series has results at two or more N; otherwise (one N per series, such
+  as Table II's runs) grouped bars per N. SA, run at N = 1 only, is a single marker with a
+  dashed reference line across.
+* Linear y axes start at 0; planning times spanning more than :data:`LOG_RATIO` are drawn on
+  a log axis.
+
+Figures are :class:`matplotlib.figure.Figure` objects with an Agg canvas (no pyplot), built
+and saved under :data:`~twostep.report.style.PAPER_RC`.
 """
 
 from __future__ import annotations
 
 import math
-import textwrap
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
+import matplotlib as mpl
 import pandas as pd
+from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.font_manager import FontProperties
 from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+from matplotlib.textpath import TextToPath
 
-from twostep.report.build import METRIC_LABELS, REPORT_METRICS, Report
-
-_TWOSTEP_COLORS = (
-    "tab:blue",
-    "tab:green",
-    "tab:purple",
-    "tab:orange",
-    "tab:brown",
-    "tab:cyan",
-    "tab:olive",
-    "tab:pink",
+from twostep.report.model import METRIC_LABELS, REPORT_METRICS, Report
+from twostep.report.style import (
+    COLUMN_WIDTH_IN,
+    FIGURE_FORMATS,
+    MIN_FONT_PT,
+    PAPER_RC,
+    PNG_DPI,
+    TEXT_WIDTH_IN,
+    TITLE_FONT_PT,
+    LineStyle,
+    SeriesStyle,
+    series_styles,
 )
-_TWOSTEP_MARKERS = ("o", "D", "v", "P", "X", "h", "<", ">")
+
 #: Planning times spanning more than this ratio are drawn on a log axis.
 LOG_RATIO = 50.0
-DPI = 130
+TIME = REPORT_METRICS[1]
+X_LABEL = "Number of agents N"
+PANEL_HEIGHT_IN = 2.0  # a row of panels with its title and axis labels
+HOLLOW = "white"
 
 
 @dataclass(frozen=True)
-class SeriesStyle:
-    color: str
-    marker: str
-    method: str
+class Cell:
+    """One point (or bar) of a series: its N, mean, std and what it lost."""
+
+    agents: int
+    mean: float
+    std: float
+    lost: bool = False
+
+    @property
+    def solved_none(self) -> bool:
+        return math.isnan(self.mean)
 
 
-def series_styles(report: Report) -> dict[str, SeriesStyle]:
-    """One fixed colour and marker per series, the same in every figure of a report."""
-    methods = dict(
-        zip(report.runs["series"], report.runs["method"], strict=True)
-    )  # series -> method
-    styles: dict[str, SeriesStyle] = {}
-    twostep_index = 0
-    ma_shades = ("tab:red", "darkred", "salmon", "firebrick")
-    sa_shades = ("0.2", "0.45", "0.6", "0.35")
-    ma_index = sa_index = 0
-    for name in report.series:
-        method = str(methods.get(name, ""))
-        if method == "sa":
-            styles[name] = SeriesStyle(sa_shades[sa_index % len(sa_shades)], "s", method)
-            sa_index += 1
-        elif method == "ma":
-            styles[name] = SeriesStyle(ma_shades[ma_index % len(ma_shades)], "^", method)
-            ma_index += 1
-        else:
-            styles[name] = SeriesStyle(
-                _TWOSTEP_COLORS[twostep_index % len(_TWOSTEP_COLORS)],
-                _TWOSTEP_MARKERS[twostep_index % len(_TWOSTEP_MARKERS)],
-                method,
+@contextmanager
+def paper_style() -> Iterator[None]:
+    """Build and save figures under the report's print settings."""
+    with mpl.rc_context(cast("Any", PAPER_RC)):
+        yield
+
+
+def report_styles(report: Report) -> dict[str, SeriesStyle]:
+    """The style of every series of ``report`` (:func:`~twostep.report.style.series_styles`)."""
+    counted = report.runs[report.runs["counted"]]
+    rows = counted[["series", "method", "decomposer", "variant"]].drop_duplicates()
+    return series_styles(
+        (str(r.series), str(r.method), str(r.decomposer), str(r.variant))
+        for r in rows.itertuples(index=False)
+    )
+
+
+def draws_bars(report: Report) -> bool:
+    """True when no series has results at two or more N: bars instead of isolated dots."""
+    rows = report.compared[report.compared["method"] != "sa"]
+    with_mean = rows[rows[f"{TIME}_mean"].notna()]
+    per_series = with_mean.groupby(["domain", "series"])["agents"].nunique()
+    return not bool((per_series >= 2).any())
+
+
+# ------------------------------------------------------------------ data of a panel
+
+
+def _domain_cells(report: Report, domain: str, series: str, metric: str) -> list[Cell]:
+    rows = report.compared[
+        (report.compared["domain"] == domain) & (report.compared["series"] == series)
+    ].sort_values("agents")
+    return [
+        Cell(
+            int(row["agents"]),
+            float(row[f"{metric}_mean"]),
+            0.0 if pd.isna(row[f"{metric}_std"]) else float(row[f"{metric}_std"]),
+            int(row["n_lost"]) > 0,
+        )
+        for row in rows.to_dict("records")
+    ]
+
+
+def _normalised_cells(report: Report, series: str, metric: str) -> list[Cell]:
+    cross = report.cross_domain
+    rows = cross[(cross["series"] == series) & (cross["metric"] == metric)].sort_values("agents")
+    return [
+        Cell(
+            int(row["agents"]),
+            float(row["normalised_mean"]),
+            0.0 if pd.isna(row["normalised_std"]) else float(row["normalised_std"]),
+        )
+        for row in rows.to_dict("records")
+    ]
+
+
+def _plural(count: int, word: str, plural: str = "") -> str:
+    return f"{count} {word if count == 1 else plural or word + 's'}"
+
+
+def lost_counts(report: Report, series: str, domains: Sequence[str]) -> str:
+    """What ``series`` lost in ``domains``: ``1 timeout``, ``2 failed, 1 unfinished``..."""
+    rows = report.compared[
+        (report.compared["series"] == series) & report.compared["domain"].isin(domains)
+    ]
+    failed, timeout = int(rows["n_failed"].sum()), int(rows["n_timeout"].sum())
+    running = int(rows["n_running"].sum())
+    unmeasured = int(rows["n_lost"].sum()) - failed - timeout - running
+    parts = []
+    if failed:
+        parts.append(f"{failed} failed")
+    if timeout:
+        parts.append(_plural(timeout, "timeout"))
+    if running:
+        parts.append(f"{running} unfinished")
+    if unmeasured > 0:
+        parts.append(f"{unmeasured} without length")
+    return ", ".join(parts)
+
+
+def legend_label(report: Report, series: str, domains: Sequence[str] | None = None) -> str:
+    """The series' legend label: its name, ``subset of tasks`` when it ran fewer tasks than
+    its domains, and the runs it lost, e.g. ``MA (1 timeout)``."""
+    chosen = list(report.domains if domains is None else domains)
+    rows = report.compared[
+        (report.compared["series"] == series) & report.compared["domain"].isin(chosen)
+    ]
+    domain_tasks = dict(zip(report.coverage["domain"], report.coverage["n_tasks"], strict=True))
+    notes = []
+    if any(int(r.n_tasks) < int(domain_tasks.get(r.domain, 0)) for r in rows.itertuples()):
+        notes.append("subset of tasks")
+    lost = lost_counts(report, series, chosen)
+    if lost:
+        notes.append(lost)
+    return f"{series} ({'; '.join(notes)})" if notes else series
+
+
+# ------------------------------------------------------------------ drawing
+
+
+def _draw_lines(ax: Axes, cells: Sequence[Cell], style: SeriesStyle) -> None:
+    have = [c for c in cells if not c.solved_none]
+    sa = style.method == "sa"
+    if have:
+        xs = [c.agents for c in have]
+        means = [c.mean for c in have]
+        stds = [c.std for c in have]
+        if sa:
+            ax.axhline(means[0], color=style.color, linestyle="--", linewidth=0.9, alpha=0.7)
+        if len(have) > 1 and not sa:
+            ax.plot(xs, means, color=style.color, linestyle=style.linestyle, zorder=2)
+            if any(stds):
+                low = [m - s for m, s in zip(means, stds, strict=True)]
+                high = [m + s for m, s in zip(means, stds, strict=True)]
+                ax.fill_between(xs, low, high, color=style.color, alpha=0.18, linewidth=0)
+        elif any(stds):
+            ax.errorbar(xs, means, yerr=stds, color=style.color, capsize=2, linestyle="none")
+        for cell in have:
+            ax.plot(
+                [cell.agents],
+                [cell.mean],
+                linestyle="none",
+                marker=style.marker,
+                color=style.color,
+                markerfacecolor=HOLLOW if cell.lost else style.color,
+                markeredgewidth=1.0,
+                zorder=4 if sa else 3,
             )
-            twostep_index += 1
-    return styles
+    _draw_solved_none(ax, [c.agents for c in cells if c.solved_none], style)
 
 
-def _new_figure(width: float, height: float) -> Figure:
-    figure = Figure(figsize=(width, height), dpi=DPI, layout="constrained")
-    FigureCanvasAgg(figure)
-    return figure
+def _draw_solved_none(ax: Axes, agents: Sequence[float], style: SeriesStyle) -> None:
+    """An x on the axis (data x, axes y) where a cell solved no task."""
+    for x in agents:
+        ax.plot(
+            [x],
+            [0.0],
+            transform=ax.get_xaxis_transform(),
+            linestyle="none",
+            marker="x",
+            markersize=6,
+            markeredgewidth=1.4,
+            color=style.color,
+            clip_on=False,
+            zorder=5,
+        )
+
+
+def _draw_bars(ax: Axes, cells_of: dict[str, list[Cell]], styles: dict[str, SeriesStyle]) -> None:
+    """Grouped bars: one group per N, one bar per series that ran at that N."""
+    agent_counts = sorted({c.agents for cells in cells_of.values() for c in cells})
+    groups = {
+        agents: [
+            (name, cell) for name, cells in cells_of.items() for cell in cells
+            if cell.agents == agents
+        ]
+        for agents in agent_counts
+    }  # fmt: skip
+    width = 0.8 / max((len(group) for group in groups.values()), default=1)  # one bar width
+    for agents, present in groups.items():
+        for index, (name, cell) in enumerate(present):
+            style = styles[name]
+            x = agents + (index - (len(present) - 1) / 2) * width
+            if cell.solved_none:
+                _draw_solved_none(ax, [x], style)
+                continue
+            ax.bar(
+                x,
+                cell.mean,
+                width * 0.92,
+                color=HOLLOW if cell.lost else style.color,
+                edgecolor=style.color,
+                hatch=style.hatch or None,
+                linewidth=1.0,
+                zorder=2,
+            )
+            if cell.std:
+                ax.errorbar(
+                    x, cell.mean, yerr=cell.std, color="black", capsize=2, linewidth=0.8,
+                    linestyle="none", zorder=3,
+                )  # fmt: skip
 
 
 def _use_log(values: Sequence[float]) -> bool:
@@ -86,277 +268,291 @@ def _use_log(values: Sequence[float]) -> bool:
     return len(positive) >= 2 and max(positive) / min(positive) > LOG_RATIO
 
 
-def _failed_label(n_failed: int, n_timeout: int) -> str:
-    parts = []
-    if n_failed:
-        parts.append(f"{n_failed} failed")
-    if n_timeout:
-        parts.append(f"{n_timeout} timed out")
-    return ", ".join(parts)
-
-
-def _draw_series(
-    ax: Axes,
-    rows: pd.DataFrame,
-    mean_col: str,
-    std_col: str,
-    style: SeriesStyle,
-    label: str,
-    annotate_failures: bool,
-    domain_tasks: int = 0,
-    max_agents: int = 0,
+def _finish_axis(
+    ax: Axes, agent_counts: Sequence[int], ylabel: str, log: bool, top: float | None = None
 ) -> None:
-    rows = rows.sort_values("agents")
-    x = [int(n) for n in rows["agents"]]
-    mean = [float(v) for v in rows[mean_col]]
-    std = [float(v) for v in rows[std_col]]
-    has = [not math.isnan(m) for m in mean]
-    xs = [n for n, ok in zip(x, has, strict=True) if ok]
-    ms = [m for m, ok in zip(mean, has, strict=True) if ok]
-    ss = [0.0 if math.isnan(s) else s for s, ok in zip(std, has, strict=True) if ok]
-    if style.method == "sa" and xs:
-        ax.axhline(ms[0], color=style.color, linestyle="--", linewidth=1.1, alpha=0.7)
-    if xs:
-        if len(xs) == 1 or style.method == "sa":
-            ax.plot(
-                xs,
-                ms,
-                color=style.color,
-                marker=style.marker,
-                markersize=8 if style.method == "sa" else 7,
-                ls="none",
-                label=label,
-                zorder=4 if style.method == "sa" else 3,  # SA stays visible under N = 1 points
-            )
-            if any(ss):
-                ax.errorbar(xs, ms, yerr=ss, color=style.color, capsize=4, linestyle="none")
-        else:
-            ax.plot(
-                xs, ms, color=style.color, marker=style.marker, markersize=6, lw=1.8, label=label
-            )
-            if any(ss):
-                low = [m - s for m, s in zip(ms, ss, strict=True)]
-                high = [m + s for m, s in zip(ms, ss, strict=True)]
-                ax.fill_between(xs, low, high, color=style.color, alpha=0.18, linewidth=0)
-    if not annotate_failures:
-        return
-    for row in rows.itertuples(index=False):
-        value = float(getattr(row, mean_col))
-        if domain_tasks and 0 < int(row.n_tasks) < domain_tasks and not math.isnan(value):
-            ax.annotate(
-                f"{int(row.n_tasks)} tasks",
-                xy=(int(row.agents), value),
-                xytext=(0, 7),
-                textcoords="offset points",
-                ha="center",
-                fontsize=7,
-                color=style.color,
-            )
-        text = _failed_label(int(row.n_failed), int(row.n_timeout))
-        if not text:
-            continue
-        if math.isnan(value):
-            ax.annotate(
-                f"{label} N={int(row.agents)}: all {text}",
-                xy=(int(row.agents), 0.03),
-                xycoords=("data", "axes fraction"),
-                ha="right" if int(row.agents) == max_agents else "center",
-                fontsize=7,
-                color=style.color,
-            )
-        else:
-            ax.annotate(
-                text,
-                xy=(int(row.agents), value),
-                xytext=(0, -12),
-                textcoords="offset points",
-                ha="center",
-                fontsize=7,
-                color=style.color,
-            )
-
-
-def _finish_axis(ax: Axes, agent_counts: Sequence[int], ylabel: str, log: bool) -> None:
     ax.set_xticks(list(agent_counts))
-    ax.set_xlim(min(agent_counts) - 0.35, max(agent_counts) + 0.35)
-    ax.set_xlabel("Number of agents N")
+    ax.set_xlim(min(agent_counts) - 0.5, max(agent_counts) + 0.5)
     if log:
         ax.set_yscale("log")
-        ylabel = ylabel.replace(")", ", log scale)")
-    ax.set_ylabel(ylabel)
-    ax.grid(True, alpha=0.3, which="major")
-    if log:
-        ax.grid(True, alpha=0.08, which="minor")
+        ylabel = ylabel.replace(")", ", log)") if ylabel else ylabel
+    else:
+        high = float(ax.dataLim.y1) if ax.dataLim.y1 > 0 else 1.0
+        ax.set_ylim(0.0, top if top is not None else high * 1.1)  # room for the top marker
+    if ylabel:
+        ax.set_ylabel(ylabel, fontsize=MIN_FONT_PT)
+    ax.tick_params(labelsize=MIN_FONT_PT)
+    ax.grid(True, axis="y", alpha=0.3, which="major")
 
 
-def _draw_domain_axis(
-    ax: Axes, report: Report, domain: str, metric: str, styles: dict[str, SeriesStyle]
+def _draw_panel(
+    ax: Axes,
+    cells_of: dict[str, list[Cell]],
+    styles: dict[str, SeriesStyle],
+    bars: bool,
 ) -> None:
-    cells = report.summary[report.summary["domain"] == domain]
-    domain_tasks = int(report.runs[report.runs["domain"] == domain]["task"].nunique())
-    for name in report.series:
-        rows = cells[cells["series"] == name]
-        if rows.empty:
-            continue
-        _draw_series(
-            ax,
-            rows,
-            f"{metric}_mean",
-            f"{metric}_std",
-            styles[name],
-            legend_label(report, name),
-            annotate_failures=True,
-            domain_tasks=domain_tasks,
-            max_agents=max(report.agent_counts),
-        )
-    log = metric == "planning_time_s" and _use_log(list(cells[f"{metric}_mean"]))
-    _finish_axis(ax, report.agent_counts, METRIC_LABELS[metric], log)
+    if bars:
+        _draw_bars(ax, cells_of, styles)
+    else:
+        for name, cells in cells_of.items():
+            _draw_lines(ax, cells, styles[name])
 
 
-def _draw_normalised_axis(
-    ax: Axes, report: Report, metric: str, styles: dict[str, SeriesStyle]
+def _domain_axis(
+    ax: Axes,
+    report: Report,
+    domain: str,
+    metric: str,
+    styles: dict[str, SeriesStyle],
+    bars: bool,
+    ylabel: bool = True,
 ) -> None:
-    cross = report.cross_domain[report.cross_domain["metric"] == metric]
-    for name in report.series:
-        rows = cross[cross["series"] == name]
-        if rows.empty:
-            continue
-        _draw_series(
-            ax,
-            rows,
-            "normalised_mean",
-            "normalised_std",
-            styles[name],
-            legend_label(report, name),
-            annotate_failures=False,
+    cells_of = {
+        name: cells
+        for name in report.series
+        if (cells := _domain_cells(report, domain, name, metric))
+    }
+    _draw_panel(ax, cells_of, styles, bars)
+    means = [c.mean for cells in cells_of.values() for c in cells]
+    log = metric == TIME and _use_log(means)
+    _finish_axis(ax, report.agent_counts, METRIC_LABELS[metric] if ylabel else "", log)
+
+
+def _normalised_axis(
+    ax: Axes,
+    report: Report,
+    metric: str,
+    styles: dict[str, SeriesStyle],
+    bars: bool,
+    ylabel: bool = True,
+) -> None:
+    cells_of = {
+        name: cells for name in report.series if (cells := _normalised_cells(report, name, metric))
+    }
+    _draw_panel(ax, cells_of, styles, bars)
+    label = METRIC_LABELS[metric].split(" (")[0] + " (normalised)" if ylabel else ""
+    _finish_axis(ax, report.agent_counts, label, log=False, top=1.05)
+
+
+def _legend_entries(
+    report: Report,
+    series: Sequence[str],
+    styles: dict[str, SeriesStyle],
+    domains: Sequence[str],
+    bars: bool,
+) -> tuple[list[Artist], list[str]]:
+    handles: list[Artist] = []
+    labels: list[str] = []
+    rows = report.compared[report.compared["domain"].isin(domains)]
+    with_mean = rows[rows[f"{TIME}_mean"].notna()]
+    per_series = with_mean.groupby(["domain", "series"])["agents"].nunique()
+    lines = {str(name) for (_, name), count in per_series.items() if count >= 2}
+    for name in series:
+        style = styles[name]
+        if bars:
+            handles.append(
+                Patch(facecolor=style.color, edgecolor=style.color, hatch=style.hatch or None)
+            )
+        else:
+            line: LineStyle = style.linestyle if name in lines else "none"
+            handles.append(Line2D([], [], color=style.color, marker=style.marker, linestyle=line))
+        labels.append(legend_label(report, name, domains))
+    if not bars and "sa" in set(rows["method"]):
+        handles.append(Line2D([], [], color="0.3", linestyle="--", linewidth=0.9))
+        labels.append("SA (N = 1) as reference")
+    if int(rows["n_lost"].sum()):
+        if bars:
+            handles.append(Patch(facecolor=HOLLOW, edgecolor="0.3"))
+        else:
+            handles.append(
+                Line2D([], [], color="0.3", marker="o", markerfacecolor=HOLLOW, linestyle="none")
+            )
+        labels.append("hollow: runs lost")
+    solved_none = rows[rows[f"{TIME}_mean"].isna() & (rows["n_runs"] > 0)]
+    if len(solved_none):
+        handles.append(Line2D([], [], color="0.3", marker="x", linestyle="none"))
+        labels.append("x: no task solved")
+    return handles, labels
+
+
+def _legend_columns(labels: Sequence[str], width_in: float) -> int:
+    """How many legend columns of ``labels`` fit across ``width_in`` (text measured)."""
+    measure = TextToPath()
+    font = FontProperties(size=MIN_FONT_PT)
+    widest = max(
+        (measure.get_text_width_height_descent(label, font, ismath=False)[0] for label in labels),
+        default=0.0,
+    )
+    em = MIN_FONT_PT  # in points: handle 1.8 em and pad 0.8 em per column, 1 em between
+    # columns, border pad 0.4 em on each side (matplotlib's legend defaults we draw with)
+    columns = len(labels)
+    while columns > 1 and columns * (widest + 2.6 * em) + (columns - 1 + 0.8) * em > width_in * 72:
+        columns -= 1
+    return max(1, columns)
+
+
+@dataclass(frozen=True)
+class Legend:
+    """A figure's legend entries and how many columns fit at its print width."""
+
+    handles: list[Artist]
+    labels: list[str]
+    columns: int
+
+    @property
+    def height_in(self) -> float:
+        rows = math.ceil(len(self.labels) / self.columns) if self.labels else 0
+        return 0.17 * rows + 0.08
+
+    def draw(self, figure: Figure) -> None:
+        if self.labels:
+            figure.legend(
+                self.handles,
+                self.labels,
+                loc="outside lower center",
+                ncol=self.columns,
+                frameon=False,
+                fontsize=MIN_FONT_PT,
+                handlelength=1.8,
+                columnspacing=1.0,
+            )
+
+
+def _figure_legend(
+    report: Report,
+    domains: Sequence[str],
+    styles: dict[str, SeriesStyle],
+    bars: bool,
+    width_in: float,
+) -> Legend:
+    present = set(report.compared[report.compared["domain"].isin(domains)]["series"])
+    series = [name for name in report.series if name in present]
+    handles, labels = _legend_entries(report, series, styles, domains, bars)
+    return Legend(handles, labels, _legend_columns(labels, width_in))
+
+
+def _new_figure(width: float, height: float) -> Figure:
+    figure = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(figure)
+    return figure
+
+
+def _domain_title(
+    report: Report, domain: str, separator: str = " ", solved: str = ", solved by all"
+) -> str:
+    """``termes (4 tasks)``; ``termes (3 of 4 tasks, solved by all)`` when runs were lost."""
+    rows = report.coverage[report.coverage["domain"] == domain]
+    if rows.empty:
+        return domain
+    tasks, compared = int(rows["n_tasks"].iloc[0]), int(rows["n_compared"].iloc[0])
+    if compared < tasks:
+        return f"{domain}{separator}({compared} of {tasks} tasks{solved})"
+    return f"{domain}{separator}({_plural(tasks, 'task')})"
+
+
+# ------------------------------------------------------------------ figures
+
+
+def domain_figure(report: Report, domain: str) -> Figure:
+    """One column wide: execution length and planning time against N for one domain."""
+    with paper_style():
+        styles = report_styles(report)
+        bars = draws_bars(report)
+        legend = _figure_legend(report, [domain], styles, bars, COLUMN_WIDTH_IN)
+        figure = _new_figure(COLUMN_WIDTH_IN, PANEL_HEIGHT_IN + legend.height_in)
+        axes = figure.subplots(1, 2)
+        for ax, metric in zip(axes, (report.length_metric(domain), TIME), strict=True):
+            _domain_axis(ax, report, domain, metric, styles, bars)
+            ax.set_xlabel(X_LABEL, fontsize=MIN_FONT_PT)
+        figure.suptitle(_domain_title(report, domain), fontsize=TITLE_FONT_PT)
+        legend.draw(figure)
+    return figure
+
+
+def normalised_figure(report: Report) -> Figure:
+    """One column wide: the per-domain compared averages min-max normalised, averaged."""
+    with paper_style():
+        styles = report_styles(report)
+        bars = draws_bars(report)
+        legend = _figure_legend(report, report.domains, styles, bars, COLUMN_WIDTH_IN)
+        figure = _new_figure(COLUMN_WIDTH_IN, PANEL_HEIGHT_IN + legend.height_in)
+        axes = figure.subplots(1, 2)
+        for ax, metric in zip(axes, REPORT_METRICS, strict=True):
+            _normalised_axis(ax, report, metric, styles, bars)
+            ax.set_xlabel(X_LABEL, fontsize=MIN_FONT_PT)
+        figure.suptitle(
+            f"All {len(report.domains)} domains, normalised to 0-1", fontsize=TITLE_FONT_PT
         )
-    label = METRIC_LABELS[metric].split(" (")[0]
-    _finish_axis(ax, report.agent_counts, f"{label} (normalised, 0-1)", log=False)
-    ax.set_ylim(-0.05, 1.05)
+        legend.draw(figure)
+    return figure
 
 
-def legend_label(report: Report, series: str) -> str:
-    """The series label, marked when it covers fewer tasks than its domains somewhere."""
-    summary = report.summary
-    cells = summary[summary["series"] == series]
-    domain_tasks = report.runs.groupby("domain")["task"].nunique()
-    fewer = any(
-        int(row.n_tasks) < int(domain_tasks.get(row.domain, 0))
-        for row in cells.itertuples(index=False)
-    )
-    return f"{series} (subset of tasks)" if fewer else series
+def overview_figure(report: Report) -> Figure:
+    """Two columns wide, as the paper's Fig. 3: one column per domain (length on top,
+    planning time below) and, with two or more domains, the normalised column."""
+    with paper_style():
+        styles = report_styles(report)
+        bars = draws_bars(report)
+        domains = report.domains
+        normalised = len(domains) >= 2 and len(report.cross_domain) > 0
+        columns = len(domains) + int(normalised)
+        legend = _figure_legend(report, domains, styles, bars, TEXT_WIDTH_IN)
+        figure = _new_figure(TEXT_WIDTH_IN, 2 * PANEL_HEIGHT_IN + legend.height_in)
+        axes = figure.subplots(2, columns, squeeze=False)
+        first_length = report.length_metric(domains[0])
+        for column, domain in enumerate(domains):
+            length = report.length_metric(domain)
+            label_length = column == 0 or length != first_length
+            _domain_axis(axes[0][column], report, domain, length, styles, bars, label_length)
+            _domain_axis(axes[1][column], report, domain, TIME, styles, bars, column == 0)
+            title = _domain_title(report, domain, "\n", solved="")
+            axes[0][column].set_title(title, fontsize=TITLE_FONT_PT)
+        if normalised:
+            for row, metric in enumerate(REPORT_METRICS):
+                _normalised_axis(axes[row][-1], report, metric, styles, bars, ylabel=False)
+            axes[0][-1].set_title("All domains\n(normalised)", fontsize=TITLE_FONT_PT)
+        for ax in axes[1]:
+            ax.set_xlabel("N", fontsize=MIN_FONT_PT)
+        legend.draw(figure)
+    return figure
 
 
-def _legend(figure: Figure, axes: Sequence[Axes], report: Report) -> None:
-    found: dict[str, Any] = {}
-    for ax in axes:
-        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
-            found.setdefault(label, handle)
-    if not found:
-        return
-    order = [legend_label(report, name) for name in report.series]
-    labels = [label for label in order if label in found]
-    labels += [label for label in found if label not in labels]
-    handles = [found[label] for label in labels]
-    if "sa" in set(report.runs["method"]):
-        handles.append(Line2D([], [], color="0.4", linestyle="--"))
-        labels.append("SA (N = 1) as reference line")
-    figure.legend(
-        handles,
-        labels,
-        loc="outside lower center",
-        ncol=len(labels) if len(labels) <= 5 else math.ceil(len(labels) / 2),
-        frameon=False,
-        fontsize=9,
-    )
+def save_figure(figure: Figure, stem: Path) -> list[Path]:
+    """Write ``figure`` as ``stem.png`` (300 dpi), ``stem.pdf`` and ``stem.svg``."""
+    paths = []
+    with paper_style():
+        for suffix in FIGURE_FORMATS:
+            path = stem.with_suffix(f".{suffix}")
+            figure.savefig(path, dpi=PNG_DPI, metadata=_metadata(suffix))
+            paths.append(path)
+    return paths
 
 
-def _domain_title(report: Report, domain: str) -> str:
-    tasks = report.runs[report.runs["domain"] == domain]["task"].nunique()
-    return f"{domain} ({tasks} task{'s' if tasks != 1 else ''})"
+def _metadata(suffix: str) -> dict[str, str | None]:
+    """No creation date in PDF/SVG files, so a figure redrawn from the same runs is the
+    same file."""
+    if suffix == "pdf":
+        return {"CreationDate": None}
+    if suffix == "svg":
+        return {"Date": None}
+    return {}
 
 
-BAND_NOTE = "mean over seeds; band / error bar = ±1 std over seeds (none with 1 seed)"
-
-
-def _prefix(label: str) -> str:
-    return f"[{label}] " if label else ""
-
-
-def _suptitle(figure: Figure, text: str, fontsize: float = 11) -> None:
-    """A figure title wrapped to the figure's width (long experiment names included)."""
-    width_chars = int(figure.get_figwidth() * 72 / (fontsize * 0.55))
-    lines = [textwrap.fill(line, width_chars) for line in text.splitlines()]
-    figure.suptitle("\n".join(lines), fontsize=fontsize)
-
-
-def plot_domain(report: Report, domain: str, path: Path, label: str = "") -> Path:
-    """Execution length and planning time against N for one domain."""
-    styles = series_styles(report)
-    figure = _new_figure(11, 4.6)
-    axes = figure.subplots(1, 2)
-    for ax, metric in zip(axes, REPORT_METRICS, strict=True):
-        _draw_domain_axis(ax, report, domain, metric, styles)
-        ax.set_title(METRIC_LABELS[metric].split(" (")[0], fontsize=11)
-    _suptitle(figure, f"{_prefix(label)}{_domain_title(report, domain)}\n{BAND_NOTE}")
-    _legend(figure, axes, report)
-    figure.savefig(path)
-    return path
-
-
-def plot_normalised(report: Report, path: Path, label: str = "") -> Path:
-    """The cross-domain panel: min-max normalised per-domain averages, averaged."""
-    styles = series_styles(report)
-    figure = _new_figure(11, 4.6)
-    axes = figure.subplots(1, 2)
-    for ax, metric in zip(axes, REPORT_METRICS, strict=True):
-        _draw_normalised_axis(ax, report, metric, styles)
-        ax.set_title(METRIC_LABELS[metric].split(" (")[0], fontsize=11)
-    _suptitle(
-        figure,
-        f"{_prefix(label)}All domains: per-domain averages min-max normalised to 0-1, "
-        f"then averaged across domains\n{BAND_NOTE}",
-    )
-    _legend(figure, axes, report)
-    figure.savefig(path)
-    return path
-
-
-def plot_overview(report: Report, path: Path, label: str = "") -> Path:
-    """Fig. 3 layout: one column per domain plus the normalised column; two rows."""
-    styles = series_styles(report)
-    domains = report.domains
-    columns = len(domains) + 1
-    figure = _new_figure(3.3 * columns + 0.5, 7.4)
-    axes = figure.subplots(2, columns, squeeze=False)
-    for column, domain in enumerate(domains):
-        for row, metric in enumerate(REPORT_METRICS):
-            _draw_domain_axis(axes[row][column], report, domain, metric, styles)
-        axes[0][column].set_title(_domain_title(report, domain), fontsize=11)
-    for row, metric in enumerate(REPORT_METRICS):
-        _draw_normalised_axis(axes[row][-1], report, metric, styles)
-    axes[0][-1].set_title("All domains (normalised)", fontsize=11)
-    for ax in axes[0]:
-        ax.set_xlabel("")
-    _suptitle(figure, f"{_prefix(label)}Execution length and planning time against N\n{BAND_NOTE}")
-    _legend(figure, [ax for row_axes in axes for ax in row_axes], report)
-    figure.savefig(path)
-    return path
-
-
-def plot_report(report: Report, out_dir: Path, label: str = "") -> list[Path]:
-    """Every figure of a report into ``out_dir``; returns the paths written.
-
-    ``label`` (e.g. the experiment name) prefixes every figure title.
-    """
+def plot_report(report: Report, out_dir: Path) -> list[Path]:
+    """Every figure of a report into ``out_dir`` as PNG, PDF and SVG; returns the paths
+    written (PNG first for each figure)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     if not report.has_results:
         return []
-    paths = [plot_overview(report, out_dir / "fig3_overview.png", label)]
-    if len(report.cross_domain):
-        paths.append(plot_normalised(report, out_dir / "fig3_normalised.png", label))
-    for domain in report.domains:
-        paths.append(plot_domain(report, domain, out_dir / f"fig3_{_slug(domain)}.png", label))
+    figures = []
+    if len(report.domains) >= 2:  # one domain: its own figure says it all
+        figures.append(("fig3_overview", overview_figure(report)))
+        if len(report.cross_domain):
+            figures.append(("fig3_normalised", normalised_figure(report)))
+    figures += [(f"fig3_{_slug(d)}", domain_figure(report, d)) for d in report.domains]
+    paths: list[Path] = []
+    for name, figure in figures:
+        paths += save_figure(figure, out_dir / name)
     return paths
 
 

@@ -1,8 +1,9 @@
 """The run table every report starts from: one row per job, whatever its source.
 
-A report reads jobs either from MLflow (``flows/report_cli.py``, following
-``docs/tracking.md``) or from a Hydra multirun directory (:func:`load_runs_from_sweep_dir`,
-no MLflow needed). Both end up in the same *canonical run table*,
+A report reads jobs from MLflow (``flows/report_cli.py``, following ``docs/tracking.md``),
+from a Hydra multirun directory (:func:`load_runs_from_sweep_dir`, no MLflow needed) or
+from a report's own ``runs.csv`` (:func:`load_runs_from_csv`: redraw a report without its
+source). All end up in the same *canonical run table*,
 checked and typed by :func:`normalise_runs`:
 
 =================  ===================================================================
@@ -331,3 +332,17 @@ def load_runs_from_sweep_dir(root: Path) -> pd.DataFrame:
     if not rows:
         raise ReportInputError(f"no job directories (result.json or .hydra/) under {root}")
     return normalise_runs(pd.DataFrame.from_records(rows))
+
+
+def load_runs_from_csv(path: Path) -> pd.DataFrame:
+    """The canonical run table of a ``runs.csv`` a report wrote (or any CSV with the
+    canonical columns). Every value is read as text, so params keep their spelling."""
+    if not path.is_file():
+        raise ReportInputError(f"runs file not found: {path}")
+    try:
+        frame = pd.read_csv(path, dtype=str, keep_default_na=False)
+    except (OSError, UnicodeDecodeError, pd.errors.ParserError) as error:
+        raise ReportInputError(f"cannot read {path}: {error}") from None
+    if frame.empty:
+        raise ReportInputError(f"no runs in {path}")
+    return normalise_runs(frame)

@@ -1,7 +1,8 @@
 """The paper's Table II: embodied execution length and planning time on the kitchen tasks.
 
 One row per series (SA, MA, TwoStep with its decomposer), one column per task and a macro
-column. Execution length is the embodied length (``embodied_length``: environment steps on
+column, headed by each task's short description when the data has one
+(:func:`read_task_titles`). Execution length is the embodied length (``embodied_length``: environment steps on
 the floor plan) when the runs have one, else the symbolic ``exec_length`` (said in the
 table's ``length`` column). Cells: mean ± sample std over seeds (ddof = 1, as everywhere
 in the reports); the macro column is, as in the paper, the mean of the task means ± the
@@ -17,9 +18,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import pandas as pd
+import yaml
 
 from twostep.planner import returncodes
 from twostep.report.aggregation import sample_std
@@ -28,6 +31,8 @@ TABLE2_DOMAIN = "alfworld"
 TABLE2_TASKS: tuple[int, ...] = (1, 2, 3, 4)
 TABLE2_AGENTS = 2
 PAPER_TIME_LIMIT_S = 3600.0
+#: Optional file of a kitchen domain's data folder with a short description per task.
+TITLES_FILE = "titles.yaml"
 
 #: The paper's Table II: per series, per task then macro, (length mean, std or None) and
 #: planning time in seconds (None: timeout at 60 minutes).
@@ -87,12 +92,16 @@ def _cell(runs: pd.DataFrame, length: str) -> dict[str, Any]:
 
 
 def table_two(
-    identified: pd.DataFrame, series: Sequence[tuple[str, str]], domain: str = TABLE2_DOMAIN
+    identified: pd.DataFrame,
+    series: Sequence[tuple[str, str]],
+    domain: str = TABLE2_DOMAIN,
+    titles: Mapping[int, str] | None = None,
 ) -> pd.DataFrame:
     """Table II of ``identified`` runs (the report's counted runs) for ``series``:
-    (series label, method) pairs in display order. Empty without runs of ``domain``."""
+    (series label, method) pairs in display order. Empty without runs of ``domain``.
+    ``titles`` (task number -> short description) fills the ``title`` column."""
     runs = identified[identified["domain"] == domain]
-    columns = ["series", "source", "task", "length", *_cell(runs.head(0), "exec_length")]
+    columns = ["series", "source", "task", "title", "length", *_cell(runs.head(0), "exec_length")]
     if runs.empty:
         return pd.DataFrame(columns=columns)
     if "planner_timeouts" not in runs:  # a run table made before the metric existed
@@ -155,7 +164,31 @@ def table_two(
                     "n_not_executed": math.nan,
                 }
             )
-    return pd.DataFrame.from_records(rows, columns=columns)
+    frame = pd.DataFrame.from_records(rows, columns=columns)
+    frame["title"] = [
+        (titles or {}).get(int(task), "") if task != "macro" else "" for task in frame["task"]
+    ]
+    return frame
+
+
+def read_task_titles(domain_dir: Path) -> dict[int, str]:
+    """Task number -> short description from ``<domain_dir>/titles.yaml`` (a mapping such
+    as ``1: Put an apple, a heated egg and a clean fork on the dining table``); empty when
+    the file is absent or not such a mapping."""
+    path = domain_dir / TITLES_FILE
+    if not path.is_file():
+        return {}
+    try:
+        loaded = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return {}
+    if not isinstance(loaded, Mapping):
+        return {}
+    titles: dict[int, str] = {}
+    for key, value in loaded.items():
+        if isinstance(key, int) and isinstance(value, str) and value.strip():
+            titles[key] = " ".join(value.split())
+    return titles
 
 
 def _number(value: float, digits: int = 1) -> str:
@@ -196,10 +229,17 @@ def time_cell(row: Mapping[str, Any]) -> str:
 
 
 def table_two_rows(frame: pd.DataFrame) -> tuple[list[str], list[list[str]]]:
-    """Headers and rows of the printed table: a length row and a time row per series."""
+    """Headers and rows of the printed table: the task descriptions when known, then a
+    length row and a time row per series."""
     tasks = [*map(str, TABLE2_TASKS), "macro"]
     headers = ["series", "", *(f"task {t}" if t != "macro" else "macro" for t in tasks)]
     rows: list[list[str]] = []
+    if "title" in frame:
+        titles = {
+            str(t): str(title) for t, title in zip(frame["task"], frame["title"], strict=True)
+        }
+        if any(titles.get(t) for t in tasks):
+            rows.append(["tasks", "", *(titles.get(t, "") for t in tasks)])
     for label in dict.fromkeys(frame["series"]):
         cells = {str(r["task"]): r for r in frame[frame["series"] == label].to_dict("records")}
         rows.append(
