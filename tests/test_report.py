@@ -522,3 +522,35 @@ def test_baselines_only_and_a_single_seed(tmp_path: Path) -> None:
     assert "No change can be computed" in markdown
     written = {p.name for p in write_report(report, tmp_path, "t", "s")}
     assert {"fig3_overview.png", "fig3_A.png", "report.md", "changes.csv"} <= written
+
+
+def test_figures_carry_no_experiment_name_and_come_in_three_formats(mlflow_report: Path) -> None:
+    svgs = sorted(mlflow_report.glob("fig3_*.svg"))
+    assert {p.stem for p in svgs} == {p.stem for p in mlflow_report.glob("fig3_*.png")}
+    assert {p.stem for p in svgs} == {p.stem for p in mlflow_report.glob("fig3_*.pdf")}
+    for svg in svgs:
+        text = svg.read_text()
+        assert EXPERIMENT not in text and "[report" not in text, svg.name
+
+
+def test_report_run_logs_normalised_and_raw_changes(store: str, mlflow_report: Path) -> None:
+    from mlflow.tracking import MlflowClient
+
+    client = MlflowClient(tracking_uri=store)
+    experiment = client.get_experiment_by_name(EXPERIMENT)
+    assert experiment is not None
+    (report_run,) = client.search_runs(
+        [experiment.experiment_id], filter_string="tags.`twostep.kind` = 'report'"
+    )
+    changes = pd.read_csv(mlflow_report / "changes.csv")
+    series = "TwoStep (goal-split) [planner.time_limit_s=10]"
+    row = changes[
+        (changes["series"] == series)
+        & (changes["baseline"] == "SA")
+        & (changes["metric"] == "exec_length")
+        & (changes["agents"] == 2)
+    ].iloc[0]
+    name = "TwoStep_goal-split_planner.time_limit_s_10.vs_SA.exec_length.n2"
+    logged = report_run.data.metrics
+    assert logged[f"change_pct_raw.{name}"] == pytest.approx(row["change_pct_raw"])
+    assert logged[f"change_pct.{name}"] == pytest.approx(row["change_pct"])
