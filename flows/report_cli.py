@@ -308,6 +308,15 @@ def task_titles(runs: pd.DataFrame, data_root: Path | None) -> dict[int, str]:
     return {}
 
 
+def _experiment_name(runs: pd.DataFrame) -> str:
+    """The one MLflow experiment the runs were logged to, or ``""``."""
+    column = f"{PARAM_PREFIX}mlflow.experiment"
+    names = (
+        {str(v) for v in runs[column] if str(v) not in ("", "None")} if column in runs else set()
+    )
+    return names.pop() if len(names) == 1 else ""
+
+
 def _sweep_name(path: Path) -> str:
     resolved = path.resolve()
     return f"{resolved.parent.name}_{resolved.name}" if resolved.parent.name else resolved.name
@@ -331,7 +340,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             read_line = f"read {len(runs)} job(s) from {args.sweep_dir}"
         elif args.runs_csv is not None:
             runs = load_runs_from_csv(args.runs_csv)
-            name = _safe_dir_name(args.runs_csv.resolve().parent.name)
+            name = _experiment_name(runs) or _safe_dir_name(args.runs_csv.resolve().parent.name)
             source = f"the run table `{args.runs_csv}`"
             read_line = f"read {len(runs)} run(s) from {args.runs_csv}"
         else:

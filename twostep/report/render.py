@@ -24,7 +24,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from twostep.report.model import METRIC_NAMES, Report
+from twostep.report.model import METRIC_LABELS, METRIC_NAMES, Report
 from twostep.report.paper import ANNOTATED_TASKS, TABLE1_AGENTS, TABLE1_DOMAINS
 from twostep.report.planning_time import planning_time_view, view_rows
 from twostep.report.plots import plot_report
@@ -46,7 +46,7 @@ def _is_nan(value: object) -> bool:
 
 
 def _digits(metric: str, value: float) -> int:
-    if metric == "exec_length":
+    if metric in ("exec_length", "embodied_length"):
         return 1
     return 2 if abs(value) < 100 else 1
 
@@ -145,19 +145,20 @@ def counts_line(report: Report) -> str:
 
 def _summary_section(report: Report) -> str:
     parts: list[str] = []
-    headers = [
-        "series",
-        "N",
-        "exec length (steps)",
-        "planning time (s)",
-        "success",
-        "ok / failed / timeout",
-        "tasks",
-        "tasks/seed",
-        "seeds",
-    ]
     for domain in report.domains:
         cells = report.summary[report.summary["domain"] == domain]
+        embodied = report.length_metric(domain) == "embodied_length"
+        metrics = ["exec_length", *(["embodied_length"] if embodied else []), "planning_time_s"]
+        headers = [
+            "series",
+            "N",
+            *(f"{METRIC_LABELS[m].lower()}" for m in metrics),
+            "success",
+            "ok / failed / timeout",
+            "tasks",
+            "tasks/seed",
+            "seeds",
+        ]
         rows = []
         for row in cells.to_dict("records"):
             rate = row["success_rate"]
@@ -165,17 +166,9 @@ def _summary_section(report: Report) -> str:
                 [
                     row["series"],
                     row["agents"],
-                    format_mean_std(
-                        row["exec_length_mean"],
-                        row["exec_length_std"],
-                        row["exec_length_n_seeds"],
-                        "exec_length",
-                    ),
-                    format_mean_std(
-                        row["planning_time_s_mean"],
-                        row["planning_time_s_std"],
-                        row["planning_time_s_n_seeds"],
-                        "planning_time_s",
+                    *(
+                        format_mean_std(row[f"{m}_mean"], row[f"{m}_std"], row[f"{m}_n_seeds"], m)
+                        for m in metrics
                     ),
                     "n/a" if _is_nan(rate) else f"{float(rate) * 100:.0f} %",
                     f"{row['n_success']} / {row['n_failed']} / {row['n_timeout']}",
