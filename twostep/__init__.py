@@ -29,4 +29,9 @@ Quick start::
     print(result.exec_length, result.schedule)
 """
 
-__version__ = "0.1.0"
+from importlib import metadata
+
+try:  # the installed version (from the git tag, pyproject's [tool.setuptools_scm])
+    __version__ = metadata.version("twostep")
+except metadata.PackageNotFoundError:  # a source tree that was never installed
+    __version__ = "0.0.0+unknown"
