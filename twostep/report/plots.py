@@ -285,53 +285,37 @@ def _finish_axis(
     ax.grid(True, axis="y", alpha=0.3, which="major")
 
 
-def _draw_panel(
+def _metric_axis(
     ax: Axes,
-    cells_of: dict[str, list[Cell]],
+    report: Report,
+    metric: str,
     styles: dict[str, SeriesStyle],
     bars: bool,
+    domain: str | None = None,
+    ylabel: bool = True,
 ) -> None:
+    """One panel: ``metric`` against N for every series, in ``domain`` or (``None``) the
+    cross-domain normalised averages."""
+    cells_of = {
+        name: cells
+        for name in report.series
+        if (
+            cells := _domain_cells(report, domain, name, metric)
+            if domain is not None
+            else _normalised_cells(report, name, metric)
+        )
+    }
     if bars:
         _draw_bars(ax, cells_of, styles)
     else:
         for name, cells in cells_of.items():
             _draw_lines(ax, cells, styles[name])
-
-
-def _domain_axis(
-    ax: Axes,
-    report: Report,
-    domain: str,
-    metric: str,
-    styles: dict[str, SeriesStyle],
-    bars: bool,
-    ylabel: bool = True,
-) -> None:
-    cells_of = {
-        name: cells
-        for name in report.series
-        if (cells := _domain_cells(report, domain, name, metric))
-    }
-    _draw_panel(ax, cells_of, styles, bars)
-    means = [c.mean for cells in cells_of.values() for c in cells]
-    log = metric == TIME and _use_log(means)
+    if domain is None:
+        label = METRIC_LABELS[metric].split(" (")[0] + " (normalised)"
+        _finish_axis(ax, report.agent_counts, label if ylabel else "", log=False, top=1.05)
+        return
+    log = metric == TIME and _use_log([c.mean for cells in cells_of.values() for c in cells])
     _finish_axis(ax, report.agent_counts, METRIC_LABELS[metric] if ylabel else "", log)
-
-
-def _normalised_axis(
-    ax: Axes,
-    report: Report,
-    metric: str,
-    styles: dict[str, SeriesStyle],
-    bars: bool,
-    ylabel: bool = True,
-) -> None:
-    cells_of = {
-        name: cells for name in report.series if (cells := _normalised_cells(report, name, metric))
-    }
-    _draw_panel(ax, cells_of, styles, bars)
-    label = METRIC_LABELS[metric].split(" (")[0] + " (normalised)" if ylabel else ""
-    _finish_axis(ax, report.agent_counts, label, log=False, top=1.05)
 
 
 def _legend_entries(
@@ -462,7 +446,7 @@ def domain_figure(report: Report, domain: str) -> Figure:
         figure = _new_figure(COLUMN_WIDTH_IN, PANEL_HEIGHT_IN + legend.height_in)
         axes = figure.subplots(1, 2)
         for ax, metric in zip(axes, (report.length_metric(domain), TIME), strict=True):
-            _domain_axis(ax, report, domain, metric, styles, bars)
+            _metric_axis(ax, report, metric, styles, bars, domain)
             ax.set_xlabel(X_LABEL, fontsize=MIN_FONT_PT)
         figure.suptitle(_domain_title(report, domain), fontsize=TITLE_FONT_PT)
         legend.draw(figure)
@@ -478,7 +462,7 @@ def normalised_figure(report: Report) -> Figure:
         figure = _new_figure(COLUMN_WIDTH_IN, PANEL_HEIGHT_IN + legend.height_in)
         axes = figure.subplots(1, 2)
         for ax, metric in zip(axes, REPORT_METRICS, strict=True):
-            _normalised_axis(ax, report, metric, styles, bars)
+            _metric_axis(ax, report, metric, styles, bars)
             ax.set_xlabel(X_LABEL, fontsize=MIN_FONT_PT)
         figure.suptitle(
             f"All {len(report.domains)} domains, normalised to 0-1", fontsize=TITLE_FONT_PT
@@ -503,13 +487,13 @@ def overview_figure(report: Report) -> Figure:
         for column, domain in enumerate(domains):
             length = report.length_metric(domain)
             label_length = column == 0 or length != first_length
-            _domain_axis(axes[0][column], report, domain, length, styles, bars, label_length)
-            _domain_axis(axes[1][column], report, domain, TIME, styles, bars, column == 0)
+            _metric_axis(axes[0][column], report, length, styles, bars, domain, label_length)
+            _metric_axis(axes[1][column], report, TIME, styles, bars, domain, column == 0)
             title = _domain_title(report, domain, "\n", solved="")
             axes[0][column].set_title(title, fontsize=TITLE_FONT_PT)
         if normalised:
             for row, metric in enumerate(REPORT_METRICS):
-                _normalised_axis(axes[row][-1], report, metric, styles, bars, ylabel=False)
+                _metric_axis(axes[row][-1], report, metric, styles, bars, ylabel=False)
             axes[0][-1].set_title("All domains\n(normalised)", fontsize=TITLE_FONT_PT)
         for ax in axes[1]:
             ax.set_xlabel("N", fontsize=MIN_FONT_PT)
