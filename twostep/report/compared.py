@@ -58,6 +58,10 @@ def _task_list(tasks: set[int] | frozenset[int]) -> str:
     return ",".join(str(t) for t in sorted(tasks))
 
 
+def _tasks_named(tasks: set[int] | frozenset[int]) -> str:
+    return f"task{'s' if len(tasks) > 1 else ''} {_task_list(tasks)}"
+
+
 def _cell_label(key: tuple[Any, ...]) -> str:
     row = dict(zip(CELL_COLUMNS, key, strict=True))
     return f"{row['series']} N={row['agents']}"
@@ -88,7 +92,7 @@ def common_tasks(identified: pd.DataFrame, full_cells: set[tuple[Any, ...]]) -> 
             if cell in full_cells and not solved_by[cell]
         ]
         lost += [
-            f"{_cell_label(cell)} did not solve {_task_list(tasks - solved_by[cell])}"
+            f"{_cell_label(cell)} did not solve {_tasks_named(tasks - solved_by[cell])}"
             for cell in taking_part
             if tasks - solved_by[cell]
         ]

@@ -109,7 +109,10 @@ def coverage_notes(coverage: pd.DataFrame) -> list[str]:
     notes: list[str] = []
     for row in coverage.itertuples(index=False):
         if row.left_out_tasks or row.lost_cells:
-            left_out = f" (left out: task {row.left_out_tasks})" if row.left_out_tasks else ""
+            plural = "s" if "," in str(row.left_out_tasks) else ""
+            left_out = (
+                f" (left out: task{plural} {row.left_out_tasks})" if row.left_out_tasks else ""
+            )
             notes.append(
                 f"{row.domain}: figures, normalised averages and changes compare the "
                 f"{row.n_compared} of {row.n_tasks} tasks every series solved{left_out}; "
