@@ -35,8 +35,8 @@ from twostep.embodied import (
     load_floor_plan,
 )
 from twostep.generators.alfworld import scaled_task
+from twostep.methods.twostep import run_twostep
 from twostep.pddl import Problem, parse_problem
-from twostep.pipeline import run_twostep
 from twostep.planner import PlannerSettings
 
 ROOT = Path(__file__).resolve().parent.parent

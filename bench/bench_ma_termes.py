@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 
 from twostep.benchmark import load_task
-from twostep.pipeline import run_multi_agent
+from twostep.methods.twostep import run_multi_agent
 from twostep.planner import PlannerSettings
 
 

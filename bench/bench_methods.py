@@ -46,16 +46,22 @@ from typing import Any
 import yaml
 
 from twostep.benchmark import DEFAULT_DATA_ROOT, list_domains, list_tasks, load_task
+from twostep.dealing.deal import PlanDeal
 from twostep.decomposers.base import Decomposer
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.decomposers.plan_split import PlanSplitDecomposer
 from twostep.files import write_json_atomic
 from twostep.generators import DOMAINS as BENCHMARK_DOMAINS
-from twostep.pipeline import RunResult, check_run, run_multi_agent, run_single_agent, run_twostep
-from twostep.plan_deal import PlanDeal
+from twostep.methods.portfolio import Portfolio
+from twostep.methods.twostep import (
+    RunResult,
+    check_run,
+    run_multi_agent,
+    run_single_agent,
+    run_twostep,
+)
 from twostep.planner import PlannerSettings
 from twostep.planner.results import PlanResult, Status
-from twostep.portfolio import Portfolio
 
 REPO = Path(__file__).resolve().parent.parent
 CONF = REPO / "conf"

@@ -47,9 +47,9 @@ VARIANTS = {
 }
 IMPORTS = {
     "hydra app (flows.cli)": "import flows.cli",
-    "prefect + flow (flows.flow)": "import flows.flow",
+    "prefect + flow (flows.prefect_flow)": "import flows.prefect_flow",
     "mlflow client": "from mlflow.tracking import MlflowClient",
-    "twostep library (pipeline)": "import twostep.pipeline",
+    "twostep library (pipeline)": "import twostep.methods.twostep",
 }
 
 
@@ -83,7 +83,7 @@ def import_seconds(statement: str, env: dict[str, str], repeats: int) -> float:
 def server_startup(home: Path, env: dict[str, str]) -> float:
     """Seconds from spawning ``prefect server start`` to a healthy API (then stopped)."""
     code = (
-        "import os, time, sys; from flows.server import ServerSettings, spawn_server, "
+        "import os, time, sys; from flows.servers import ServerSettings, spawn_server, "
         "stop_server, wait_until_healthy; t = time.perf_counter(); "
         f"info = spawn_server(ServerSettings(home={str(home)!r}, startup_timeout_s=600), os.getpid()); "
         "wait_until_healthy(info); print(time.perf_counter() - t); stop_server(info)"

@@ -58,7 +58,7 @@ start, start_cpu = time.perf_counter(), cpu()
 from hydra import compose, initialize_config_dir
 import flows.cli  # the app's own imports: Hydra, the schema, the job module
 imported, imported_cpu = time.perf_counter(), cpu()
-from flows.runner import execute_job
+from flows.job import execute_job
 with initialize_config_dir(config_dir=sys.argv[1], version_base="1.3"):
     cfg = compose("config", overrides=sys.argv[3:])
 composed, composed_cpu = time.perf_counter(), cpu()

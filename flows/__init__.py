@@ -7,7 +7,7 @@ module               what it is for
 ``config``           the structured config schema (typos fail at once)
 ``build``            config -> library objects: task, planner settings, decomposer
 ``runner``           one job end to end: reuse or compute, files, MLflow
-``job``              config -> library call (:func:`twostep.pipeline` methods)
+``job``              config -> library call (:func:`twostep.methods.twostep` methods)
 ``flow``             the Prefect flow of one job
 ``tasks``            the pipeline's steps as Prefect tasks (cache keys, retries)
 ``sweep``            the Hydra callback of a sweep (start, summary, exit code)

@@ -15,8 +15,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from flows.checks import check_values
 from flows.config import TwostepConfig
-from flows.validation import check_values
 from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.base import Decomposer
 
@@ -74,13 +74,13 @@ def open_decomposer(cfg: TwostepConfig) -> Iterator[Decomposer]:
 
         yield PlanSplitDecomposer(agent_predicates)
     elif name == "plan-deal":
-        # Method-level too: run_twostep hands a PlanDeal to twostep.plan_deal.run_plan_deal.
-        from twostep.plan_deal import PlanDeal
+        # Method-level too: run_twostep hands a PlanDeal to twostep.dealing.deal.run_plan_deal.
+        from twostep.dealing.deal import PlanDeal
 
         yield PlanDeal(agent_predicates, cfg.decomposer.cut)
     elif name == "portfolio":
-        # Method-level: run_twostep hands a Portfolio to twostep.portfolio.run_portfolio.
-        from twostep.portfolio import Portfolio
+        # Method-level: run_twostep hands a Portfolio to twostep.methods.portfolio.run_portfolio.
+        from twostep.methods.portfolio import Portfolio
 
         yield Portfolio(agent_predicates, cfg.decomposer.link_degree)
     elif name == "llm":

@@ -4,7 +4,7 @@ Single run: prints a one-line summary (and the joint schedule), writes result.js
 the Hydra run directory; bad input (unknown task, malformed PDDL) or an unusable MLflow
 store prints one line and exits 2, a job that crashed prints one line and exits 1.
 Sweep: one progress line per finished job; failures are recorded and the sweep goes on
-(:mod:`flows.sweep` prints the summary and sets the exit code).
+(:mod:`flows.sweep_callback` prints the summary and sets the exit code).
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from omegaconf import DictConfig
 from flows.artifacts import picture_paths
 from flows.config import register
 from flows.environment import quiet_defaults
-from flows.job import format_schedule, format_summary
+from flows.step_stats import format_schedule, format_summary
 
 CONF_DIR = str(Path(__file__).resolve().parent.parent / "conf")
 
@@ -35,10 +35,10 @@ _SINGLE_RUN_DONE = False
 
 @hydra.main(config_path=CONF_DIR, config_name="config", version_base="1.3")
 def app(cfg: DictConfig) -> None:
-    from flows.progress import progress_line
-    from flows.runner import execute_job
+    from flows.console import progress_line
+    from flows.job import execute_job
     from flows.sweep_state import SweepState, record_job
-    from flows.tracking import TrackingError
+    from flows.tracking.client import TrackingError
 
     hydra_cfg = HydraConfig.get()
     job_dir = Path(hydra_cfg.runtime.output_dir)
@@ -120,8 +120,8 @@ def _fast_exit(code: int) -> None:
     import logging
     import os
 
-    if "flows.flow" in sys.modules:
-        from flows.flow import flush_to_server
+    if "flows.prefect_flow" in sys.modules:
+        from flows.prefect_flow import flush_to_server
 
         flush_to_server()
     logging.shutdown()

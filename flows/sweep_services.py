@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from flows.server import (
+from flows.servers import (
     ServerError,
     ServerInfo,
     ServerSettings,
@@ -29,7 +29,7 @@ from flows.sweep_state import SweepState
 from twostep.files import write_json_atomic
 
 if TYPE_CHECKING:
-    from flows.tracking import Tracker
+    from flows.tracking.client import Tracker
 
 
 def sweep_server(state: SweepState) -> ServerInfo:
@@ -57,7 +57,7 @@ def sweep_tracking(state: SweepState) -> tuple[Tracker, str, str]:
     tables, which two processes must not do at once: a lock beside the SQLite file, so
     that two sweeps sharing one store take turns too (else the sweep's own).
     """
-    from flows.tracking import Tracker
+    from flows.tracking.client import Tracker
 
     assert state.tracking_uri is not None and state.experiment is not None
     record = state.folder / "mlflow.json"

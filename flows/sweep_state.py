@@ -1,6 +1,6 @@
 """What the jobs of one sweep share on disk: the sweep's state, its identity, job records.
 
-The launching process (:class:`flows.sweep.SweepCallback`) writes
+The launching process (:class:`flows.sweep_callback.SweepCallback`) writes
 ``<sweep dir>/.twostep/sweep.json``; every job reads it. Jobs report to
 ``.twostep/jobs/<num>.json`` (one file each: nothing to lock between joblib or submitit
 workers); the progress line and the summary are computed from those files.

@@ -6,11 +6,11 @@ task               library function                                   cache / re
 ``plan``           :func:`twostep.planner.plan_pddl`                  cached on PDDL text
 ``generate``       :func:`~twostep.decomposers.llm.generate_subgoal`  no (see below)
 ``translate``      :func:`~twostep.decomposers.llm.translate_subgoal` no (see below)
-``progress_state`` :func:`twostep.pipeline.progress`                  no (microseconds)
-``score``          :func:`twostep.pipeline.score`                     no (milliseconds)
+``progress_state`` :func:`twostep.methods.twostep.progress`                  no (microseconds)
+``score``          :func:`twostep.methods.twostep.score`                     no (milliseconds)
 =================  =================================================  ===================
 
-:func:`prefect_steps` packs them into a :class:`twostep.pipeline.Steps`, so the library
+:func:`prefect_steps` packs them into a :class:`twostep.methods.twostep.Steps`, so the library
 runs its own control flow and only the step calls become task runs.
 
 Cache keys are explicit (``cache_key_fn``): Prefect's INPUTS policy would hash Python
@@ -44,11 +44,12 @@ from prefect.context import TaskRunContext
 from prefect.states import Completed
 from prefect.utilities.annotations import quote
 
-from flows.job import StepStats
-from twostep import pipeline, planner
+from flows.step_stats import StepStats
+from twostep import planner
 from twostep.execution import DEFAULT_SEARCH_BUDGET, ParallelExecution, SearchBudget
+from twostep.methods import twostep as pipeline
+from twostep.methods.twostep import Steps
 from twostep.pddl import Fact, Problem
-from twostep.pipeline import Steps
 from twostep.planner import PlannerSettings, PlanResult, Status
 
 # Bump when a change in the library makes cached task results stale.

@@ -21,10 +21,10 @@ import pytest
 from twostep.benchmark import load_task
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.execution import parallel_length
+from twostep.methods.twostep import check_run, run_multi_agent, run_single_agent, run_twostep
 from twostep.multiagent import compile_multi_agent_problem, split_plan
 from twostep.pddl import PDDLError, domain_to_pddl, parse_goal, parse_problem, problem_to_pddl
 from twostep.pddl.origins import compiled_plan, original_plan
-from twostep.pipeline import check_run, run_multi_agent, run_single_agent, run_twostep
 from twostep.planner import PlannerSettings, driver_path, plan
 from twostep.progression import progress_state
 from twostep.strips import Grounder, simulate

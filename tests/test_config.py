@@ -160,4 +160,4 @@ def test_slurm_launcher_settings() -> None:
 def test_sweep_callback_is_configured() -> None:
     cfg = make(hydra=True)
     callback = OmegaConf.to_container(cfg.hydra.callbacks.twostep)
-    assert callback == {"_target_": "flows.sweep.SweepCallback"}
+    assert callback == {"_target_": "flows.sweep_callback.SweepCallback"}

@@ -281,7 +281,7 @@ def test_single_agent_plans_of_the_four_tasks_execute(
 
 def _expert_twostep_plans(task_id: int) -> tuple[Problem, list[list[str]]]:
     from twostep.decomposers.expert import ExpertDecomposer
-    from twostep.pipeline import run_twostep
+    from twostep.methods.twostep import run_twostep
 
     task = load_task("alfworld", task_id, DATA)
     run = run_twostep(task, 2, ExpertDecomposer(), ["at", "handempty", "holding"], FAST)

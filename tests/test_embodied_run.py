@@ -19,7 +19,7 @@ from omegaconf import DictConfig
 from PIL import Image
 
 from flows.config import register, typed
-from flows.job import run_job
+from flows.step_stats import run_job
 from tests.conftest import BLOCKS_DOMAIN, FIXTURES, blocks_problem
 from tests.test_cli import REPO, run_cli
 

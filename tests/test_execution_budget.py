@@ -16,11 +16,10 @@ from hypothesis import HealthCheck, given, settings
 
 from flows.build import JobError, check_job, search_budget
 from flows.config import register, typed
-from flows.job import run_job
+from flows.step_stats import run_job
 from tests.test_execution import TRACKS, problem
 from tests.test_execution_scaling import STAGGERED, two_hub_tracks, two_hub_tracks_text
 from tests.test_independent_checks import _brute_force, cases
-from twostep import pipeline
 from twostep.execution import (
     DEFAULT_SEARCH_BUDGET,
     ParallelExecution,
@@ -28,8 +27,9 @@ from twostep.execution import (
     check_schedule,
     parallel_length,
 )
+from twostep.methods import twostep as pipeline
+from twostep.methods.twostep import Steps
 from twostep.pddl import Problem
-from twostep.pipeline import Steps
 
 CONF = Path(__file__).resolve().parent.parent / "conf"
 

@@ -25,7 +25,7 @@ from flows.sweep_state import count_jobs
 from tests.conftest import blocks_problem
 from tests.test_pipeline import BW, FAST, _task
 from twostep.decomposers.goal_split import GoalSplitDecomposer
-from twostep.pipeline import run_single_agent, run_twostep
+from twostep.methods.twostep import run_single_agent, run_twostep
 from twostep.report import build_report, render_markdown
 from twostep.report.planning_time import planning_time_view, view_rows
 

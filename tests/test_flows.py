@@ -24,16 +24,16 @@ import pytest
 from hydra import compose, initialize_config_dir
 from omegaconf import DictConfig
 
-from flows import runner
+from flows import job as runner
 from flows.artifacts import write_job_files
 from flows.config import register
-from flows.job import format_summary
-from flows.progress import progress_line
-from flows.runner import execute_job
-from flows.server import pid_alive, stop_server
+from flows.console import progress_line
+from flows.job import execute_job
+from flows.servers import pid_alive, stop_server
+from flows.step_stats import format_summary
 from flows.store import JobStore, job_config, job_key
 from flows.sweep_state import SweepState, record_job
-from flows.tracking import TrackingError, job_metrics, job_params
+from flows.tracking.client import TrackingError, job_metrics, job_params
 from tests.conftest import blocks_problem
 from tests.test_prompts import make_blocksworld_data
 
@@ -368,7 +368,7 @@ def test_watchdog_stops_its_command_when_the_owner_is_killed(tmp_path: Path) -> 
     owner = subprocess.Popen(["sleep", "60"])
     pid_file = tmp_path / "child.pid"
     watchdog = subprocess.Popen(
-        [sys.executable, "-m", "flows.server", "--owner", str(owner.pid), "--",
+        [sys.executable, "-m", "flows.servers", "--owner", str(owner.pid), "--",
          "sh", "-c", f"echo $$ > {pid_file}; exec sleep 60"],
         start_new_session=True,
     )  # fmt: skip
@@ -399,7 +399,7 @@ def test_watchdog_stops_its_command_when_the_owner_is_killed(tmp_path: Path) -> 
 @pytest.fixture(scope="session")
 def prefect_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     """One Prefect server for the session's integration tests; stopped by PID."""
-    from flows.server import ServerSettings, spawn_server, wait_until_healthy
+    from flows.servers import ServerSettings, spawn_server, wait_until_healthy
 
     home = tmp_path_factory.mktemp("prefect-home")
     info = spawn_server(

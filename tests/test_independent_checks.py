@@ -22,9 +22,9 @@ from hypothesis import strategies as st
 from twostep.benchmark import load_task
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.execution import ScheduleError, parallel_length
+from twostep.methods.twostep import RunResult, run_multi_agent, run_single_agent, run_twostep
 from twostep.multiagent import compile_multi_agent_problem
 from twostep.pddl import Fact, Goal
-from twostep.pipeline import RunResult, run_multi_agent, run_single_agent, run_twostep
 from twostep.planner import PlannerSettings
 from twostep.strips import GroundAction
 from twostep.validation import to_up_problem, validate_plan

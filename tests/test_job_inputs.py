@@ -15,9 +15,9 @@ import pytest
 from hydra import compose, initialize_config_dir
 from omegaconf import DictConfig
 
-from flows import runner
+from flows import job as runner
 from flows.config import register
-from flows.runner import execute_job
+from flows.job import execute_job
 from tests.conftest import blocks_problem
 from tests.test_flows import make_data
 

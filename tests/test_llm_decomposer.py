@@ -179,7 +179,7 @@ def test_script_running_out_is_an_error(task: BenchmarkTask) -> None:
 
 def test_pipeline_falls_back_to_single_agent(task: BenchmarkTask, tmp_path: Path) -> None:
     """Through the pipeline with scripted answers: helper accepted / all discarded."""
-    pipeline = pytest.importorskip("twostep.pipeline")
+    pipeline = pytest.importorskip("twostep.methods.twostep")
     from twostep.planner import PlannerSettings
 
     settings = PlannerSettings(search_time_limit_s=20)

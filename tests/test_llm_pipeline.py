@@ -19,11 +19,11 @@ import yaml
 from hydra import compose, initialize_config_dir
 
 from flows.config import register
-from flows.job import run_job
+from flows.step_stats import run_job
 from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.llm import LLMDecomposer
 from twostep.llm import LLMClient, LLMSettings
-from twostep.pipeline import RunResult, check_run, run_twostep
+from twostep.methods.twostep import RunResult, check_run, run_twostep
 from twostep.planner import PlannerSettings
 
 REPO = Path(__file__).resolve().parent.parent
@@ -361,7 +361,7 @@ def test_failed_llm_call_through_the_config(
 @pytest.fixture(scope="module")
 def prefect_api(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     """A Prefect server for this module's flow tests; stopped by PID."""
-    from flows.server import ServerSettings, spawn_server, stop_server, wait_until_healthy
+    from flows.servers import ServerSettings, spawn_server, stop_server, wait_until_healthy
 
     home = tmp_path_factory.mktemp("prefect-home")
     info = spawn_server(ServerSettings(home=str(home), startup_timeout_s=240), os.getpid())
@@ -369,7 +369,7 @@ def prefect_api(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
         wait_until_healthy(info)
         yield info.api_url
     finally:
-        from flows.flow import flush_to_server
+        from flows.prefect_flow import flush_to_server
 
         flush_to_server()  # the logs still queued for it, before it stops
         stop_server(info)
@@ -396,8 +396,8 @@ def test_missing_key_under_prefect_is_one_line_and_one_attempt(
     monkeypatch: pytest.MonkeyPatch,
     capfd: pytest.CaptureFixture[str],
 ) -> None:
-    from flows.job import format_summary
-    from flows.runner import execute_job
+    from flows.job import execute_job
+    from flows.step_stats import format_summary
 
     attempts: list[int] = []
     real_complete = LLMClient.complete
@@ -429,7 +429,7 @@ def test_llm_tasks_under_prefect_neither_cache_nor_retry(
     litellm: Any,
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    from flows.runner import execute_job
+    from flows.job import execute_job
 
     provider = StandIn(litellm)
     monkeypatch.setattr(litellm, "completion", provider)
@@ -458,7 +458,7 @@ def test_llm_tasks_under_prefect_neither_cache_nor_retry(
 def test_steps_replace_the_llm_calls(task: BenchmarkTask) -> None:
     """Steps.generate / Steps.translate are what the pipeline calls for the LLM decomposer."""
     from twostep.decomposers.llm import generate_subgoal, translate_subgoal
-    from twostep.pipeline import Steps
+    from twostep.methods.twostep import Steps
 
     seen: list[tuple[str, int]] = []
 

@@ -1,4 +1,4 @@
-"""twostep.pipeline: SA, MA and TwoStep end to end on small tasks (real Fast Downward)."""
+"""twostep.methods.twostep: SA, MA and TwoStep end to end on small tasks (real Fast Downward)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from tests.test_benchmark import make_root
 from twostep.benchmark import load_task
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import GoalSplitDecomposer
-from twostep.pipeline import check_run, run_multi_agent, run_single_agent, run_twostep
+from twostep.methods.twostep import check_run, run_multi_agent, run_single_agent, run_twostep
 from twostep.planner import PlannerSettings
 from twostep.validation import validate_plan
 

@@ -1,4 +1,4 @@
-"""twostep.plan_deal: the SA plan's pieces dealt to N agents, several per agent.
+"""twostep.dealing.deal: the SA plan's pieces dealt to N agents, several per agent.
 
 Hand-written SA plans give pieces, walks and makespans that can be derived by hand (each
 test's comment); every joint schedule is checked by ``check_run`` (our simulator) and by
@@ -24,11 +24,11 @@ from tests.test_plan_split import (
     _copy_task,
     sa_result,
 )
-from twostep import plan_deal
 from twostep.benchmark import load_task
-from twostep.pipeline import run_single_agent, run_twostep
-from twostep.plan_deal import PlanDeal, deal_plan, eliminate_actions, eliminate_joint
-from twostep.portfolio import Portfolio
+from twostep.dealing import deal as plan_deal
+from twostep.dealing.deal import PlanDeal, deal_plan, eliminate_actions, eliminate_joint
+from twostep.methods.portfolio import Portfolio
+from twostep.methods.twostep import run_single_agent, run_twostep
 from twostep.strips import Grounder
 
 
@@ -198,7 +198,7 @@ def test_the_deal_does_not_depend_on_the_hash_seed(data_root: Path, tmp_path: Pa
         "import json, sys\n"
         "from pathlib import Path\n"
         "from twostep.benchmark import load_task\n"
-        "from twostep.plan_deal import deal_plan\n"
+        "from twostep.dealing.deal import deal_plan\n"
         "task = load_task('termes', 2, Path(sys.argv[1]))\n"
         "plan = json.loads(Path(sys.argv[2]).read_text())\n"
         "print(json.dumps(deal_plan(task.problem, plan, 3, ['at', 'has-block']).plans))\n"

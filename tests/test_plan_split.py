@@ -19,9 +19,9 @@ from tests.test_benchmark import make_root
 from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.base import DecompositionRequest
 from twostep.decomposers.plan_split import PlanSplitDecomposer, split_plan
+from twostep.methods.twostep import RunResult, check_run, run_single_agent, run_twostep
 from twostep.multiagent import compile_multi_agent_problem
 from twostep.pddl import Goal, Problem, parse_goal
-from twostep.pipeline import RunResult, check_run, run_single_agent, run_twostep
 from twostep.planner import PlannerSettings, PlanResult, Status
 from twostep.strips import parse_action
 from twostep.validation import validate_plan

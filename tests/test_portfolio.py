@@ -1,4 +1,4 @@
-"""twostep.portfolio: several decompositions through TwoStep, the shortest schedule kept.
+"""twostep.methods.portfolio: several decompositions through TwoStep, the shortest schedule kept.
 
 Lengths are derived by hand on blocksworld tasks small enough for that; every returned
 schedule is re-validated by ``check_run`` and by unified-planning on the sequentialised
@@ -22,8 +22,8 @@ from tests.test_plan_split import (
 )
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import GoalSplitDecomposer
-from twostep.pipeline import run_twostep
-from twostep.portfolio import Portfolio
+from twostep.methods.portfolio import Portfolio
+from twostep.methods.twostep import run_twostep
 
 
 class Scripted:

@@ -19,10 +19,10 @@ from typing import Any
 
 import pytest
 
+from flows.checks import value_problems, write_problem
 from flows.store import JobStore
-from flows.sweep import _refuse_running_sweep
+from flows.sweep_callback import _refuse_running_sweep
 from flows.sweep_state import SweepState
-from flows.validation import value_problems, write_problem
 from tests.test_flows import make_data
 from twostep.pddl import PDDLError, load_problem
 
@@ -149,7 +149,7 @@ def test_job_store_failing_after_the_work_keeps_the_result(
     from hydra import compose, initialize_config_dir
 
     from flows.config import register
-    from flows.runner import execute_job
+    from flows.job import execute_job
 
     blocker = tmp_path / "a-file"
     blocker.write_text("")

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from flows import services
-from flows.server import is_healthy, pid_alive
+from flows import services_cli as services
+from flows.servers import is_healthy, pid_alive
 from tests.test_flows import make_data
 
 REPO = Path(__file__).resolve().parent.parent

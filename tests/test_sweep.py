@@ -18,7 +18,7 @@ from typing import Any
 
 import pytest
 
-from flows.server import pid_alive, read_info
+from flows.servers import pid_alive, read_info
 from tests.test_flows import make_data
 
 REPO = Path(__file__).resolve().parent.parent

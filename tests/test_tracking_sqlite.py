@@ -1,8 +1,8 @@
 """flows/tracking_sqlite.py: a single run's rows written directly equal MLflow's own.
 
 The reference is MLflow: the same record is logged once through
-:func:`flows.tracking.log_job_run` (MLflow's client and SQLAlchemy store) and once through
-:class:`flows.tracking_sqlite.SqliteJobLog`, into the same store; every row of the run
+:func:`flows.tracking.client.log_job_run` (MLflow's client and SQLAlchemy store) and once through
+:class:`flows.tracking.sqlite.SqliteJobLog`, into the same store; every row of the run
 (runs, tags, params, metrics, latest_metrics) and every artifact file must be the same,
 apart from the run id, the job key and the clock.
 """
@@ -17,9 +17,9 @@ from typing import Any
 
 import pytest
 
-from flows import tracking_sqlite
-from flows.tracking import Tracker, log_job_run
-from flows.tracking_sqlite import SCHEMA_VERSION, SqliteJobLog, make_template, seed_store
+from flows.tracking import sqlite as tracking_sqlite
+from flows.tracking.client import Tracker, log_job_run
+from flows.tracking.sqlite import SCHEMA_VERSION, SqliteJobLog, make_template, seed_store
 
 EXPERIMENT = "twostep"
 

@@ -13,14 +13,14 @@ One module per step of the paper's pipeline:
 - :mod:`twostep.execution`    parallel execution length (A*) and joint schedule check
 - :mod:`twostep.decomposers`  where helper subgoals come from (goal-split, expert, llm)
 - :mod:`twostep.llm`          LLM access (litellm), prompts and answer parsing
-- :mod:`twostep.pipeline`     SA, MA and TwoStep end to end
+- :mod:`twostep.methods.twostep`     SA, MA and TwoStep end to end
 - :mod:`twostep.benchmark`    tasks on disk in the LLM+P layout
 
 Quick start::
 
     from twostep.benchmark import load_task
     from twostep.decomposers.goal_split import GoalSplitDecomposer
-    from twostep.pipeline import run_twostep
+    from twostep.methods.twostep import run_twostep
     from twostep.planner import PlannerSettings
 
     task = load_task("blocksworld", 5)

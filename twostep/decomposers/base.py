@@ -2,7 +2,7 @@
 
 A decomposer proposes, for N agents, up to N-1 helper subgoals. Each proposal carries the
 PDDL goal text (and, for the LLM, the English subgoal and every prompt and answer). The
-pipeline (:mod:`twostep.pipeline`) then checks every proposal against the task
+pipeline (:mod:`twostep.methods.twostep`) then checks every proposal against the task
 (:mod:`twostep.subgoals`) and plans the accepted ones; a decomposer never plans.
 
 A decomposer that cannot propose at all (its LLM calls failed) raises

@@ -12,7 +12,7 @@ raises :class:`~twostep.decomposers.base.DecomposerError` with status ``llm_erro
 the run fails instead of falling back to the single-agent plan.
 
 The two steps are plain functions that :meth:`LLMDecomposer.decompose` takes as
-arguments (the pipeline passes :attr:`twostep.pipeline.Steps.generate` and ``translate``),
+arguments (the pipeline passes :attr:`twostep.methods.twostep.Steps.generate` and ``translate``),
 so a workflow engine can run each call as its own task.
 """
 
@@ -120,7 +120,7 @@ def translate_subgoal(
     return goal.to_pddl(), exchange
 
 
-# The signatures of the two steps, as :class:`twostep.pipeline.Steps` holds them.
+# The signatures of the two steps, as :class:`twostep.methods.twostep.Steps` holds them.
 GenerateStep = Callable[..., tuple[str | None, Exchange]]
 TranslateStep = Callable[..., tuple[str | None, Exchange]]
 

@@ -253,7 +253,7 @@ def _subgoal_counts(subgoals: object) -> dict[str, float]:
 
 
 def result_to_row(result: Mapping[str, Any]) -> dict[str, Any]:
-    """The run-table row of one result.json (the :class:`twostep.pipeline.RunResult` shape)."""
+    """The run-table row of one result.json (the :class:`twostep.methods.twostep.RunResult` shape)."""
     row: dict[str, Any] = {
         key: result.get(key) for key in ("domain", "task", "method", "agents", "seed")
     }

@@ -113,7 +113,7 @@ def _check_sqlite(path: Path, uri: str, hint: str) -> None:
 
 
 def _check_writable(folder: Path, what: str, hint: str) -> None:
-    from flows.validation import write_problem
+    from flows.checks import write_problem
 
     problem = write_problem(folder)
     if problem is not None:
@@ -122,7 +122,7 @@ def _check_writable(folder: Path, what: str, hint: str) -> None:
 
 def _client(tracking_uri: str, seed: bool = True) -> Any:
     """MLflow's client; a SQLite store that does not exist yet is seeded from the
-    environment's template (:func:`flows.tracking_sqlite.seed_store`) unless ``seed`` is
+    environment's template (:func:`flows.tracking.sqlite.seed_store`) unless ``seed`` is
     False (MLflow then creates and migrates it: how the template itself is made)."""
     import logging
 
@@ -134,7 +134,7 @@ def _client(tracking_uri: str, seed: bool = True) -> Any:
         logging.getLogger(name).setLevel(logging.WARNING)
 
     if seed and tracking_uri.startswith("sqlite:///"):  # a new store: copied, not migrated
-        from flows.tracking_sqlite import seed_store
+        from flows.tracking.sqlite import seed_store
 
         path = Path(tracking_uri[len("sqlite:///") :])
         if not path.exists():
@@ -328,7 +328,7 @@ def job_tags(record: Mapping[str, Any]) -> dict[str, str]:
 def log_job_run(
     tracker: Tracker, experiment_id: str, parent: str | None, record: Mapping[str, Any]
 ) -> str:
-    """Log one job (``record``: plain data, see ``flows.runner._job_record``) to its run,
+    """Log one job (``record``: plain data, see ``flows.job._job_record``) to its run,
     found again by job key; return the run id.
 
     A run recorded completely before (same job key: same result) is left as it is:

@@ -6,10 +6,10 @@ first: it imports MLflow and opens the store on the other core while the job rea
 task and plans; the job then sends it the run's record (one JSON line on stdin) and
 waits for the run id (one JSON line on stdout). Nothing is logged if the job sends
 nothing (stdin closed): the process just exits. A warm SQLite store does not need it:
-:mod:`flows.tracking_sqlite` writes the run's rows directly; this process serves the
+:mod:`flows.tracking.sqlite` writes the run's rows directly; this process serves the
 first run of a store or experiment, and stores that are not SQLite files.
 
-    python -m flows.tracking_worker <tracking uri> <artifact location or ""> <experiment>
+    python -m flows.tracking.worker <tracking uri> <artifact location or ""> <experiment>
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ class TrackingWorker:
 
     @classmethod
     def start(cls, uri: str, artifact_location: str | None, experiment: str) -> TrackingWorker:
-        command = [sys.executable, "-m", "flows.tracking_worker", uri]
+        command = [sys.executable, "-m", "flows.tracking.worker", uri]
         command += [artifact_location or "", experiment]
         process = subprocess.Popen(
             command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
@@ -60,7 +60,7 @@ class TrackingWorker:
 def serve(argv: Sequence[str], stdin: IO[str], stdout: IO[str]) -> int:
     uri, artifact_location, experiment = argv
     try:
-        from flows.tracking import Tracker, log_job_run
+        from flows.tracking.client import Tracker, log_job_run
 
         tracker = Tracker(uri, artifact_location or None)  # the slow part: done meanwhile
         experiment_id = tracker.experiment_id(experiment)

@@ -1,7 +1,7 @@
 """The Prefect flow of one job: (domain, task, method, N, seed) -> result.json dict.
 
 The flow holds no planning logic: it loads the job's config and calls
-:func:`flows.job.run_job` with the task-wrapped steps of :mod:`flows.tasks`, so each
+:func:`flows.step_stats.run_job` with the task-wrapped steps of :mod:`flows.tasks`, so each
 planner call, LLM call, state progression and scoring shows up as a task run. Its
 parameter is the job's resolved config (plain JSON, shown in the Prefect UI).
 
@@ -31,7 +31,7 @@ from prefect.settings import (
 )
 
 from flows.config import typed
-from flows.job import StepStats, run_job
+from flows.step_stats import StepStats, run_job
 from flows.tasks import prefect_steps
 
 

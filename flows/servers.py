@@ -10,7 +10,7 @@ a warm database, over 30 s on a fresh one: STACK-NOTES). A sweep instead shares 
   ``.twostep/server.json``; a sweep whose jobs are all finished never starts one.
 * **Patient.** Jobs wait on ``/api/health`` until ``startup_timeout_s`` after the spawn:
   the first start on a fresh database runs its migrations (over 30 s on a small machine).
-* **Watched.** The server runs under a small watchdog (``python -m flows.server``) that
+* **Watched.** The server runs under a small watchdog (``python -m flows.servers``) that
   stops it as soon as the sweep's launching process is gone, even after ``kill -9``, so
   an interrupted sweep leaves no server behind. The server has its own session, so
   Ctrl-C in the terminal reaches the jobs, not the server under them.
@@ -134,7 +134,7 @@ def spawn(
     """
     full = list(command)
     if owner_pid is not None:
-        full = [sys.executable, "-m", "flows.server", "--owner", str(owner_pid), "--", *full]
+        full = [sys.executable, "-m", "flows.servers", "--owner", str(owner_pid), "--", *full]
     with open(log_path, "wb") as log:
         process = subprocess.Popen(
             full,
@@ -323,7 +323,7 @@ def watch(owner_pid: int, command: Sequence[str], poll_s: float = 0.2) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m flows.server",
+        prog="python -m flows.servers",
         description="Run a command until the owner process exits (the sweep's server watchdog).",
     )
     parser.add_argument("--owner", type=int, required=True, help="PID whose exit stops the command")

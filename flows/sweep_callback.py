@@ -3,7 +3,7 @@
 :class:`SweepCallback` runs in the process that launches the sweep, whatever the launcher:
 
 ``on_run_start`` (a single run)
-    checks that the output locations are writable (:mod:`flows.validation`) before
+    checks that the output locations are writable (:mod:`flows.checks`) before
     Hydra creates the run directory: one line and exit 2;
 ``on_multirun_start``
     checks the output locations the same way, refuses a sweep directory that a running
@@ -13,7 +13,7 @@
     ``LocalCluster`` for ``task_runner=dask`` without an address, and writes the sweep's
     state (:mod:`flows.sweep_state`), which every job reads;
 ``on_multirun_end``
-    prints the summary (:mod:`flows.progress`), counts the sweep's Prefect flow runs on
+    prints the summary (:mod:`flows.console`), counts the sweep's Prefect flow runs on
     the server, stops the server it started by PID, closes the cluster, ends the MLflow
     parent run, and exits 1 if a job failed.
 
@@ -37,9 +37,9 @@ from typing import Any
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig
 
+from flows.console import footer, header
 from flows.environment import quiet_defaults
-from flows.progress import footer, header
-from flows.server import ServerSettings, is_healthy, pid_alive, read_info
+from flows.servers import ServerSettings, is_healthy, pid_alive, read_info
 from flows.sweep_services import count_flow_runs, stop_sweep_server
 from flows.sweep_state import SweepState, count_jobs, job_records, sweep_key, sweep_overrides
 from twostep.files import write_json_atomic
@@ -53,7 +53,7 @@ def _set_hydra_config(config: DictConfig) -> None:
 
 
 def _check_writable(config: DictConfig, run_dir: Path) -> None:
-    from flows.validation import ValidationError, check_writable
+    from flows.checks import ValidationError, check_writable
 
     try:
         check_writable(config, run_dir)
@@ -118,7 +118,7 @@ class SweepCallback(Callback):
             overrides=overrides,
         )
         if config.mlflow.enabled:
-            from flows.tracking import TrackingError, check_store, experiment_name_for
+            from flows.tracking.client import TrackingError, check_store, experiment_name_for
 
             try:
                 check_store(str(config.mlflow.tracking_uri), float(config.mlflow.connect_timeout_s))
@@ -133,7 +133,7 @@ class SweepCallback(Callback):
         # Read by Prefect at import, here and in Dask workers started below.
         os.environ.setdefault("PREFECT_LOGGING_LEVEL", str(orchestration.prefect_log_level))
         if orchestration.prefect is not False:  # null (auto): sweeps always use Prefect
-            from flows.services import prefect_api_url
+            from flows.services_cli import prefect_api_url
 
             external = (
                 orchestration.prefect_api_url
@@ -187,8 +187,8 @@ class SweepCallback(Callback):
         if api_url and is_healthy(api_url):
             summary["prefect_api_url"] = api_url
             summary["prefect_flow_runs"] = count_flow_runs(api_url, state.run_tag)
-        if "flows.flow" in sys.modules:  # jobs ran flows in this process (basic launcher)
-            from flows.flow import flush_to_server
+        if "flows.prefect_flow" in sys.modules:  # jobs ran flows in this process (basic launcher)
+            from flows.prefect_flow import flush_to_server
 
             flush_to_server()
         summary["prefect_server_started"] = stop_sweep_server(state)
@@ -206,7 +206,7 @@ class SweepCallback(Callback):
         record = state.folder / "mlflow.json"
         if state.tracking_uri is None or not record.is_file():
             return  # no job logged anything (all reused and recorded before)
-        from flows.tracking import Tracker
+        from flows.tracking.client import Tracker
 
         metrics = {
             key: float(value)

@@ -3,7 +3,7 @@
 No single offline decomposer wins everywhere: goal-split finds nothing on one termes
 tower, plan-split follows the SA plan's resource reuse, and fewer helpers than N-1
 sometimes beat more (less waiting at shared places). The portfolio runs each candidate
-(a decomposer and a number of agents <= N) through :func:`~twostep.pipeline.run_twostep`,
+(a decomposer and a number of agents <= N) through :func:`~twostep.methods.twostep.run_twostep`,
 scores it exactly like any run, and returns the run with the shortest execution length
 (ties: the earlier candidate). Every candidate's planner time counts in the planning time,
 the SA plan's once; ``extra["candidates"]`` (result.json ``candidates``) lists every
@@ -11,7 +11,7 @@ candidate with its length. Candidates whose helper subgoals equal an earlier can
 are not planned again (same subgoals, same run, whatever the number of agents). With
 ``fallback_if_longer`` the SA plan is itself the last candidate: a winner longer than SA
 gives way to it. plan-deal is a member too: it deals the SA plan's pieces to the agents
-instead of proposing subgoals (:mod:`twostep.plan_deal`), and costs no planner call.
+instead of proposing subgoals (:mod:`twostep.dealing.deal`), and costs no planner call.
 
 The portfolio is a decomposer only in name: ``run_twostep`` hands a :class:`Portfolio` to
 :func:`run_portfolio`, since choosing needs the whole pipeline, not just subgoals.
@@ -25,15 +25,15 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from twostep.benchmark import BenchmarkTask
+from twostep.dealing.deal import PlanDeal
 from twostep.decomposers.base import Decomposer, DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.decomposers.plan_split import PlanSplitDecomposer
-from twostep.plan_deal import PlanDeal
 from twostep.planner import PlannerSettings, PlanResult
 from twostep.subgoals import SubgoalStatus
 
 if TYPE_CHECKING:
-    from twostep.pipeline import RunResult, Steps
+    from twostep.methods.twostep import RunResult, Steps
 
 
 @dataclass(frozen=True)
@@ -61,7 +61,7 @@ class Portfolio:
     Default members: plan-split cut at free states, plan-split cut by what the agent holds
     (with partial progress, and with goal literals only), goal-split, the three
     plan-splits again with consecutive stretches instead of the list schedule, and
-    plan-deal (:mod:`twostep.plan_deal`, with N agents only, tried last).
+    plan-deal (:mod:`twostep.dealing.deal`, with N agents only, tried last).
     """
 
     name = "portfolio"
@@ -113,7 +113,7 @@ def run_portfolio(
     fallback_if_longer: bool = True,
 ) -> RunResult:
     """Every candidate through TwoStep; the shortest schedule wins (module docstring)."""
-    from twostep.pipeline import DIRECT, run_twostep
+    from twostep.methods.twostep import DIRECT, run_twostep
 
     steps = steps or DIRECT
     start = time.perf_counter()
@@ -176,7 +176,7 @@ def run_portfolio(
         and best.exec_length is not None
         and best.exec_length > len(sa_steps)
     ):
-        from twostep.pipeline import AgentPlan, _use_single_agent_plan
+        from twostep.methods.twostep import AgentPlan, _use_single_agent_plan
 
         chosen = best
         best = _sa_run(task, agents, seed, sa_length, sa_plan)
@@ -233,7 +233,7 @@ def _steps_of(sa_plan: PlanResult | None, decomposer: Decomposer | None) -> tupl
 def _sa_run(
     task: BenchmarkTask, agents: int, seed: int, sa_length: int | None, sa_plan: PlanResult | None
 ) -> RunResult:
-    from twostep.pipeline import RunResult
+    from twostep.methods.twostep import RunResult
 
     run = RunResult(task.domain_name, task.task_id, "twostep", agents, seed, sa_length=sa_length)
     if sa_plan is None:

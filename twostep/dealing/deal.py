@@ -41,7 +41,7 @@ Every action of an agent's plan is an action of Fast Downward's SA plan, or a sh
 walk found by the search above; the joint schedule is re-validated like every other.
 The result is deterministic given the SA plan. :func:`run_plan_deal` deals with each cut
 and order (four deals, no planner call), scores each and keeps the shortest, in a
-:class:`~twostep.pipeline.RunResult` (the SA plan's planner time counts, as does the time
+:class:`~twostep.methods.twostep.RunResult` (the SA plan's planner time counts, as does the time
 spent dealing).
 """
 
@@ -72,7 +72,7 @@ from twostep.strips import GroundAction, Grounder, PlanError
 
 if TYPE_CHECKING:
     from twostep.benchmark import BenchmarkTask
-    from twostep.pipeline import RunResult, Steps
+    from twostep.methods.twostep import RunResult, Steps
     from twostep.planner import PlannerSettings, PlanResult
 
 WALK_LIMIT = 20_000
@@ -535,7 +535,7 @@ class PlanDeal:
     """The decomposer-side handle of plan-deal (it makes plans, not subgoals).
 
     ``cut`` is ``"free"``, ``"holding"`` or ``"best"`` (both, the shorter schedule kept;
-    the default). :func:`~twostep.pipeline.run_twostep` hands it to :func:`run_plan_deal`;
+    the default). :func:`~twostep.methods.twostep.run_twostep` hands it to :func:`run_plan_deal`;
     ``propose`` is never asked.
     """
 
@@ -573,7 +573,7 @@ def run_plan_deal(
     schedule; the SA plan when no deal works (or, with ``fallback_if_longer``, when the
     schedule is longer). ``extra["deal"]`` records each cut's outcome."""
     from twostep.execution import ScheduleError
-    from twostep.pipeline import (
+    from twostep.methods.twostep import (
         DIRECT,
         AgentPlan,
         RunResult,

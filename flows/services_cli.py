@@ -23,7 +23,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from flows.environment import quiet_defaults
-from flows.server import (
+from flows.servers import (
     ServerSettings,
     free_port,
     is_healthy,

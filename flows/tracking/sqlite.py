@@ -5,7 +5,7 @@ costs 3-4 CPU seconds per process: more than everything else a short single run 
 When the store is a SQLite file that MLflow created with the schema of the installed
 MLflow (:data:`SCHEMA_VERSION`, its alembic head) and the run's experiment exists and is
 active, :class:`SqliteJobLog` writes the rows MLflow's client writes for
-:func:`flows.tracking.log_job_run` (``Tracker.job_run`` + ``Tracker.log_job``: the run,
+:func:`flows.tracking.client.log_job_run` (``Tracker.job_run`` + ``Tracker.log_job``: the run,
 its tags, params, metrics and latest metrics, the artifact files, the status tags and
 the run's end) in one transaction, and copies the artifacts as MLflow's local artifact
 repository does. The contents are MLflow's: tests/test_tracking_sqlite.py compares
@@ -43,7 +43,14 @@ from typing import Any
 from urllib.parse import urlparse
 from urllib.request import url2pathname
 
-from flows.tracking import JOB_KEY, KIND, STATUS, experiment_location, job_tags, metric_points
+from flows.tracking.client import (
+    JOB_KEY,
+    KIND,
+    STATUS,
+    experiment_location,
+    job_tags,
+    metric_points,
+)
 
 # The alembic revision of MLflow 3.17.2's tracking schema (test_tracking_sqlite checks it
 # against the installed MLflow): another schema is written by MLflow itself.
@@ -67,7 +74,7 @@ def make_template(target: Path | None = None) -> Path:
     target = target or template_path()
     if target.is_file():
         return target
-    from flows.tracking import _client
+    from flows.tracking.client import _client
 
     with tempfile.TemporaryDirectory() as folder:
         db = Path(folder) / "mlflow.db"
@@ -207,7 +214,7 @@ class SqliteJobLog:
         return sqlite3.connect(str(path), timeout=30.0, isolation_level=None)
 
     def log(self, record: Mapping[str, Any]) -> str | None:
-        """Log the job (``flows.runner._job_record``) and return its run id, or None when
+        """Log the job (``flows.job._job_record``) and return its run id, or None when
         MLflow has to do it (see the module docstring). Nothing is half written."""
         params = {str(k): str(v) for k, v in record["params"].items()}
         tags = job_tags(record)

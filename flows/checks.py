@@ -3,7 +3,7 @@ job writes to writable. Each problem is one line naming the key (or the location
 what is allowed; the command prints it and exits 2.
 
 :func:`check_values` runs from :func:`flows.build.check_job` (every job, before any
-planning); :func:`check_writable` runs from the Hydra callback (:mod:`flows.sweep`)
+planning); :func:`check_writable` runs from the Hydra callback (:mod:`flows.sweep_callback`)
 before Hydra creates the run directory of a single run or the sweep directory of a
 multirun (the jobs of a sweep write where the sweep was checked).
 """

@@ -1,0 +1,1 @@
+"""The methods: SA PDDL, MA PDDL, TwoStep, plan-deal and the portfolio."""
