@@ -27,7 +27,7 @@ $(BOOTSTRAP)/bin/uv:
 $(VENV)/.synced: pyproject.toml uv.lock | $(UV)
 	$(UV) $(SYNC)
 	# An empty MLflow store made once by MLflow: a new store is a copy (ms), not a migration (s).
-	$(VENV)/bin/python -m flows.tracking.sqlite
+	$(VENV)/bin/python -m flows.tracking.template
 	touch $@
 
 setup: $(VENV)/.synced

@@ -35,7 +35,7 @@ from twostep.embodied import (
     load_floor_plan,
 )
 from twostep.generators.alfworld import scaled_task
-from twostep.methods.twostep import run_twostep
+from twostep.methods import MethodRequest, run_twostep
 from twostep.pddl import Problem, parse_problem
 from twostep.planner import PlannerSettings
 
@@ -70,7 +70,9 @@ def agent_plans(name: str, problem: Problem, task: object, agents: int) -> list[
         template = load_task("alfworld", 1, ROOT / "data")
         bench_task = replace(template, problem=problem, task_id=0)
     run = run_twostep(
-        bench_task, agents, GoalSplitDecomposer(AGENT_PREDICATES), AGENT_PREDICATES, settings
+        MethodRequest(
+            bench_task, agents, settings, AGENT_PREDICATES, GoalSplitDecomposer(AGENT_PREDICATES)
+        )
     )
     plans = [run.plans[a] for a in run.agent_order]
     return plans + [[] for _ in range(agents - len(plans))]

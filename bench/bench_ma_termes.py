@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 
 from twostep.benchmark import load_task
-from twostep.methods.twostep import run_multi_agent
+from twostep.methods import MethodRequest, run_multi_agent
 from twostep.planner import PlannerSettings
 
 
@@ -19,7 +19,7 @@ def main() -> None:
     args = parser.parse_args()
     for k in args.tasks:
         settings = PlannerSettings("lama-first", args.time_limit)
-        r = run_multi_agent(load_task("termes", k), 4, ["at", "has-block"], settings)
+        r = run_multi_agent(MethodRequest(load_task("termes", k), 4, settings, ["at", "has-block"]))
         print(
             f"termes p{k:02d} MA N=4 lama-first {args.time_limit:g} s: status={r.status} "
             f"exec_length={r.exec_length} planning_time={r.planning_time_s:.1f}s",

@@ -25,7 +25,8 @@ and time limit (and, for TwoStep, the same ``fallback_if_longer``).
         --reuse docs/bench/methods_sa_ma.json --out outputs/bench/methods_all.json
     .venv/bin/python bench/bench_methods.py --report outputs/bench/methods_all.json
 
-A new decomposer joins the bench with one line in :data:`DECOMPOSERS`.
+A new subgoal source joins the bench with one line in :data:`SUBGOAL_SOURCES`; every method
+runs through the registry (:func:`twostep.methods.method_for`).
 """
 
 from __future__ import annotations
@@ -46,34 +47,27 @@ from typing import Any
 import yaml
 
 from twostep.benchmark import DEFAULT_DATA_ROOT, list_domains, list_tasks, load_task
-from twostep.dealing.deal import PlanDeal
 from twostep.decomposers.base import Decomposer
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.decomposers.plan_split import PlanSplitDecomposer
 from twostep.files import write_json_atomic
 from twostep.generators import DOMAINS as BENCHMARK_DOMAINS
-from twostep.methods.portfolio import Portfolio
-from twostep.methods.twostep import (
-    RunResult,
-    check_run,
-    run_multi_agent,
-    run_single_agent,
-    run_twostep,
-)
+from twostep.methods import MethodRequest, RunResult, check_run, method_for
+from twostep.methods.registry import TWOSTEP_METHODS
 from twostep.planner import PlannerSettings
 from twostep.planner.results import PlanResult, Status
 
 REPO = Path(__file__).resolve().parent.parent
 CONF = REPO / "conf"
 
-# The TwoStep decomposers the bench knows, by their config name (conf/decomposer/<name>).
-# Each is built from the domain's agent predicates; a new one joins with one line here.
-DECOMPOSERS: dict[str, Callable[[list[str]], Decomposer]] = {
+# The TwoStep decomposers the bench knows, by their config name (conf/decomposer/<name>):
+# the subgoal sources, built from the domain's agent predicates (a new one joins with one
+# line here), then the methods the registry runs under the same name (plan-deal, portfolio).
+SUBGOAL_SOURCES: dict[str, Callable[[list[str]], Decomposer]] = {
     "goal-split": GoalSplitDecomposer,
     "plan-split": PlanSplitDecomposer,
-    "plan-deal": PlanDeal,
-    "portfolio": Portfolio,
 }
+DECOMPOSERS = (*SUBGOAL_SOURCES, *TWOSTEP_METHODS)
 METHODS = ("ma", *DECOMPOSERS)
 REUSED_BY_DEFAULT = ("sa", "ma")  # planner only: unchanged by any decomposer's code
 TARGETS = {2: 0.70, 3: 0.58, 4: 0.50}  # issue 11: macro exec/SA of the offline default
@@ -184,7 +178,7 @@ def run_job(job: Job) -> list[Row]:
     needs_plan = any(m != "ma" for _, m in todo)
     if sa_row is None or (needs_plan and sa_plan is None):
         start = time.perf_counter()
-        sa = run_single_agent(task, settings)
+        sa = method_for("sa")(MethodRequest(task, planner=settings))
         sa_plan = sa.planner_calls[0].result
         sa_row = {**common, "method": "sa", "agents": 1, "exec_length": sa.exec_length,
                   "planning_time_s": sa.planning_time_s, "sa_length": sa.sa_length,
@@ -200,13 +194,12 @@ def run_job(job: Job) -> list[Row]:
             continue
         start = time.perf_counter()
         try:
-            if method == "ma":
-                result = run_multi_agent(task, n, preds, settings, sa_length=sa_length)
-            else:
-                result = run_twostep(
-                    task, n, DECOMPOSERS[method](preds), preds, settings, sa_length=sa_length,
-                    sa_plan=sa_plan, fallback_if_longer=job.fallback,
-                )  # fmt: skip
+            source = SUBGOAL_SOURCES.get(method)
+            request = MethodRequest(
+                task, n, settings, preds, source(preds) if source else None,
+                sa_length=sa_length, sa_plan=sa_plan, fallback_if_longer=job.fallback,
+            )  # fmt: skip
+            result = method_for("ma" if method == "ma" else "twostep", method)(request)
             try:
                 valid = verify(task, result, preds)
             except Exception as error:  # report, do not stop the table

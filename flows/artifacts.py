@@ -24,7 +24,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from flows.step_stats import format_schedule
+from flows.console import format_schedule
 from twostep.embodied.run import GIF_NAME, TIMELINE_NAME, TRACE_KEY
 from twostep.files import write_json_atomic
 

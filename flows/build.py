@@ -1,38 +1,45 @@
-"""Config to library objects, in one place: the task, the planner settings and the
-decomposer a job's config names, and the check that they exist and fit together.
+"""A job's config turned into library objects, once: :func:`build_job` makes the
+:class:`Job` (the task, the method and its request, the executor), and :meth:`Job.run`
+runs it through a set of steps (the library's own, or Prefect tasks).
 
 Each library setting has one name in the config (``flows/config.py``, whose defaults
 are the library dataclasses' defaults) and is mapped here once; ``planner.time_limit_s``
 is the planner's ``search_time_limit_s``; :func:`llm_settings` maps the ``llm`` group to
 the LLM client's settings; :func:`search_budget` maps ``score_max_nodes`` and
-``score_time_limit_s`` to the scorer's budget.
+``score_time_limit_s`` to the scorer's budget. The method is the registry's
+(:func:`twostep.methods.method_for`), named by ``method`` and ``decomposer``.
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from flows.checks import check_values
+from flows.checks import JobError, check_values
 from flows.config import TwostepConfig
 from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.base import Decomposer
+from twostep.embodied import ExecutorSettings
+from twostep.execution import SearchBudget
+from twostep.methods import (
+    DIRECT,
+    Method,
+    MethodName,
+    MethodRequest,
+    RunResult,
+    Steps,
+    method_for,
+    run_single_agent,
+)
+from twostep.methods.registry import SUBGOAL_SOURCES
+from twostep.planner import PlannerSettings
 
 if TYPE_CHECKING:
     from twostep.llm import LLMSettings
-from twostep.embodied import ExecutorSettings
-from twostep.execution import SearchBudget
-from twostep.planner import PlannerSettings
-
-
-class JobError(Exception):
-    """A config that names something that does not exist or does not fit together."""
-
-
-METHODS = ("sa", "ma", "twostep")
-DECOMPOSERS = ("goal-split", "expert", "llm", "plan-split", "plan-deal", "portfolio")
 
 
 def planner_settings(cfg: TwostepConfig) -> PlannerSettings:
@@ -50,47 +57,6 @@ def search_budget(cfg: TwostepConfig) -> SearchBudget:
         max_nodes=None if max_nodes is None else int(max_nodes),
         time_limit_s=None if time_limit_s is None else float(time_limit_s),
     )
-
-
-@contextmanager
-def open_decomposer(cfg: TwostepConfig) -> Iterator[Decomposer]:
-    """The decomposer the config names, for the duration of one job.
-
-    A context manager because the LLM decomposer owns a client (``llm=local`` runs a
-    model server for the job's lifetime, stopped when the job ends).
-    """
-    name = cfg.decomposer.name
-    agent_predicates = list(cfg.domain.agent_predicates)
-    if name == "goal-split":
-        from twostep.decomposers.goal_split import GoalSplitDecomposer
-
-        yield GoalSplitDecomposer(agent_predicates, cfg.decomposer.link_degree)
-    elif name == "expert":
-        from twostep.decomposers.expert import ExpertDecomposer
-
-        yield ExpertDecomposer()
-    elif name == "plan-split":
-        from twostep.decomposers.plan_split import PlanSplitDecomposer
-
-        yield PlanSplitDecomposer(agent_predicates)
-    elif name == "plan-deal":
-        # Method-level too: run_twostep hands a PlanDeal to twostep.dealing.deal.run_plan_deal.
-        from twostep.dealing.deal import PlanDeal
-
-        yield PlanDeal(agent_predicates, cfg.decomposer.cut)
-    elif name == "portfolio":
-        # Method-level: run_twostep hands a Portfolio to twostep.methods.portfolio.run_portfolio.
-        from twostep.methods.portfolio import Portfolio
-
-        yield Portfolio(agent_predicates, cfg.decomposer.link_degree)
-    elif name == "llm":
-        from twostep.decomposers.llm import LLMDecomposer
-        from twostep.llm import open_client
-
-        with open_client(llm_settings(cfg)) as client:
-            yield LLMDecomposer(client)
-    else:
-        raise JobError(f"unknown decomposer '{name}' (known: {', '.join(DECOMPOSERS)})")
 
 
 def llm_settings(cfg: TwostepConfig) -> LLMSettings:
@@ -116,6 +82,17 @@ def llm_settings(cfg: TwostepConfig) -> LLMSettings:
     )
 
 
+def executor_settings(cfg: TwostepConfig) -> ExecutorSettings:
+    """The embodied executor's settings; its seed is the job's."""
+    return ExecutorSettings(
+        seed=int(cfg.seed),
+        max_steps=cfg.executor.max_steps,
+        random_start=bool(cfg.executor.random_start),
+        stall_limit=int(cfg.executor.stall_limit),
+        backoff_radius=int(cfg.executor.backoff_radius),
+    )
+
+
 def load_job_task(cfg: TwostepConfig) -> BenchmarkTask:
     cache = Path(cfg.output.root) / "cache" / "tasks"  # parsed PDDL: see load_problem
     return load_task(cfg.domain.name, int(cfg.task), Path(cfg.data.root), cache)
@@ -126,12 +103,132 @@ def check_job(cfg: TwostepConfig) -> None:
     check_values(cfg)  # every value in range, one line naming the key and allowed values
 
 
-def executor_settings(cfg: TwostepConfig) -> ExecutorSettings:
-    """The embodied executor's settings; its seed is the job's."""
-    return ExecutorSettings(
-        seed=int(cfg.seed),
-        max_steps=cfg.executor.max_steps,
-        random_start=bool(cfg.executor.random_start),
-        stall_limit=int(cfg.executor.stall_limit),
-        backoff_radius=int(cfg.executor.backoff_radius),
-    )
+@contextmanager
+def open_decomposer(cfg: TwostepConfig) -> Iterator[Decomposer | None]:
+    """The subgoal source the config names (None for the methods that need none), for
+    the duration of one job.
+
+    A context manager because the LLM decomposer owns a client (``llm=local`` runs a
+    model server for the job's lifetime, stopped when the job ends).
+    """
+    name = cfg.decomposer.name
+    agent_predicates = list(cfg.domain.agent_predicates)
+    if cfg.method.name != MethodName.TWOSTEP or name not in SUBGOAL_SOURCES:
+        yield None  # sa, ma, and the twostep methods that deal or choose (plan-deal, ...)
+    elif name == "goal-split":
+        from twostep.decomposers.goal_split import GoalSplitDecomposer
+
+        yield GoalSplitDecomposer(agent_predicates, cfg.decomposer.link_degree)
+    elif name == "expert":
+        from twostep.decomposers.expert import ExpertDecomposer
+
+        yield ExpertDecomposer()
+    elif name == "plan-split":
+        from twostep.decomposers.plan_split import PlanSplitDecomposer
+
+        yield PlanSplitDecomposer(agent_predicates)
+    else:  # llm
+        from twostep.decomposers.llm import LLMDecomposer
+        from twostep.llm import open_client
+
+        with open_client(llm_settings(cfg)) as client:
+            yield LLMDecomposer(client)
+
+
+@dataclass(frozen=True)
+class Job:
+    """One job's library objects: the method, the request it answers (with the library's
+    own steps), whether SA is solved beside it, and the embodied executor (None:
+    symbolic)."""
+
+    method_name: MethodName
+    method: Method
+    request: MethodRequest
+    compare_sa: bool
+    executor: ExecutorSettings | None = None
+    render: bool = True  # embodied: draw the GIF and the timeline
+    task_load_s: float = 0.0  # reading and parsing the task's PDDL
+
+    def run(self, steps: Steps = DIRECT) -> RunResult:
+        """The method's result through ``steps``; with ``compare_sa`` the SA plan is
+        solved first (its length is reported beside the result, and TwoStep reuses the
+        plan), then the embodied executor runs the plans when configured."""
+        request = replace(self.request, steps=steps)
+        if self.method_name is MethodName.SA or not self.compare_sa:
+            return self.execute(self.method(request))
+        sa = run_single_agent(request)
+        request = replace(request, sa_length=sa.sa_length, sa_plan=sa.planner_calls[0].result)
+        result = self.method(request)
+        if self.method_name is MethodName.TWOSTEP:
+            result.extra["fallback_if_longer"] = request.fallback_if_longer
+        # The SA comparison is solved in the same job; its planner time is reported apart.
+        result.extra["sa_planning_time_s"] = round(sa.planning_time_s, 4)
+        return self.execute(result)
+
+    def execute(self, run: RunResult) -> RunResult:
+        """``executor=embodied``: the run's plans executed on the task's floor plan; the
+        result gains the embodied fields (:func:`twostep.embodied.embodied_fields`). A
+        failed execution is a recorded status, never an exception."""
+        if self.executor is None:
+            return run
+        from twostep.embodied import embodied_fields, execute_plans, task_floor_plan
+
+        if not run.success or not run.plans:
+            run.extra.update(executor="embodied", embodied_status="not_run", embodied_length=None)
+            run.extra["embodied"] = {"status": "not_run", "reason": "no plan to execute"}
+            return run
+        task = self.request.task
+        floor = task_floor_plan(task.problem, task.problem_path.parent)
+        execution = execute_plans(task.problem, run.plans, run.agent_order, floor, self.executor)
+        run.extra.update(embodied_fields(execution, floor))
+        run.extra["embodied_trace"]["render"] = self.render
+        return run
+
+
+@contextmanager
+def build_job(cfg: TwostepConfig) -> Iterator[Job]:
+    """The job of a config, checked (:class:`JobError`) and built once, for the duration
+    of the job (the LLM decomposer's client lives as long)."""
+    check_job(cfg)
+    method_name = MethodName(cfg.method.name)
+    try:
+        method = method_for(
+            method_name,
+            cfg.decomposer.name,
+            cut=cfg.decomposer.cut,
+            link_degree=cfg.decomposer.link_degree,
+        )
+    except ValueError as error:  # UnknownMethod, or an option out of range
+        raise JobError(str(error)) from None
+    start = time.perf_counter()
+    task = load_job_task(cfg)
+    task_load_s = time.perf_counter() - start
+    with open_decomposer(cfg) as decomposer:
+        request = MethodRequest(
+            task,
+            agents=int(cfg.agents),
+            planner=planner_settings(cfg),
+            agent_predicates=list(cfg.domain.agent_predicates),
+            decomposer=decomposer,
+            seed=int(cfg.seed),
+            score_mode=cfg.score_mode,
+            search_budget=search_budget(cfg),
+            fallback_if_longer=bool(cfg.method.fallback_if_longer),
+        )
+        embodied = cfg.executor.name == "embodied"
+        yield Job(
+            method_name,
+            method,
+            request,
+            compare_sa=bool(cfg.compare_sa),
+            executor=executor_settings(cfg) if embodied else None,
+            render=bool(cfg.executor.render),
+            task_load_s=task_load_s,
+        )
+
+
+def run_config(cfg: TwostepConfig, steps: Steps = DIRECT) -> RunResult:
+    """Build the job of ``cfg`` and run it through ``steps``: the library path of one job,
+    without the job store, files or records (:func:`flows.job.execute_job` adds them)."""
+    with build_job(cfg) as job:
+        return job.run(steps)

@@ -10,11 +10,16 @@ multirun (the jobs of a sweep write where the sweep was checked).
 
 from __future__ import annotations
 
-import time
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
-from urllib.parse import urlparse
+
+from flows.locations import local_folder, write_problem
+
+
+class JobError(Exception):
+    """A config that names something that does not exist or does not fit together (an
+    input error: one line, exit 2)."""
 
 
 class ValidationError(Exception):
@@ -39,9 +44,9 @@ def _positive(key: str, value: Any) -> str | None:
 def value_problems(cfg: Any) -> list[str]:
     """Every out-of-range value of a job config (an empty list: all fine)."""
     # Imported here: the writability check of every run needs none of this.
-    from flows.build import DECOMPOSERS, METHODS
     from twostep.execution.model import MODES as SCORE_MODES
     from twostep.llm.client import MODES as LLM_MODES
+    from twostep.methods.registry import DECOMPOSERS, METHODS
 
     problems = [
         _choice("score_mode", cfg.score_mode, SCORE_MODES),
@@ -70,43 +75,13 @@ def value_problems(cfg: Any) -> list[str]:
 
 
 def check_values(cfg: Any) -> None:
-    """Raise :class:`flows.build.JobError` (an input error: one line, exit 2) naming the
-    first bad value, before any planning."""
-    from flows.build import JobError
-
+    """Raise :class:`JobError` naming the first bad value, before any planning."""
     problems = value_problems(cfg)
     if problems:
         raise JobError(problems[0])
 
 
 # ----------------------------------------------------------------- writable locations
-
-
-def write_problem(folder: Path) -> str | None:
-    """Why ``folder`` cannot hold new files (None: it can). Creates the folder (as the
-    job would) and writes and deletes a probe file: permission bits alone do not tell
-    (root ignores them; a read-only mount does not)."""
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        probe = folder / f".twostep-probe-{time.time_ns()}"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as error:
-        return error.strerror or type(error).__name__
-    return None
-
-
-def _local_path(uri: str | None) -> Path | None:
-    """The local folder of an MLflow store or artifact URI (None: not on this disk)."""
-    if not uri:
-        return None
-    if uri.startswith("sqlite:///"):
-        path = uri[len("sqlite:///") :]
-        return None if path in ("", ":memory:") else Path(path).parent
-    parsed = urlparse(uri)
-    if parsed.scheme in ("", "file"):
-        return Path(parsed.path or uri)
-    return None
 
 
 def writable_locations(cfg: Any, run_dir: Path | None = None) -> list[tuple[str, Path]]:
@@ -123,7 +98,7 @@ def writable_locations(cfg: Any, run_dir: Path | None = None) -> list[tuple[str,
             ("mlflow.tracking_uri", cfg.mlflow.tracking_uri),
             ("mlflow.artifact_location", cfg.mlflow.artifact_location),
         ):
-            folder = _local_path(None if uri is None else str(uri))
+            folder = local_folder(None if uri is None else str(uri))
             if folder is not None:
                 locations.append((key, folder))
     return locations

@@ -20,8 +20,8 @@ from omegaconf import DictConfig
 
 from flows.artifacts import picture_paths
 from flows.config import register
+from flows.console import format_schedule, format_summary
 from flows.environment import quiet_defaults
-from flows.step_stats import format_schedule, format_summary
 
 CONF_DIR = str(Path(__file__).resolve().parent.parent / "conf")
 
@@ -38,7 +38,7 @@ def app(cfg: DictConfig) -> None:
     from flows.console import progress_line
     from flows.job import execute_job
     from flows.sweep_state import SweepState, record_job
-    from flows.tracking.client import TrackingError
+    from flows.tracking import TrackingError
 
     hydra_cfg = HydraConfig.get()
     job_dir = Path(hydra_cfg.runtime.output_dir)

@@ -1,13 +1,96 @@
-"""What a sweep prints: the progress line after each job, its header and its summary."""
+"""What the commands print: a job's summary line and schedule table, a sweep's progress
+line, header and footer, and any error on one line."""
 
 from __future__ import annotations
 
 import time
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from flows.sweep_state import SweepState, job_records
+from twostep.identity import display_name
+
+if TYPE_CHECKING:
+    from flows.sweep_state import SweepState
+    from twostep.methods import RunResult
+
+
+def one_line(error: BaseException, name_type: bool = True, limit: int | None = None) -> str:
+    """The error's first non-empty line, after its type's name unless ``name_type`` is
+    False (errors whose message is written for the user), cut at ``limit`` characters."""
+    lines = [line for line in str(error).strip().splitlines() if line.strip()]
+    text = lines[0] if lines else ""
+    if not name_type:
+        text = text or type(error).__name__
+    else:
+        text = f"{type(error).__name__}: {text}" if text else type(error).__name__
+    return text if limit is None else text[:limit]
+
+
+# ----------------------------------------------------------------- one job
+
+
+def format_summary(result: RunResult | Mapping[str, Any]) -> str:
+    """One line for the terminal (from a result or its result.json dict)."""
+    r = result if isinstance(result, Mapping) else result.to_dict()
+    if r.get("status") == "failed" and "error" in r:
+        return f"{display_name(r)} | FAILED: {r['error']}"
+    parts = [
+        display_name(r),
+        f"N={r.get('agents')}",
+        "success" if r.get("success") else f"FAILED ({r.get('status')}: {r.get('message')})",
+        f"exec_length={r.get('exec_length')}",
+    ]
+    if r.get("sa_length") is not None:
+        parts.append(f"sa_length={r['sa_length']}")
+    parts.append(f"planning_time={float(r.get('planning_time_s') or 0.0):.2f}s")
+    subgoals = r.get("subgoals") or []
+    chosen = [d for d in r.get("deal") or [] if d.get("chosen")]
+    if chosen:  # plan-deal: pieces, not subgoals
+        d = chosen[0]
+        parts.append(f"dealt {d.get('pieces')} pieces ({d.get('walks')} walking steps)")
+    elif r.get("decomposer"):
+        accepted = sum(1 for s in subgoals if s.get("status") == "accepted")
+        parts.append(f"subgoals={accepted}/{len(subgoals)} accepted")
+    if r.get("fallback"):
+        parts.append(f"fallback: {r['fallback']}")
+    if r.get("executor") == "embodied":
+        embodied = r.get("embodied") or {}
+        if r.get("embodied_status") == "success":
+            parts.append(
+                f"embodied_length={r.get('embodied_length')} "
+                f"(waits={r.get('waits')}, backoffs={r.get('backoffs')})"
+            )
+        else:
+            where = f" {embodied.get('agent')} at step {embodied.get('step')}"
+            where = where if embodied.get("agent") is not None else ""
+            parts.append(
+                f"embodied: {r.get('embodied_status')}{where}: {embodied.get('reason', '')}"
+            )
+    return " | ".join(parts)
+
+
+def _agent_number(agent: str) -> int:
+    digits = agent.removeprefix("agent")
+    return int(digits) if digits.isdigit() else 0
+
+
+def format_schedule(result: RunResult | Mapping[str, Any], width: int = 34) -> str:
+    """The joint schedule as a table, one column per agent."""
+    r = result if isinstance(result, Mapping) else result.to_dict()
+    agents = sorted(r.get("plans") or {}, key=_agent_number)
+    schedule = r.get("schedule") or []
+    if not schedule or len(agents) < 2:
+        return ""
+    header = "step  " + "".join(a.ljust(width) for a in agents)
+    lines = [header, "-" * len(header)]
+    for t, step in enumerate(schedule, start=1):
+        acting = {agent: action for agent, action in step}
+        lines.append(f"{t:>4}  " + "".join(acting.get(a, ".").ljust(width) for a in agents))
+    return "\n".join(lines)
+
+
+# ----------------------------------------------------------------- a sweep
 
 
 def clock(seconds: float) -> str:
@@ -20,6 +103,8 @@ def clock(seconds: float) -> str:
 def progress_line(state: SweepState, now: float | None = None) -> str:
     """``[3/4 done | 0 failed | 1 reused | 0:41 elapsed, ~0:14 left]`` (``now``: the
     time to measure from, default the clock's)."""
+    from flows.sweep_state import job_records
+
     records = job_records(Path(state.sweep_dir))
     done = len(records)
     failed = sum(1 for r in records if r.get("status") == "failed")

@@ -4,17 +4,19 @@
 and in each job of a sweep (any launcher):
 
 1. check the MLflow store (single run; a sweep's callback checked it already):
-   :class:`~flows.tracking.client.TrackingError` before any work;
+   :class:`~flows.tracking.TrackingError` before any work;
 2. a job whose key is in the job store is read back, not recomputed (``reused``);
-3. otherwise run it (:func:`prefect_target`): as the Prefect flow on the sweep's server
-   (started on demand by the first job that needs it, then waited for); a single run as
-   a flow on a running server (``twostep-services up``) or, with
-   ``orchestration.prefect=true``, on a temporary server of its own; otherwise (a single
-   run by default, ``orchestration.prefect=false``) the library directly;
+3. otherwise build it from its config, once (:func:`flows.build.build_job`), and run it
+   (:func:`compute_job`): as the Prefect flow on the sweep's server (started on demand by
+   the first job that needs it, then waited for); a single run as a flow on a running
+   server (``twostep-services up``) or, with ``orchestration.prefect=true``, on a
+   temporary server of its own; otherwise (a single run by default,
+   ``orchestration.prefect=false``) the library directly;
 4. write result.json and the other files to the job's Hydra directory;
-5. log params, metrics, artifacts and status to the job's MLflow run, found again by
-   ``twostep.job_key`` (a re-run adds no duplicate), child of the sweep's parent run;
-   skipped when the reused result is known to be logged there already.
+5. log params, metrics, artifacts and status to the job's MLflow run
+   (:class:`~flows.tracking.JobRunLog`), found again by ``twostep.job_key`` (a re-run
+   adds no duplicate), child of the sweep's parent run; skipped when the reused result is
+   known to be logged there already.
 
 A job that raises is recorded as ``failed`` (result.json, MLflow status and error), is
 not stored (a re-run tries again), and the sweep goes on.
@@ -27,23 +29,34 @@ import sys
 import time
 import traceback
 from dataclasses import dataclass, field
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
 from flows.artifacts import write_job_files
-from flows.build import JobError, check_job, load_job_task
+from flows.build import Job, build_job
+from flows.checks import JobError
 from flows.config import TwostepConfig, typed
-from flows.step_stats import StepStats, counting_steps, run_job
+from flows.console import one_line
+from flows.services import running_prefect_api
+from flows.step_stats import StepStats, counting_steps
 from flows.store import JobStore, job_config, job_inputs, job_key
-from flows.sweep_services import sweep_server, sweep_tracking
 from flows.sweep_state import SweepState
-from twostep.benchmark import BenchmarkError, task_path
+from flows.tracking import DEFAULT_EXPERIMENT, JobRunLog, check_store, job_record
+from twostep.benchmark import BenchmarkError
 from twostep.identity import job_name
 from twostep.pddl import PDDLError
 
 # Errors in what the user asked for: one line, no traceback.
 INPUT_ERRORS: tuple[type[Exception], ...] = (BenchmarkError, PDDLError, JobError)
-DEFAULT_EXPERIMENT = "twostep"
+
+
+class JobStatus(StrEnum):
+    """How a job ended (the ``twostep.status`` tag, the sweep's job records)."""
+
+    SUCCESS = "success"
+    FAILED = "failed"
+    TIMEOUT = "timeout"
 
 
 @dataclass
@@ -51,7 +64,7 @@ class JobOutcome:
     name: str
     key: str
     result: dict[str, Any]  # result.json as written
-    status: str  # success | failed | timeout (the twostep.status tag)
+    status: JobStatus
     error: str | None
     reused: bool
     stats: StepStats = field(default_factory=StepStats)
@@ -61,14 +74,14 @@ class JobOutcome:
     tracking_error: str | None = None  # logging failed; the result itself is safe
 
 
-def job_status(result: dict[str, Any]) -> tuple[str, str | None]:
+def job_status(result: dict[str, Any]) -> tuple[JobStatus, str | None]:
     """``twostep.status`` and ``twostep.error`` of a result.json dict."""
     if result.get("success"):
-        return "success", None
+        return JobStatus.SUCCESS, None
     if result.get("status") == "timeout":
-        return "timeout", result.get("message") or "planner time limit"
+        return JobStatus.TIMEOUT, result.get("message") or "planner time limit"
     message = result.get("error") or result.get("message") or result.get("status") or "failed"
-    return "failed", " ".join(str(message).split())[:500]
+    return JobStatus.FAILED, " ".join(str(message).split())[:500]
 
 
 def failed_result(config: dict[str, Any], error: str) -> dict[str, Any]:
@@ -79,18 +92,10 @@ def failed_result(config: dict[str, Any], error: str) -> dict[str, Any]:
         "agents": config.get("agents"),
         "seed": config.get("seed"),
         "success": False,
-        "status": "failed",
+        "status": JobStatus.FAILED.value,
         "message": error,
         "error": error,
     }
-
-
-def one_line(error: BaseException) -> str:
-    lines = [line for line in str(error).strip().splitlines() if line.strip()]
-    text = lines[0] if lines else ""
-    if isinstance(error, INPUT_ERRORS):
-        return text or type(error).__name__
-    return f"{type(error).__name__}: {text}" if text else type(error).__name__
 
 
 # ----------------------------------------------------------------- computing
@@ -110,12 +115,7 @@ def prefect_target(cfg: TwostepConfig, sweep: SweepState | None) -> tuple[bool, 
         return False, None
     if sweep is not None:
         return bool(sweep.server or sweep.prefect_api_url), None
-    external = cfg.orchestration.prefect_api_url or os.environ.get("PREFECT_API_URL")
-    if external:
-        return True, str(external)
-    from flows.services_cli import prefect_api_url
-
-    running = prefect_api_url(str(cfg.output.root))
+    running = running_prefect_api(cfg.orchestration, str(cfg.output.root))
     if running:
         return True, running
     return mode is True, None
@@ -126,7 +126,14 @@ def _prefect_api(
 ) -> tuple[Any, bool]:
     """The server this job uses (started now if the sweep has none yet) and whether
     this job owns it (a single run's own server, stopped when the job ends)."""
-    from flows.servers import ServerError, ServerInfo, ServerSettings, is_healthy, spawn_server
+    from flows.servers import (
+        ServerError,
+        ServerInfo,
+        ServerSettings,
+        is_healthy,
+        spawn_server,
+        sweep_server,
+    )
 
     if sweep is not None:
         return sweep_server(sweep), False
@@ -138,22 +145,35 @@ def _prefect_api(
     return spawn_server(settings, owner_pid=os.getpid()), True
 
 
-def _compute(
-    cfg: TwostepConfig, config: dict[str, Any], name: str, sweep: SweepState | None
-) -> tuple[dict[str, Any], StepStats, dict[str, float]]:
-    """Run the job; return its result dict, step stats and timings (``server_wait_s``;
-    for a flow, ``flow_wall_s``: importing Prefect, waiting, the flow run)."""
-    check_job(cfg)
-    stats = StepStats()
-    use_prefect, external = prefect_target(cfg, sweep)
-    if not use_prefect:
-        run = run_job(cfg, steps=counting_steps(stats), stats=stats)
-        return run.to_dict(), stats, {"server_wait_s": 0.0}
-    if sweep is None and external is None:
-        load_job_task(cfg)  # bad input fails here, before a server starts for this run
-    else:  # the server runs already: the flow parses the task (once)
-        task_path(cfg.domain.name, int(cfg.task), Path(cfg.data.root))
-    # Spawn the server (if it is this job's turn) before importing Prefect: they overlap.
+def compute_job(
+    cfg: TwostepConfig,
+    config: dict[str, Any],
+    name: str,
+    sweep: SweepState | None,
+    stats: StepStats,
+) -> tuple[dict[str, Any], dict[str, float]]:
+    """Build the job once and run it; return its result dict and timings
+    (``server_wait_s``; for a flow, ``flow_wall_s``: importing Prefect, waiting, the flow
+    run). Bad input fails in the build, before any server starts for this run."""
+    with build_job(cfg) as job:
+        stats.add(task_load_s=job.task_load_s)
+        use_prefect, external = prefect_target(cfg, sweep)
+        if not use_prefect:
+            return job.run(counting_steps(stats)).to_dict(), {"server_wait_s": 0.0}
+        return _run_flow(job, cfg, config, name, sweep, external, stats)
+
+
+def _run_flow(
+    job: Job,
+    cfg: TwostepConfig,
+    config: dict[str, Any],
+    name: str,
+    sweep: SweepState | None,
+    external: str | None,
+    stats: StepStats,
+) -> tuple[dict[str, Any], dict[str, float]]:
+    """The job as a Prefect flow on its server (spawned before Prefect is imported, so
+    that the two overlap)."""
     server, owned = _prefect_api(cfg, sweep, external)
     # Read by Prefect at import: the job's console shows warnings, not every API call.
     os.environ.setdefault("PREFECT_LOGGING_LEVEL", str(cfg.orchestration.prefect_log_level))
@@ -166,14 +186,13 @@ def _compute(
         start = time.perf_counter()
         wait_until_healthy(server)
         waited = time.perf_counter() - start
-        result, stats = run_flow(
-            config, server.api_url, name, _flow_tags(config, sweep), dask_address
-        )
+        tags = _flow_tags(config, sweep)
+        result = run_flow(job, config, server.api_url, name, tags, dask_address, stats)
     finally:
         if owned:
             flush_to_server()
             stop_server(server)
-    return result, stats, {"server_wait_s": waited, "flow_wall_s": time.perf_counter() - flow_start}
+    return result, {"server_wait_s": waited, "flow_wall_s": time.perf_counter() - flow_start}
 
 
 def _flow_tags(config: dict[str, Any], sweep: SweepState | None) -> list[str]:
@@ -189,7 +208,7 @@ def _flow_tags(config: dict[str, Any], sweep: SweepState | None) -> list[str]:
     return tags
 
 
-# ----------------------------------------------------------------- tracking
+# ----------------------------------------------------------------- one job
 
 
 def _experiment(cfg: TwostepConfig, sweep: SweepState | None) -> str:
@@ -198,50 +217,17 @@ def _experiment(cfg: TwostepConfig, sweep: SweepState | None) -> str:
     return str(cfg.mlflow.experiment or DEFAULT_EXPERIMENT)
 
 
-def _job_record(
-    outcome: JobOutcome, config: dict[str, Any], files: list[tuple[Path, str | None]]
-) -> dict[str, Any]:
-    """What :func:`flows.tracking.client.log_job_run` logs for this job, as plain data."""
-    from flows.tracking.client import job_metrics, job_params
-
-    return {
-        "key": outcome.key,
-        "name": outcome.name,
-        "status": outcome.status,
-        "error": outcome.error,
-        "reused": outcome.reused,
-        "scripted": bool(outcome.result.get("scripted_llm")),
-        "params": job_params(config),
-        "metrics": job_metrics(outcome.result, outcome.timings),
-        "files": [[str(path), folder] for path, folder in files],
-    }
-
-
-def _record_in_mlflow(cfg: TwostepConfig, sweep: SweepState | None, record: dict[str, Any]) -> str:
-    from flows.tracking.client import Tracker, log_job_run
-
-    uri = str(cfg.mlflow.tracking_uri)
-    parent: str | None = None
-    if sweep is not None and sweep.tracking_uri == uri:
-        tracker, experiment_id, parent = sweep_tracking(sweep)
-    else:
-        tracker = Tracker(uri, cfg.mlflow.artifact_location)
-        experiment_id = tracker.experiment_id(_experiment(cfg, sweep))
-    return log_job_run(tracker, experiment_id, parent, record)
-
-
 def execute_job(
     cfg: object, job_dir: Path, sweep: SweepState | None = None, tracking_worker: bool = False
 ) -> JobOutcome:
     """Run (or reuse) one job and record it; see the module docstring for the order.
 
-    Raises :class:`~flows.tracking.client.TrackingError` when the MLflow store of a single run
+    Raises :class:`~flows.tracking.TrackingError` when the MLflow store of a single run
     cannot be used, before any planning; every other error is a ``failed`` outcome.
 
-    ``tracking_worker`` (single runs of the command): a warm SQLite store is written
-    directly (:mod:`flows.tracking.sqlite`); otherwise MLflow logging goes through a
-    process started now (:mod:`flows.tracking.worker`), which imports MLflow and opens
-    its store while this one runs the job; the job still returns after its run is logged.
+    ``tracking_worker`` (single runs of the command): MLflow's store is prepared while the
+    job runs (:class:`~flows.tracking.JobRunLog`); the job still returns after its run
+    is logged.
     """
     start = time.perf_counter()
     config = job_config(cfg)
@@ -250,34 +236,25 @@ def execute_job(
     name = job_name(config)
     tracking = bool(cfg.mlflow.enabled)
     if tracking and sweep is None:
-        from flows.tracking.client import check_store
-
         check_store(str(cfg.mlflow.tracking_uri), float(cfg.mlflow.connect_timeout_s))
     store = JobStore(str(cfg.orchestration.job_store))
     stored = store.load_or_claim(key) if cfg.orchestration.reuse_results else None
     experiment = _experiment(cfg, sweep)
     uri = str(cfg.mlflow.tracking_uri)
     logged = stored is not None and f"{uri} {experiment}" in store.logged_to(key)
-    worker, light = None, None
-    if tracking and tracking_worker and sweep is None and not logged:
-        from flows.tracking.sqlite import SqliteJobLog
-
-        # A warm SQLite store takes the run's rows directly (milliseconds); otherwise
-        # MLflow is imported in a helper process while the job runs.
-        light = SqliteJobLog.open(uri, experiment, cfg.mlflow.artifact_location)
-        if light is None:
-            from flows.tracking.worker import TrackingWorker
-
-            worker = TrackingWorker.start(uri, cfg.mlflow.artifact_location, experiment)
+    run_log = None
+    if tracking and not logged:
+        location = cfg.mlflow.artifact_location
+        run_log = JobRunLog.open(uri, location, experiment, sweep, single_run=tracking_worker)
     stats, error, details, input_error = StepStats(), None, None, False
     compute_timings: dict[str, float] = {"server_wait_s": 0.0}
     if stored is not None:
         result = stored
     else:
         try:
-            result, stats, compute_timings = _compute(cfg, config, name, sweep)
+            result, compute_timings = compute_job(cfg, config, name, sweep, stats)
         except INPUT_ERRORS as exc:
-            error, input_error = one_line(exc), True
+            error, input_error = one_line(exc, name_type=False), True
         except Exception as exc:
             error, details = one_line(exc), traceback.format_exc()
         if error is None:
@@ -311,26 +288,45 @@ def execute_job(
     if details:
         (job_dir / "error.txt").write_text(details)
     tracking_start = time.perf_counter()
-    if tracking and not logged:
-        try:
-            record = _job_record(outcome, config, files)
-            run_id = light.log(record) if light is not None else None
-            if run_id is not None:
-                outcome.mlflow_run_id = run_id
-            elif worker is not None:
-                outcome.mlflow_run_id = worker.log(record)
-            else:
-                outcome.mlflow_run_id = _record_in_mlflow(cfg, sweep, record)
-            store.mark_logged(key, uri, experiment, outcome.mlflow_run_id)
-        except Exception as exc:  # the result is stored; the next run logs it again
-            outcome.tracking_error = one_line(exc)
-            print(
-                f"warning: {name}: not logged to MLflow: {outcome.tracking_error}", file=sys.stderr
-            )
-    if worker is not None:
-        worker.close()
+    if run_log is not None:
+        _log_run(run_log, outcome, config, files, store, uri, experiment)
     # With MLflow logging: what the job cost end to end (the progress record, the bench).
     outcome.timings["tracking_s"] = time.perf_counter() - tracking_start
     outcome.timings["job_wall_time_s"] = job_wall = time.perf_counter() - start
     outcome.timings["orchestration_overhead_s"] = max(0.0, job_wall - work)
     return outcome
+
+
+def _log_run(
+    run_log: JobRunLog,
+    outcome: JobOutcome,
+    config: dict[str, Any],
+    files: list[tuple[Path, str | None]],
+    store: JobStore,
+    uri: str,
+    experiment: str,
+) -> None:
+    """Log the job to its MLflow run and remember where; a failure is a warning (the
+    result is stored: the next run logs it again)."""
+    try:
+        record = job_record(
+            key=outcome.key,
+            name=outcome.name,
+            status=outcome.status.value,
+            error=outcome.error,
+            reused=outcome.reused,
+            config=config,
+            result=outcome.result,
+            timings=outcome.timings,
+            files=files,
+        )
+        outcome.mlflow_run_id = run_log.log(record)
+        store.mark_logged(outcome.key, uri, experiment, outcome.mlflow_run_id)
+    except Exception as exc:
+        outcome.tracking_error = one_line(exc)
+        print(
+            f"warning: {outcome.name}: not logged to MLflow: {outcome.tracking_error}",
+            file=sys.stderr,
+        )
+    finally:
+        run_log.close()

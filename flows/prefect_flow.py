@@ -1,26 +1,55 @@
-"""The Prefect flow of one job: (domain, task, method, N, seed) -> result.json dict.
+"""The Prefect flow of one job and its tasks: each task calls one library function, the
+library keeps the control flow.
 
-The flow holds no planning logic: it loads the job's config and calls
-:func:`flows.step_stats.run_job` with the task-wrapped steps of :mod:`flows.tasks`, so each
-planner call, LLM call, state progression and scoring shows up as a task run. Its
-parameter is the job's resolved config (plain JSON, shown in the Prefect UI).
+:func:`run_flow` runs a built job (:class:`flows.build.Job`) as the flow ``twostep-job``
+on a given API server. The flow's parameter is the job's resolved config (plain JSON,
+shown in the Prefect UI); its body runs the job with :func:`prefect_steps`, so each
+planner call, LLM call, state progression and scoring shows up as a task run. Task
+results are persisted under ``orchestration.result_storage``; no ephemeral server is
+started (a missing server is an error, not a silent 10-second start-up); the Dask task
+runner is used when ``orchestration.task_runner=dask``.
 
-:func:`run_flow` runs it against a given API server with this job's settings: task
-results persisted under ``orchestration.result_storage``, no ephemeral server (a
-missing server is an error, not a silent 10-second start-up), and the Dask task runner
-when ``orchestration.task_runner=dask``.
+=================  =================================================  ===================
+task               library function                                   cache / retries
+=================  =================================================  ===================
+``plan``           :func:`twostep.planner.plan_pddl`                  cached on PDDL text
+``generate``       :func:`~twostep.decomposers.llm.generate_subgoal`  no (see below)
+``translate``      :func:`~twostep.decomposers.llm.translate_subgoal` no (see below)
+``progress_state`` :func:`twostep.methods.steps.progress`             no (microseconds)
+``score``          :func:`twostep.methods.steps.score`                no (milliseconds)
+=================  =================================================  ===================
+
+Cache keys are explicit (``cache_key_fn``): Prefect's INPUTS policy would hash Python
+objects, and a :class:`~twostep.pddl.Problem` holds frozensets whose iteration order,
+hence pickle, changes between processes. ``plan`` is keyed on the PDDL text the planner
+reads, the planner settings, the Fast Downward wheel version and :data:`PLAN_VERSION`.
+Results persist under ``orchestration.result_storage``, so a cache hit survives the
+process, the sweep and a ``kill -9``. A planner crash is not cached (the task fails; the
+method still gets the crash as a status).
+
+The LLM tasks exist for observability only: the LLM client owns the one answer cache
+(its disk cache, which replay reads) and the one retry loop, so these tasks neither
+cache nor retry. A failed LLM call is the job's outcome (``llm_error``), not a task
+crash: the task ends in a state named :data:`LLM_ERROR_STATE`, with no traceback.
 """
 
 from __future__ import annotations
 
 import contextlib
+import hashlib
+import json
 import logging
-from collections.abc import Mapping, Sequence
+import time
+from collections.abc import Callable, Collection, Mapping, Sequence
+from dataclasses import asdict
+from functools import cache
+from importlib import metadata
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from prefect import flow, tags
-from prefect.context import SettingsContext
+from prefect import State, flow, tags, task
+from prefect.cache_policies import NO_CACHE
+from prefect.context import SettingsContext, TaskRunContext
 from prefect.settings import (
     PREFECT_API_URL,
     PREFECT_FLOWS_HEARTBEAT_FREQUENCY,
@@ -29,23 +58,251 @@ from prefect.settings import (
     Settings,
     get_current_settings,
 )
+from prefect.states import Completed
+from prefect.utilities.annotations import quote
 
-from flows.config import typed
-from flows.step_stats import StepStats, run_job
-from flows.tasks import prefect_steps
+from flows.step_stats import StepStats
+from twostep import planner
+from twostep.execution import DEFAULT_SEARCH_BUDGET, ParallelExecution, SearchBudget
+from twostep.methods import Steps
+from twostep.methods.steps import progress, score
+from twostep.pddl import Fact, Problem
+from twostep.planner import PlannerSettings, PlanResult, Status
+
+if TYPE_CHECKING:
+    from flows.build import Job
+
+# Bump when a change in the library makes cached task results stale.
+PLAN_VERSION = "plan-2"  # PlanResult gained cost and the incomplete status
+# The state name of an LLM task whose call failed (see _llm_call_outcome).
+LLM_ERROR_STATE = "LLMError"
+LLMStepResult = tuple[str | None, dict[str, Any]]
 
 
-@flow(name="twostep-job", persist_result=False, validate_parameters=False, log_prints=False)
-def job_flow(job: dict[str, Any]) -> dict[str, Any]:
-    from omegaconf import OmegaConf
+@cache
+def _planner_version() -> str:
+    try:
+        return f"up-fast-downward {metadata.version('up-fast-downward')}"
+    except metadata.PackageNotFoundError:
+        return "up-fast-downward unknown"
 
-    cfg = typed(OmegaConf.create(job))
-    stats = StepStats()
-    orchestration = cfg.orchestration
-    # The steps, the LLM calls among them, as task runs; the library keeps the control flow.
-    steps = prefect_steps(stats, submit=orchestration.task_runner == "dask")
-    result = run_job(cfg, steps=steps, stats=stats)
-    return {"result": result.to_dict(), "stats": stats.to_dict()}
+
+def _digest(data: Any) -> str:
+    blob = json.dumps(data, sort_keys=True, ensure_ascii=False, default=str)
+    return hashlib.sha256(blob.encode()).hexdigest()
+
+
+class PlannerCrashed(Exception):
+    """Raised by the ``plan`` task for a planner error, so the error is not cached."""
+
+    def __init__(self, result: PlanResult) -> None:
+        super().__init__(result)
+        self.result = result
+
+    def __str__(self) -> str:
+        return f"planner error: {self.result.message}"
+
+
+# ----------------------------------------------------------------- planner
+
+
+def plan_cache_key(context: TaskRunContext, parameters: dict[str, Any]) -> str:
+    settings: PlannerSettings = parameters["settings"]
+    return _digest(
+        {
+            "task": "plan",
+            "version": PLAN_VERSION,
+            "planner": _planner_version(),
+            "domain": parameters["domain_pddl"],
+            "problem": parameters["problem_pddl"],
+            "settings": asdict(settings),
+        }
+    )
+
+
+@task(name="plan", persist_result=True, cache_key_fn=plan_cache_key)
+def plan_task(domain_pddl: str, problem_pddl: str, settings: PlannerSettings) -> PlanResult:
+    result = planner.plan_pddl(domain_pddl, problem_pddl, settings)
+    if result.status is Status.ERROR:
+        raise PlannerCrashed(result)
+    return result
+
+
+@task(name="progress_state", cache_policy=NO_CACHE, persist_result=False)
+def progress_task(
+    problem: Problem, plan_steps: Sequence[str], agent_predicates: Collection[str]
+) -> frozenset[Fact]:
+    return progress(problem, plan_steps, agent_predicates)
+
+
+@task(name="score", cache_policy=NO_CACHE, persist_result=False)
+def score_task(
+    problem: Problem,
+    plans: Sequence[Sequence[str]],
+    agent_predicates: Collection[str],
+    mode: str,
+    budget: SearchBudget,
+) -> ParallelExecution:
+    return score(problem, plans, agent_predicates, mode, budget)
+
+
+# ----------------------------------------------------------------- LLM
+
+
+def _llm_call_outcome(call: Callable[[], LLMStepResult]) -> Any:
+    """Run one LLM step inside its task; a failed LLM call ends the task as a state.
+
+    An :class:`~twostep.llm.client.LLMError` raised in a task would make Prefect log a
+    traceback (and retry, with retries set): the error is the job's one-line outcome, so
+    the task returns it in a ``Completed`` state named ``LLMError`` instead and
+    :func:`_llm_step` raises it again in the caller, as the plain function would.
+    """
+    from twostep.llm.client import LLMError
+
+    try:
+        return call()
+    except LLMError as error:
+        return Completed(name=LLM_ERROR_STATE, message=str(error), data=error)
+
+
+@task(name="generate", cache_policy=NO_CACHE, persist_result=False, retries=0)
+def generate_task(
+    client: Any,
+    task: Any,
+    agents: int,
+    helper: int,
+    earlier: Sequence[str],
+    seed: int,
+    *,
+    fixed_example: bool = True,
+) -> Any:
+    from twostep.decomposers.llm import generate_subgoal
+
+    return _llm_call_outcome(
+        lambda: generate_subgoal(
+            client, task, agents, helper, list(earlier), seed, fixed_example=fixed_example
+        )
+    )
+
+
+@task(name="translate", cache_policy=NO_CACHE, persist_result=False, retries=0)
+def translate_task(
+    client: Any,
+    task: Any,
+    english: str,
+    seed: int,
+    *,
+    helper: int = 1,
+    earlier: dict[int, str] | None = None,
+) -> Any:
+    from twostep.decomposers.llm import translate_subgoal
+
+    return _llm_call_outcome(
+        lambda: translate_subgoal(client, task, english, seed, helper=helper, earlier=earlier)
+    )
+
+
+def _llm_step(task_fn: Any, stats: StepStats) -> Callable[..., LLMStepResult]:
+    """``task_fn`` as a library step: same arguments, same result, same exceptions."""
+
+    def call(client: Any, task: Any, *args: Any, **kwargs: Any) -> LLMStepResult:
+        start = time.perf_counter()
+        state = task_fn(quote(client), quote(task), *args, return_state=True, **kwargs)
+        outcome = state.result()  # raises what the task raised (a bug, not an LLM error)
+        failed = isinstance(outcome, BaseException)
+        # a hit of the LLM client's disk cache costs no call; a failed call does
+        cached = not failed and bool(outcome[1].get("cached"))
+        stats.add(
+            llm_calls=0 if cached else 1,
+            llm_cache_hits=1 if cached else 0,
+            llm_wall_s=0.0 if cached else time.perf_counter() - start,
+        )
+        if failed:
+            raise outcome
+        text, exchange = outcome
+        return text, exchange
+
+    return call
+
+
+# ----------------------------------------------------------------- steps
+
+
+def _run(task_fn: Any, submit: bool, *args: Any, **kwargs: Any) -> State[Any]:
+    """Run a task and return its final state: inline, or on the flow's task runner."""
+    if submit:
+        future = task_fn.submit(*args, **kwargs)
+        future.wait()
+        return future.state  # type: ignore[no-any-return]
+    return task_fn(*args, return_state=True, **kwargs)  # type: ignore[no-any-return]
+
+
+def prefect_steps(stats: StepStats, submit: bool = False) -> Steps:
+    """The pipeline's steps as task runs; ``submit`` sends planner calls to the task runner.
+
+    Only ``plan`` is submitted: it is the step worth moving to a Dask worker, while
+    progress_state and score take micro- to milliseconds and run inline.
+    """
+
+    def plan(problem: Problem, settings: PlannerSettings) -> PlanResult:
+        if problem.goal.holds(problem.init):
+            # The library answers this without calling the planner: no task run needed.
+            return planner.plan(problem, settings)
+        domain_pddl, problem_pddl = planner.planner_input(problem)
+        state = _run(plan_task, submit, domain_pddl, problem_pddl, settings)
+        outcome = state.result(raise_on_failure=False)
+        if isinstance(outcome, PlannerCrashed):
+            result = outcome.result
+        elif isinstance(outcome, BaseException):
+            raise outcome
+        else:
+            result = outcome
+        cached = state.name == "Cached"
+        stats.add(
+            plan_calls=0 if cached else 1,
+            plan_cache_hits=1 if cached else 0,
+            planner_wall_s=0.0 if cached else result.wall_time_s,
+        )
+        return result
+
+    def progress_step(
+        problem: Problem, plan_steps: Sequence[str], agent_predicates: Collection[str]
+    ) -> frozenset[Fact]:
+        # quote(): Prefect must not walk the problem's fact sets looking for futures; it
+        # hands the task the problem itself.
+        environment: frozenset[Fact] = progress_task(
+            quote(problem),  # type: ignore[call-overload]
+            list(plan_steps),
+            list(agent_predicates),
+        )
+        return environment
+
+    def score_step(
+        problem: Problem,
+        plans: Sequence[Sequence[str]],
+        agent_predicates: Collection[str],
+        mode: str = "exact",
+        budget: SearchBudget = DEFAULT_SEARCH_BUDGET,
+    ) -> ParallelExecution:
+        execution: ParallelExecution = score_task(
+            quote(problem),  # type: ignore[call-overload]
+            [list(p) for p in plans],
+            list(agent_predicates),
+            mode,
+            budget,
+        )
+        return execution
+
+    return Steps(
+        generate=_llm_step(generate_task, stats),
+        translate=_llm_step(translate_task, stats),
+        plan=plan,
+        progress=progress_step,
+        score=score_step,
+    )
+
+
+# ----------------------------------------------------------------- the flow
 
 
 def _task_runner(config: Mapping[str, Any], dask_address: str | None) -> Any:
@@ -107,22 +364,33 @@ def job_settings(api_url: str, storage: Path) -> SettingsContext:
 
 
 def run_flow(
+    built: Job,
     config: Mapping[str, Any],
     api_url: str,
     name: str,
     flow_tags: Sequence[str] = (),
     dask_address: str | None = None,
-) -> tuple[dict[str, Any], StepStats]:
-    """Run the job's flow on the server at ``api_url``; raise the job's error if it failed."""
+    stats: StepStats | None = None,
+) -> dict[str, Any]:
+    """Run the ``built`` job as its flow on the server at ``api_url`` (``config``: its
+    resolved config, the flow's parameter); return its result.json dict, counting its task
+    runs in ``stats``. Raise the job's error if it failed."""
     quiet_logs(str(config["orchestration"]["prefect_log_level"]))
     storage = Path(config["orchestration"]["result_storage"])
     storage.mkdir(parents=True, exist_ok=True)
+    counted = stats if stats is not None else StepStats()
+    submit = config["orchestration"]["task_runner"] == "dask"
+
+    @flow(name="twostep-job", persist_result=False, validate_parameters=False, log_prints=False)
+    def job_flow(job: dict[str, Any]) -> dict[str, Any]:
+        # The steps, the LLM calls among them, as task runs; the library keeps the control flow.
+        return built.run(prefect_steps(counted, submit=submit)).to_dict()
+
     options: dict[str, Any] = {"flow_run_name": name}
     runner = _task_runner(config, dask_address)
     if runner is not None:
         options["task_runner"] = runner
     with job_settings(api_url, storage), tags(*flow_tags):
         state = job_flow.with_options(**options)(dict(config), return_state=True)
-    output = state.result()  # raises the exception the job raised
-    stats = StepStats(**output["stats"])
-    return output["result"], stats
+    result: dict[str, Any] = state.result()  # raises the exception the job raised
+    return result

@@ -1,4 +1,5 @@
-"""One Prefect API server for a whole sweep: started on demand, watched, stopped by PID.
+"""The Prefect API servers we start: one for a whole sweep, started on demand, watched,
+stopped by PID (long-lived ones are :mod:`flows.services`).
 
 Without a server every process that runs a flow starts its own temporary one (8 s with
 a warm database, over 30 s on a fresh one: STACK-NOTES). A sweep instead shares one
@@ -36,9 +37,12 @@ import urllib.request
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from twostep.files import write_json_atomic
+
+if TYPE_CHECKING:
+    from flows.sweep_state import SweepState
 
 # Server-side services a sweep does not use: schedules, deployments, work pools, pauses.
 # The task run recorder and event persister stay on: they make task runs visible.
@@ -178,7 +182,7 @@ def is_healthy(api_url: str, timeout_s: float = 2.0) -> bool:
 
     A plain HTTP probe on purpose: it runs before Prefect is imported (2 s), e.g. in
     every single run looking for the services. Everything else goes through Prefect's
-    client (:func:`flows.sweep_services.count_flow_runs`).
+    client (:func:`count_flow_runs`).
     """
     try:
         with urllib.request.urlopen(f"{api_url}/health", timeout=timeout_s) as response:
@@ -291,6 +295,62 @@ def shared_server(info_path: Path, settings: ServerSettings, owner_pid: int) -> 
         info = spawn_server(settings, owner_pid)
         write_json_atomic(info_path, info.to_dict())
         return info
+
+
+def sweep_server(state: SweepState) -> ServerInfo:
+    """The sweep's Prefect server: the user's, or ours, started by the first job asking."""
+    if state.prefect_api_url:
+        return ServerInfo(state.prefect_api_url, None, time.time(), 30.0)
+    if state.server is None:
+        raise RuntimeError("this sweep runs without Prefect (orchestration.prefect=false)")
+    if state.hostname and socket.gethostname() != state.hostname:
+        # e.g. SLURM: the launching host's 127.0.0.1 is out of reach, and so is its PID.
+        raise ServerError(
+            f"this job runs on {socket.gethostname()}, the sweep was launched on "
+            f"{state.hostname}: set orchestration.prefect_api_url to a server both reach "
+            "(or orchestration.prefect=false)"
+        )
+    return shared_server(
+        state.folder / "server.json", ServerSettings(**state.server), state.main_pid
+    )
+
+
+def stop_sweep_server(state: SweepState) -> bool:
+    """Stop the server the sweep started (if any); True if there was one."""
+    info = read_info(state.folder / "server.json")
+    if info is None:
+        return False
+    stop_server(info)
+    return True
+
+
+def count_flow_runs(api_url: str, tag: str) -> dict[str, int] | None:
+    """Flow runs with ``tag`` on the server, by state type (the server's own record)."""
+    from prefect.client.orchestration import get_client
+    from prefect.client.schemas.filters import FlowRunFilter, FlowRunFilterTags
+    from prefect.settings import PREFECT_API_URL, temporary_settings
+
+    counts: dict[str, int] = {}
+    flow_run_filter = FlowRunFilter(tags=FlowRunFilterTags(all_=[tag]))
+    page = 200
+    try:
+        with (
+            temporary_settings(updates={PREFECT_API_URL: api_url}),
+            get_client(sync_client=True) as client,
+        ):
+            offset = 0
+            while True:
+                runs = client.read_flow_runs(
+                    flow_run_filter=flow_run_filter, limit=page, offset=offset
+                )
+                for run in runs:
+                    state_type = run.state.type.value if run.state is not None else "UNKNOWN"
+                    counts[state_type] = counts.get(state_type, 0) + 1
+                if len(runs) < page:
+                    return counts
+                offset += len(runs)
+    except Exception:  # the count is part of the summary, never a reason to fail
+        return None
 
 
 # ----------------------------------------------------------------- the watchdog

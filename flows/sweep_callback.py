@@ -17,14 +17,13 @@
     the server, stops the server it started by PID, closes the cluster, ends the MLflow
     parent run, and exits 1 if a job failed.
 
-The shared services themselves: :mod:`flows.sweep_services`.
+The sweep's Prefect server: :mod:`flows.servers`; its MLflow parent run: :mod:`flows.tracking`.
 """
 
 from __future__ import annotations
 
 import atexit
 import contextlib
-import json
 import os
 import socket
 import sys
@@ -39,8 +38,14 @@ from omegaconf import DictConfig
 
 from flows.console import footer, header
 from flows.environment import quiet_defaults
-from flows.servers import ServerSettings, is_healthy, pid_alive, read_info
-from flows.sweep_services import count_flow_runs, stop_sweep_server
+from flows.servers import (
+    ServerSettings,
+    count_flow_runs,
+    is_healthy,
+    pid_alive,
+    read_info,
+    stop_sweep_server,
+)
 from flows.sweep_state import SweepState, count_jobs, job_records, sweep_key, sweep_overrides
 from twostep.files import write_json_atomic
 
@@ -118,7 +123,7 @@ class SweepCallback(Callback):
             overrides=overrides,
         )
         if config.mlflow.enabled:
-            from flows.tracking.client import TrackingError, check_store, experiment_name_for
+            from flows.tracking import TrackingError, check_store, experiment_name_for
 
             try:
                 check_store(str(config.mlflow.tracking_uri), float(config.mlflow.connect_timeout_s))
@@ -133,13 +138,9 @@ class SweepCallback(Callback):
         # Read by Prefect at import, here and in Dask workers started below.
         os.environ.setdefault("PREFECT_LOGGING_LEVEL", str(orchestration.prefect_log_level))
         if orchestration.prefect is not False:  # null (auto): sweeps always use Prefect
-            from flows.services_cli import prefect_api_url
+            from flows.services import running_prefect_api
 
-            external = (
-                orchestration.prefect_api_url
-                or os.environ.get("PREFECT_API_URL")
-                or prefect_api_url(str(config.output.root))
-            )
+            external = running_prefect_api(orchestration, str(config.output.root))
             if external:
                 state.prefect_api_url = str(external)
             else:
@@ -203,10 +204,9 @@ class SweepCallback(Callback):
 
     @staticmethod
     def _end_parent_run(state: SweepState, summary: Mapping[str, Any], failed: bool) -> None:
-        record = state.folder / "mlflow.json"
-        if state.tracking_uri is None or not record.is_file():
-            return  # no job logged anything (all reused and recorded before)
-        from flows.tracking.client import Tracker
+        if state.tracking_uri is None:
+            return
+        from flows.tracking import end_sweep_run
 
         metrics = {
             key: float(value)
@@ -214,7 +214,6 @@ class SweepCallback(Callback):
             if isinstance(value, int | float) and not isinstance(value, bool)
         }
         try:
-            parent = json.loads(record.read_text())["parent_run_id"]
-            Tracker(state.tracking_uri).end_sweep(parent, metrics, failed)
+            end_sweep_run(state, metrics, failed)
         except Exception as error:  # the jobs are recorded; the summary metrics are extra
             print(f"warning: could not end the MLflow parent run: {error}", file=sys.stderr)

@@ -21,7 +21,13 @@ import pytest
 from twostep.benchmark import load_task
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.execution import parallel_length
-from twostep.methods.twostep import check_run, run_multi_agent, run_single_agent, run_twostep
+from twostep.methods import (
+    MethodRequest,
+    check_run,
+    run_multi_agent,
+    run_single_agent,
+    run_twostep,
+)
 from twostep.multiagent import compile_multi_agent_problem, split_plan
 from twostep.pddl import PDDLError, domain_to_pddl, parse_goal, parse_problem, problem_to_pddl
 from twostep.pddl.origins import compiled_plan, original_plan
@@ -236,16 +242,15 @@ def test_multi_agent_compilation_adds_agents_as_objects() -> None:
 
 def test_sa_ma_twostep_run_on_the_adl_kitchen() -> None:
     task = kitchen()
-    sa = run_single_agent(task, OPTIMAL)
+    sa = run_single_agent(MethodRequest(task, planner=OPTIMAL))
     assert sa.success and sa.exec_length == 9
-    ma = run_multi_agent(task, 2, AGENT_PREDICATES, OPTIMAL, sa_length=sa.exec_length)
+    ma = run_multi_agent(
+        MethodRequest(task, 2, OPTIMAL, AGENT_PREDICATES, sa_length=sa.exec_length)
+    )
     assert ma.success
     check_run(task.problem, ma, AGENT_PREDICATES)
     assert all(step.split()[1] == "alice" for p in ma.plans.values() for step in p)
-    twostep = run_twostep(
-        task, 2, GoalSplitDecomposer(AGENT_PREDICATES), AGENT_PREDICATES, OPTIMAL,
-        sa_length=sa.exec_length,
-    )  # fmt: skip
+    twostep = run_twostep(MethodRequest(task, 2, OPTIMAL, AGENT_PREDICATES, GoalSplitDecomposer(AGENT_PREDICATES), sa_length=sa.exec_length))  # fmt: skip
     check_run(task.problem, twostep, AGENT_PREDICATES)
     # goal-split gives the lamp to the helper (walk + toggle: 2 steps); the main agent's
     # cheapest plan for the rest is the 8 other steps of P01_PLAN, which never touch
@@ -412,12 +417,12 @@ def test_alfworld_own_domain_runs_sa_ma_twostep(tmp_path: Path) -> None:
     assert sorted(f[0] for f in problem.goal.positive) == ["inreceptacle", "inreceptacle", "ishot"]
     agents = (*AGENT_PREDICATES, "holdsanyreceptacleobject")
     settings = PlannerSettings(search_time_limit_s=60)
-    sa = run_single_agent(task, settings)
+    sa = run_single_agent(MethodRequest(task, planner=settings))
     assert sa.success
-    ma = run_multi_agent(task, 2, agents, settings, sa_length=sa.exec_length)
+    ma = run_multi_agent(MethodRequest(task, 2, settings, agents, sa_length=sa.exec_length))
     assert ma.success
     check_run(problem, ma, agents)
-    twostep = run_twostep(task, 2, GoalSplitDecomposer(agents), agents, settings)
+    twostep = run_twostep(MethodRequest(task, 2, settings, agents, GoalSplitDecomposer(agents)))
     assert twostep.success
     check_run(problem, twostep, agents)
     assert twostep.exec_length is not None and sa.exec_length is not None

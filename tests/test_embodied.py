@@ -281,10 +281,12 @@ def test_single_agent_plans_of_the_four_tasks_execute(
 
 def _expert_twostep_plans(task_id: int) -> tuple[Problem, list[list[str]]]:
     from twostep.decomposers.expert import ExpertDecomposer
-    from twostep.methods.twostep import run_twostep
+    from twostep.methods import MethodRequest, run_twostep
 
     task = load_task("alfworld", task_id, DATA)
-    run = run_twostep(task, 2, ExpertDecomposer(), ["at", "handempty", "holding"], FAST)
+    run = run_twostep(
+        MethodRequest(task, 2, FAST, ["at", "handempty", "holding"], ExpertDecomposer())
+    )
     assert run.agent_order == ["agent1", "agent0"]
     return task.problem, [run.plans[a] for a in run.agent_order]
 

@@ -18,8 +18,8 @@ from hydra import compose, initialize_config_dir
 from omegaconf import DictConfig
 from PIL import Image
 
+from flows.build import run_config
 from flows.config import register, typed
-from flows.step_stats import run_job
 from tests.conftest import BLOCKS_DOMAIN, FIXTURES, blocks_problem
 from tests.test_cli import REPO, run_cli
 
@@ -91,12 +91,12 @@ def test_executor_config_alfworld_embodied_by_default() -> None:
 
 def test_alfworld_symbolic_executor_has_no_embodied_fields() -> None:
     cfg = typed(make("domain=alfworld", "task=1", "method=sa", "executor=symbolic"))
-    result = run_job(cfg).to_dict()
+    result = run_config(cfg).to_dict()
     assert result["success"]
     embodied = {"executor", "embodied_status", "embodied_length", "waits", "backoffs", "embodied"}
     assert not embodied & set(result)
     # the same job embodied: the fields appear and the execution replays the SA plan
-    embodied_run = run_job(typed(make("domain=alfworld", "task=1", "method=sa"))).to_dict()
+    embodied_run = run_config(typed(make("domain=alfworld", "task=1", "method=sa"))).to_dict()
     assert embodied <= set(embodied_run) and embodied_run["embodied_status"] == "success"
     steps = embodied_run["embodied_trace"]["trace"]
     assert [t["action"] for t in steps if t.get("applied")] == result["plans"]["agent0"]
@@ -169,7 +169,7 @@ def test_fallback_if_longer_true_and_false(tmp_path: Path) -> None:
             "domain.agent_predicates=[arm-empty,holding]", "task=1", "decomposer=expert",
             f"method.fallback_if_longer={flag}",
         ])  # fmt: skip
-        results[flag] = run_job(typed(cfg)).to_dict()
+        results[flag] = run_config(typed(cfg)).to_dict()
     kept, fell_back = results["false"], results["true"]
     assert kept["sa_length"] == fell_back["sa_length"] == 2
     assert kept["fallback"] is None and kept["exec_length"] > 2

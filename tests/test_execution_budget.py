@@ -9,14 +9,14 @@ from __future__ import annotations
 
 from collections.abc import Collection, Iterator, Sequence
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 from hydra import compose, initialize_config_dir
 from hypothesis import HealthCheck, given, settings
 
-from flows.build import JobError, check_job, search_budget
+from flows.build import JobError, check_job, run_config, search_budget
 from flows.config import register, typed
-from flows.step_stats import run_job
 from tests.test_execution import TRACKS, problem
 from tests.test_execution_scaling import STAGGERED, two_hub_tracks, two_hub_tracks_text
 from tests.test_independent_checks import _brute_force, cases
@@ -27,8 +27,8 @@ from twostep.execution import (
     check_schedule,
     parallel_length,
 )
-from twostep.methods import twostep as pipeline
-from twostep.methods.twostep import Steps
+from twostep.methods import MethodRequest, Steps
+from twostep.methods.steps import score
 from twostep.pddl import Problem
 
 CONF = Path(__file__).resolve().parent.parent / "conf"
@@ -64,13 +64,17 @@ def test_zero_time_budget_brackets_the_brute_force_optimum(case) -> None:
 def test_pipeline_score_passes_its_budget_to_the_search() -> None:
     text, plans = two_hub_tracks_text(STAGGERED, 14)
     prob = problem(TRACKS, text)
-    budgeted = pipeline.score(prob, plans, ["ready"], "exact", SearchBudget(0, None))
-    unlimited = pipeline.score(prob, plans, ["ready"], "exact", SearchBudget(None, None))
+    budgeted = score(prob, plans, ["ready"], "exact", SearchBudget(0, None))
+    unlimited = score(prob, plans, ["ready"], "exact", SearchBudget(None, None))
     # Stopped before any expansion, the greedy schedule is not proven: a gap of one.
     assert (budgeted.exact, unlimited.exact) == (False, True)
     assert budgeted.lower_bound < unlimited.length <= budgeted.length
-    steps = Steps().with_search_budget(SearchBudget(0, None))
-    assert steps.score(prob, plans, ["ready"], "exact") == budgeted
+    request = MethodRequest(
+        SimpleNamespace(problem=prob),  # type: ignore[arg-type]  # the request reads .problem
+        agent_predicates=["ready"],
+        search_budget=SearchBudget(0, None),
+    )
+    assert request.score(plans) == budgeted
 
 
 # ------------------------------------------------------------------- config keys
@@ -116,7 +120,7 @@ def test_config_budget_reaches_the_score_step(
         budget: SearchBudget = DEFAULT_SEARCH_BUDGET,
     ) -> ParallelExecution:
         seen.append(budget)
-        return pipeline.score(problem, plans, agent_predicates, mode, budget)
+        return score(problem, plans, agent_predicates, mode, budget)
 
     cfg = make(
         tmp_path,
@@ -127,6 +131,6 @@ def test_config_budget_reaches_the_score_step(
         "score_max_nodes=7",
         "score_time_limit_s=2.5",
     )
-    result = run_job(cfg, steps=Steps(score=recording_score))
+    result = run_config(cfg, steps=Steps(score=recording_score))
     assert result.success
     assert seen == [SearchBudget(max_nodes=7, time_limit_s=2.5)]

@@ -25,7 +25,7 @@ from flows.sweep_state import count_jobs
 from tests.conftest import blocks_problem
 from tests.test_pipeline import BW, FAST, _task
 from twostep.decomposers.goal_split import GoalSplitDecomposer
-from twostep.methods.twostep import run_single_agent, run_twostep
+from twostep.methods import MethodRequest, run_single_agent, run_twostep
 from twostep.report import build_report, render_markdown
 from twostep.report.planning_time import planning_time_view, view_rows
 
@@ -85,7 +85,7 @@ HUGE = 1000.0  # an SA planner time no real call here comes near
 
 
 def _sa_with_huge_time(task: Any) -> Any:
-    sa = run_single_agent(task, FAST)
+    sa = run_single_agent(MethodRequest(task, planner=FAST))
     return dataclasses.replace(sa.planner_calls[0].result, planner_time_s=HUGE)
 
 
@@ -93,11 +93,13 @@ def test_twostep_with_helpers_does_not_count_the_sa_plan(tmp_path: Path) -> None
     task = _task(tmp_path)  # two towers: goal-split gives the helper one of them
     sa_plan = _sa_with_huge_time(task)
     run = run_twostep(
-        task, 2, GoalSplitDecomposer(BW), BW, FAST, sa_plan=sa_plan, fallback_if_longer=False
+        MethodRequest(
+            task, 2, FAST, BW, GoalSplitDecomposer(BW), sa_plan=sa_plan, fallback_if_longer=False
+        )
     )
     assert run.success and run.fallback is None
     assert [c.role for c in run.planner_calls] == ["helper", "main"]
-    assert "sa_time_included_s" not in run.extra
+    assert run.sa_time_included_s is None
     own = sum(c.result.planner_time_s for c in run.planner_calls)
     assert own <= run.planning_time_s < HUGE
     assert run.planning_time_s == pytest.approx(own + run.state_editing_time_s, abs=1e-6)
@@ -112,10 +114,12 @@ def test_twostep_without_a_helper_counts_the_sa_plan_it_returns(tmp_path: Path) 
     task = _task(tmp_path, one_tower)  # one component: goal-split proposes no helper
     sa_plan = _sa_with_huge_time(task)
     run = run_twostep(
-        task, 2, GoalSplitDecomposer(BW), BW, FAST, sa_plan=sa_plan, fallback_if_longer=False
+        MethodRequest(
+            task, 2, FAST, BW, GoalSplitDecomposer(BW), sa_plan=sa_plan, fallback_if_longer=False
+        )
     )
     assert run.success and run.fallback is not None
-    assert run.extra["sa_time_included_s"] == HUGE
+    assert run.sa_time_included_s == HUGE
     assert run.planning_time_s >= HUGE
 
 

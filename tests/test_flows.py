@@ -26,14 +26,15 @@ from omegaconf import DictConfig
 
 from flows import job as runner
 from flows.artifacts import write_job_files
+from flows.build import Job
 from flows.config import register
-from flows.console import progress_line
+from flows.console import format_summary, progress_line
 from flows.job import execute_job
 from flows.servers import pid_alive, stop_server
-from flows.step_stats import format_summary
 from flows.store import JobStore, job_config, job_key
 from flows.sweep_state import SweepState, record_job
-from flows.tracking.client import TrackingError, job_metrics, job_params
+from flows.tracking import TrackingError
+from flows.tracking.contents import job_metrics, job_params
 from tests.conftest import blocks_problem
 from tests.test_prompts import make_blocksworld_data
 
@@ -188,7 +189,7 @@ def test_crash_is_recorded_with_its_traceback(
     def crash(*args: object, **kwargs: object) -> None:
         raise RuntimeError("planner exploded")
 
-    monkeypatch.setattr(runner, "run_job", crash)
+    monkeypatch.setattr(Job, "run", crash)
     outcome = execute_job(job_cfg(shared, tmp_path, "method=sa", "task=1"), tmp_path / "job")
     assert outcome.status == "failed" and not outcome.input_error
     assert outcome.error == "RuntimeError: planner exploded"
@@ -204,7 +205,7 @@ def test_unusable_tracking_store_fails_before_any_work(
     def no_work(*args: object, **kwargs: object) -> None:
         raise AssertionError("planning started")
 
-    monkeypatch.setattr(runner, "_compute", no_work)
+    monkeypatch.setattr(runner, "compute_job", no_work)
     cfg = job_cfg(shared, tmp_path, f"mlflow.tracking_uri={uri.format(tmp=tmp_path)}")
     with pytest.raises(TrackingError) as info:
         execute_job(cfg, tmp_path / "job")

@@ -22,7 +22,13 @@ from hypothesis import strategies as st
 from twostep.benchmark import load_task
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.execution import ScheduleError, parallel_length
-from twostep.methods.twostep import RunResult, run_multi_agent, run_single_agent, run_twostep
+from twostep.methods import (
+    MethodRequest,
+    RunResult,
+    run_multi_agent,
+    run_single_agent,
+    run_twostep,
+)
 from twostep.multiagent import compile_multi_agent_problem
 from twostep.pddl import Fact, Goal
 from twostep.planner import PlannerSettings
@@ -42,7 +48,7 @@ AGENT_FACTS = {
 
 def test_validator_rejects_invalid_plans(data_root) -> None:
     task = load_task("blocksworld", 2, data_root)
-    plan = run_single_agent(task, FAST).plans["agent0"]
+    plan = run_single_agent(MethodRequest(task, planner=FAST)).plans["agent0"]
     assert len(plan) >= 2
     up_problem = to_up_problem(task.problem)
     assert validate_plan(task.problem, plan, up_problem).valid
@@ -92,9 +98,9 @@ def test_twostep_and_ma_schedules_validate_in_the_compiled_task(
 ) -> None:
     task = load_task(domain, task_id, data_root)
     facts = AGENT_FACTS[domain]
-    twostep = run_twostep(task, agents, GoalSplitDecomposer(facts), facts, FAST)
+    twostep = run_twostep(MethodRequest(task, agents, FAST, facts, GoalSplitDecomposer(facts)))
     _validate_joint(task, twostep, facts)
-    ma = run_multi_agent(task, agents, facts, FAST)
+    ma = run_multi_agent(MethodRequest(task, agents, FAST, facts))
     _validate_joint(task, ma, facts)
 
 
@@ -102,7 +108,7 @@ def test_sequentialised_schedule_with_a_wrong_order_is_rejected(data_root) -> No
     """The check above can fail: swapping two dependent steps makes UP say invalid."""
     task = load_task("grippers", 2, data_root)
     facts = AGENT_FACTS["grippers"]
-    run = run_twostep(task, 2, GoalSplitDecomposer(facts), facts, FAST)
+    run = run_twostep(MethodRequest(task, 2, FAST, facts, GoalSplitDecomposer(facts)))
     compiled, names = compile_multi_agent_problem(task.problem, 2, facts)
     plan = _sequentialise(run, names)
     assert validate_plan(compiled, plan).valid

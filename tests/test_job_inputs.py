@@ -16,6 +16,7 @@ from hydra import compose, initialize_config_dir
 from omegaconf import DictConfig
 
 from flows import job as runner
+from flows.build import Job
 from flows.config import register
 from flows.job import execute_job
 from tests.conftest import blocks_problem
@@ -120,7 +121,7 @@ def test_llm_error_is_a_failed_job_that_a_rerun_tries_again(
 ) -> None:
     data = make_data(tmp_path / "data")
     cfg = job_cfg(data, tmp_path / "out", "task=2", "method=twostep")
-    monkeypatch.setattr(runner, "run_job", LLMFailure())
+    monkeypatch.setattr(Job, "run", LLMFailure())
     LLMFailure.calls = 0
     first = execute_job(cfg, tmp_path / "run1")
     assert first.status == "failed" and "RateLimitError" in str(first.error)

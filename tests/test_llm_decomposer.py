@@ -179,12 +179,14 @@ def test_script_running_out_is_an_error(task: BenchmarkTask) -> None:
 
 def test_pipeline_falls_back_to_single_agent(task: BenchmarkTask, tmp_path: Path) -> None:
     """Through the pipeline with scripted answers: helper accepted / all discarded."""
-    pipeline = pytest.importorskip("twostep.methods.twostep")
+    pipeline = pytest.importorskip("twostep.methods")
     from twostep.planner import PlannerSettings
 
     settings = PlannerSettings(search_time_limit_s=20)
     good = pipeline.run_twostep(
-        task, 2, LLMDecomposer(scripted(GEN_B, PDDL_B)), ["arm-empty", "holding"], settings
+        pipeline.MethodRequest(
+            task, 2, settings, ["arm-empty", "holding"], LLMDecomposer(scripted(GEN_B, PDDL_B))
+        )
     )
     assert good.success and good.scripted_llm
     assert [s["status"] for s in good.subgoals] == ["accepted"]
@@ -193,11 +195,13 @@ def test_pipeline_falls_back_to_single_agent(task: BenchmarkTask, tmp_path: Path
         "agent1",
     }
     bad = pipeline.run_twostep(
-        task,
-        2,
-        LLMDecomposer(scripted(GEN_B, "(:goal (and (on-floor b)))")),
-        ["arm-empty", "holding"],
-        settings,
+        pipeline.MethodRequest(
+            task,
+            2,
+            settings,
+            ["arm-empty", "holding"],
+            LLMDecomposer(scripted(GEN_B, "(:goal (and (on-floor b)))")),
+        )
     )
     assert bad.success and bad.fallback == "no helper subgoal accepted"
     assert [s["status"] for s in bad.subgoals] == ["discarded"]

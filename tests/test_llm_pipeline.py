@@ -18,12 +18,12 @@ import pytest
 import yaml
 from hydra import compose, initialize_config_dir
 
+from flows.build import run_config
 from flows.config import register
-from flows.step_stats import run_job
 from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.llm import LLMDecomposer
 from twostep.llm import LLMClient, LLMSettings
-from twostep.methods.twostep import RunResult, check_run, run_twostep
+from twostep.methods import MethodRequest, RunResult, check_run, run_twostep
 from twostep.planner import PlannerSettings
 
 REPO = Path(__file__).resolve().parent.parent
@@ -58,7 +58,7 @@ def assert_valid_schedule(task: BenchmarkTask, result: RunResult) -> None:
 
 
 def test_good_subgoal_is_planned_in_parallel(task: BenchmarkTask) -> None:
-    result = run_twostep(task, 3, scripted(GOOD_EN, GOOD_PDDL, "None"), BW, FAST)
+    result = run_twostep(MethodRequest(task, 3, FAST, BW, scripted(GOOD_EN, GOOD_PDDL, "None")))
     statuses = [(s["helper"], s["status"]) for s in result.subgoals]
     assert statuses == [(1, "accepted"), (2, "stopped")]
     assert result.subgoals[0]["pddl"] == "(and (arm-empty) (on-table b4))"
@@ -109,7 +109,7 @@ def test_bad_answers_are_discarded_and_the_run_succeeds(
 ) -> None:
     if kind == "already true" and ("on-table", "b5") not in task.problem.init:
         pytest.skip("p06 changed: b5 is not on the table initially")
-    result = run_twostep(task, 2, scripted(*answers), BW, FAST)
+    result = run_twostep(MethodRequest(task, 2, FAST, BW, scripted(*answers)))
     [subgoal] = result.subgoals
     assert subgoal["status"] == status, subgoal
     assert subgoal["reason"] and fragment.lower() in subgoal["reason"].lower()
@@ -119,14 +119,16 @@ def test_bad_answers_are_discarded_and_the_run_succeeds(
 
 
 def test_none_for_the_first_helper_falls_back_to_sa(task: BenchmarkTask) -> None:
-    result = run_twostep(task, 3, scripted("none"), BW, FAST)
+    result = run_twostep(MethodRequest(task, 3, FAST, BW, scripted("none")))
     assert [s["status"] for s in result.subgoals] == ["stopped"]
     assert result.fallback == "no helper subgoal proposed"
     assert_valid_schedule(task, result)
 
 
 def test_more_helpers_than_asked_are_ignored(task: BenchmarkTask) -> None:
-    result = run_twostep(task, 2, scripted(GOOD_EN, GOOD_PDDL, GOOD_EN, GOOD_PDDL), BW, FAST)
+    result = run_twostep(
+        MethodRequest(task, 2, FAST, BW, scripted(GOOD_EN, GOOD_PDDL, GOOD_EN, GOOD_PDDL))
+    )
     assert [s["helper"] for s in result.subgoals] == [1]
     assert_valid_schedule(task, result)
 
@@ -136,7 +138,9 @@ def test_whole_goal_and_contradiction_are_discarded(task: BenchmarkTask) -> None
     positive = sorted(task.problem.goal.positive)[0]
     undo = f"(and (not ({' '.join(positive)})) (arm-empty))"
     result = run_twostep(
-        task, 3, scripted(english("everything"), whole, english("undo"), undo), BW, FAST
+        MethodRequest(
+            task, 3, FAST, BW, scripted(english("everything"), whole, english("undo"), undo)
+        )
     )
     reasons = [s["reason"] for s in result.subgoals]
     assert [s["status"] for s in result.subgoals] == ["discarded", "discarded"]
@@ -205,18 +209,18 @@ def test_replay_with_network_blocked_gives_identical_result(
     ]
     monkeypatch.setenv("OPENAI_API_KEY", "fake-test-key-not-real-000000")
     monkeypatch.setattr(litellm, "completion", provider)
-    live = run_job(compose("config", overrides=overrides)).to_dict()
+    live = run_config(compose("config", overrides=overrides)).to_dict()
     assert len(calls) == 3 and [s["status"] for s in live["subgoals"]] == ["accepted", "stopped"]
 
     monkeypatch.setattr(litellm, "completion", None)  # the network is gone
     monkeypatch.delenv("OPENAI_API_KEY")
-    replayed = run_job(compose("config", overrides=[*overrides, "llm.mode=replay"])).to_dict()
+    replayed = run_config(compose("config", overrides=[*overrides, "llm.mode=replay"])).to_dict()
     assert strip_timings(replayed) == strip_timings(live)
     assert "fake-test-key" not in json.dumps(live) + json.dumps(replayed)
 
     # a replay of a request that was never recorded fails clearly (other seed)
     with pytest.raises(Exception, match=r"(?i)cache"):
-        run_job(compose("config", overrides=[*overrides, "llm.mode=replay", "seed=7"]))
+        run_config(compose("config", overrides=[*overrides, "llm.mode=replay", "seed=7"]))
 
 
 def test_cli_with_scripted_answers(data_root: Path, tmp_path: Path) -> None:
@@ -316,7 +320,7 @@ def test_failed_llm_call_fails_the_run_without_fallback(
     provider = StandIn(litellm)
     provider.error = transport_error(litellm, kind)
     monkeypatch.setattr(litellm, "completion", provider)
-    result = run_twostep(task, 3, live(tmp_path, retries=2), BW, FAST)
+    result = run_twostep(MethodRequest(task, 3, FAST, BW, live(tmp_path, retries=2)))
     assert (result.status, result.success, result.fallback) == ("llm_error", False, None)
     assert type(provider.error).__name__ in result.message and "3 attempts" in result.message
     assert "generate for agent1" in result.message and FAKE_KEY not in result.message
@@ -331,7 +335,7 @@ def test_bad_live_answer_is_discarded_and_falls_back(
 ) -> None:
     provider = StandIn(litellm, translate="Sorry, I cannot write PDDL.")
     monkeypatch.setattr(litellm, "completion", provider)
-    result = run_twostep(task, 2, live(tmp_path), BW, FAST)
+    result = run_twostep(MethodRequest(task, 2, FAST, BW, live(tmp_path)))
     assert result.status == "solved" and result.success and provider.calls == 2
     assert result.fallback == "no helper subgoal accepted"
     [subgoal] = result.subgoals
@@ -350,7 +354,7 @@ def test_failed_llm_call_through_the_config(
         "decomposer=llm", "llm=gpt-4o", "llm.max_retries=1", "llm.backoff_s=0.001",
         "orchestration.prefect=false", "compare_sa=false",
     ]  # fmt: skip
-    result = run_job(compose("config", overrides=overrides)).to_dict()
+    result = run_config(compose("config", overrides=overrides)).to_dict()
     assert (result["status"], result["success"], result["fallback"]) == ("llm_error", False, None)
     assert "APIConnectionError" in result["message"] and provider.calls == 2
 
@@ -396,8 +400,8 @@ def test_missing_key_under_prefect_is_one_line_and_one_attempt(
     monkeypatch: pytest.MonkeyPatch,
     capfd: pytest.CaptureFixture[str],
 ) -> None:
+    from flows.console import format_summary
     from flows.job import execute_job
-    from flows.step_stats import format_summary
 
     attempts: list[int] = []
     real_complete = LLMClient.complete
@@ -458,7 +462,7 @@ def test_llm_tasks_under_prefect_neither_cache_nor_retry(
 def test_steps_replace_the_llm_calls(task: BenchmarkTask) -> None:
     """Steps.generate / Steps.translate are what the pipeline calls for the LLM decomposer."""
     from twostep.decomposers.llm import generate_subgoal, translate_subgoal
-    from twostep.methods.twostep import Steps
+    from twostep.methods import Steps
 
     seen: list[tuple[str, int]] = []
 
@@ -473,6 +477,8 @@ def test_steps_replace_the_llm_calls(task: BenchmarkTask) -> None:
         return translate_subgoal(*args, **kwargs)
 
     steps = Steps(generate=generate, translate=translate)
-    result = run_twostep(task, 3, scripted(GOOD_EN, GOOD_PDDL, "None"), BW, FAST, steps=steps)
+    result = run_twostep(
+        MethodRequest(task, 3, FAST, BW, scripted(GOOD_EN, GOOD_PDDL, "None"), steps=steps)
+    )
     assert seen == [("generate", 1), ("translate", 1), ("generate", 2)]
     assert [s["status"] for s in result.subgoals] == ["accepted", "stopped"]

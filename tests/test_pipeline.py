@@ -9,7 +9,13 @@ from tests.test_benchmark import make_root
 from twostep.benchmark import load_task
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import GoalSplitDecomposer
-from twostep.methods.twostep import check_run, run_multi_agent, run_single_agent, run_twostep
+from twostep.methods import (
+    MethodRequest,
+    check_run,
+    run_multi_agent,
+    run_single_agent,
+    run_twostep,
+)
 from twostep.planner import PlannerSettings
 from twostep.validation import validate_plan
 
@@ -49,7 +55,7 @@ def _check(task, result) -> None:
 
 def test_single_agent(tmp_path: Path) -> None:
     task = _task(tmp_path)
-    result = run_single_agent(task, FAST)
+    result = run_single_agent(MethodRequest(task, planner=FAST))
     assert result.success and result.exec_length == result.sa_length == len(result.plans["agent0"])
     assert validate_plan(task.problem, result.plans["agent0"]).valid
     assert result.to_dict()["schedule"][0][0][0] == "agent0"
@@ -57,8 +63,8 @@ def test_single_agent(tmp_path: Path) -> None:
 
 def test_multi_agent_is_split_and_scored(tmp_path: Path) -> None:
     task = _task(tmp_path)
-    sa = run_single_agent(task, FAST)
-    result = run_multi_agent(task, 2, BW, FAST, sa_length=sa.sa_length)
+    sa = run_single_agent(MethodRequest(task, planner=FAST))
+    result = run_multi_agent(MethodRequest(task, 2, FAST, BW, sa_length=sa.sa_length))
     assert result.success and result.exec_length is not None
     assert result.exec_length <= result.extra["sequential_length"]
     assert set(result.plans) <= {"agent0", "agent1"}
@@ -67,7 +73,7 @@ def test_multi_agent_is_split_and_scored(tmp_path: Path) -> None:
 
 def test_twostep_goal_split_runs_in_parallel(tmp_path: Path) -> None:
     task = _task(tmp_path)
-    result = run_twostep(task, 2, GoalSplitDecomposer(BW), BW, FAST)
+    result = run_twostep(MethodRequest(task, 2, FAST, BW, GoalSplitDecomposer(BW)))
     assert result.success and result.fallback is None
     assert [s["status"] for s in result.subgoals] == ["accepted"]
     assert set(result.plans) == {"agent0", "agent1"}
@@ -87,7 +93,7 @@ def test_bad_subgoals_are_discarded_with_reasons(tmp_path: Path) -> None:
         "(on-table a)",  # already true
         "(and (on a b) (on b c) (on d e) (on e f))",  # the whole goal
     )
-    result = run_twostep(task, 4, decomposer, BW, FAST)
+    result = run_twostep(MethodRequest(task, 4, FAST, BW, decomposer))
     reasons = [s["reason"] for s in result.subgoals]
     assert [s["status"] for s in result.subgoals] == ["discarded"] * 3
     assert "unknown predicate" in reasons[0]
@@ -101,7 +107,7 @@ def test_bad_subgoals_are_discarded_with_reasons(tmp_path: Path) -> None:
 def test_unsolvable_subgoal_is_discarded(tmp_path: Path) -> None:
     task = _task(tmp_path)
     result = run_twostep(
-        task, 3, Scripted("(and (on a a))", "(and (on d e) (arm-empty))"), BW, FAST
+        MethodRequest(task, 3, FAST, BW, Scripted("(and (on a a))", "(and (on d e) (arm-empty))"))
     )
     assert result.subgoals[0]["status"] == "discarded"
     assert "unsolvable" in result.subgoals[0]["reason"]
@@ -115,8 +121,8 @@ def test_goal_already_holds(tmp_path: Path) -> None:
         tmp_path, blocks_problem("(on-table a) (clear a) (arm-empty)", "(on-table a)", "a")
     )
     for result in (
-        run_single_agent(task, FAST),
-        run_multi_agent(task, 3, BW, FAST),
-        run_twostep(task, 3, GoalSplitDecomposer(BW), BW, FAST),
+        run_single_agent(MethodRequest(task, planner=FAST)),
+        run_multi_agent(MethodRequest(task, 3, FAST, BW)),
+        run_twostep(MethodRequest(task, 3, FAST, BW, GoalSplitDecomposer(BW))),
     ):
         assert result.success and result.exec_length == 0 and result.schedule == []

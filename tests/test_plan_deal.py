@@ -25,10 +25,14 @@ from tests.test_plan_split import (
     sa_result,
 )
 from twostep.benchmark import load_task
-from twostep.dealing import deal as plan_deal
-from twostep.dealing.deal import PlanDeal, deal_plan, eliminate_actions, eliminate_joint
-from twostep.methods.portfolio import Portfolio
-from twostep.methods.twostep import run_single_agent, run_twostep
+from twostep.dealing import deal_plan, eliminate_actions, eliminate_joint, walks
+from twostep.methods import (
+    MethodRequest,
+    Portfolio,
+    run_plan_deal,
+    run_portfolio,
+    run_single_agent,
+)
 from twostep.strips import Grounder
 
 
@@ -42,7 +46,9 @@ def test_two_towers_dealt_to_two_and_four_agents(tmp_path: Path) -> None:
     for agents, length in ((2, 4), (4, 3)):
         deal = deal_plan(task.problem, TWO_TOWERS_PLAN, agents, BW)
         assert deal.walks == 0 and deal.cleaned == 8 and deal.estimate == length
-        run = run_twostep(task, agents, PlanDeal(BW), BW, FAST, sa_plan=sa_result(TWO_TOWERS_PLAN))
+        run = run_plan_deal(
+            MethodRequest(task, agents, FAST, BW, sa_plan=sa_result(TWO_TOWERS_PLAN))
+        )
         _check(task.problem, run, BW)
         assert run.exec_length == length and run.fallback is None
         assert run.decomposer == "plan-deal" and len(run.agent_order) == agents
@@ -101,7 +107,7 @@ def test_termes_agents_walk_to_their_pieces(tmp_path: Path, data_root: Path) -> 
         "(create-block d)", "(move-up d n0 p1 n1)", "(place-block p1 p2 n1 n2)",
     ]  # fmt: skip
     assert deal.walks == 3  # d->p3 for the base, up the ramp for the top, p3->d after
-    run = run_twostep(task, 2, PlanDeal(TERMES), TERMES, FAST, sa_plan=sa_result(TERMES_PLAN))
+    run = run_plan_deal(MethodRequest(task, 2, FAST, TERMES, sa_plan=sa_result(TERMES_PLAN)))
     _check(task.problem, run, TERMES)
     assert run.exec_length == 7 and run.exact
     assert {(r["cut"], r["order"]) for r in run.extra["deal"]} == {
@@ -117,9 +123,9 @@ def test_no_walk_means_the_sa_plan(
 ) -> None:
     # With the walking search allowed no state, agent 0 cannot walk to p3: no deal, the SA
     # plan is the result and ``fallback`` says why.
-    monkeypatch.setattr(plan_deal, "WALK_LIMIT", 0)
+    monkeypatch.setattr(walks, "WALK_LIMIT", 0)
     task = _copy_task(tmp_path, data_root, "termes", TERMES_TOWER)
-    run = run_twostep(task, 2, PlanDeal(TERMES), TERMES, FAST, sa_plan=sa_result(TERMES_PLAN))
+    run = run_plan_deal(MethodRequest(task, 2, FAST, TERMES, sa_plan=sa_result(TERMES_PLAN)))
     assert run.success and run.exec_length == len(TERMES_PLAN)
     assert run.fallback is not None and "walk" in run.fallback
     assert all("error" in row for row in run.extra["deal"])
@@ -129,13 +135,15 @@ def test_longer_than_sa_falls_back(tmp_path: Path) -> None:
     # One tower of two blocks: a single chain (pickup b, stack b c... here a on b): no
     # overlap, the deal equals SA's length, never longer; with one agent nothing is dealt.
     task = _blocks(tmp_path, TWO_TOWERS)
-    run = run_twostep(task, 1, PlanDeal(BW), BW, FAST, sa_plan=sa_result(TWO_TOWERS_PLAN))
+    run = run_plan_deal(MethodRequest(task, 1, FAST, BW, sa_plan=sa_result(TWO_TOWERS_PLAN)))
     assert run.exec_length == 8 and run.fallback == "one agent"
 
 
 def test_portfolio_keeps_the_deal_when_it_is_shortest(tmp_path: Path) -> None:
     task = _blocks(tmp_path, TWO_TOWERS)
-    run = run_twostep(task, 2, Portfolio(BW), BW, FAST, sa_plan=sa_result(TWO_TOWERS_PLAN))
+    run = run_portfolio(
+        MethodRequest(task, 2, FAST, BW, sa_plan=sa_result(TWO_TOWERS_PLAN)), Portfolio()
+    )
     _check(task.problem, run, BW)
     rows = run.extra["candidates"]
     assert rows[-1]["decomposer"] == "plan-deal" and rows[-1]["exec_length"] == 4
@@ -153,8 +161,8 @@ def test_walk_links_kept_when_no_walk_exists(data_root: Path) -> None:
     preds = yaml.safe_load((Path(__file__).parents[1] / "conf/domain/termes.yaml").read_text())
     preds = preds["agent_predicates"]
     task = load_task("termes", 13, data_root)
-    sa = run_single_agent(task, FAST)
-    run = run_twostep(task, 4, PlanDeal(preds), preds, FAST, sa_plan=sa.planner_calls[0].result)
+    sa = run_single_agent(MethodRequest(task, planner=FAST))
+    run = run_plan_deal(MethodRequest(task, 4, FAST, preds, sa_plan=sa.planner_calls[0].result))
     assert run.fallback is None and run.exec_length is not None
     assert sa.exec_length is not None and run.exec_length < sa.exec_length
     _check(task.problem, run, preds)
@@ -171,9 +179,9 @@ def test_real_sa_plans_deal_and_validate(data_root: Path, agents: int) -> None:
             (Path(__file__).parents[1] / "conf" / "domain" / f"{domain}.yaml").read_text()
         )["agent_predicates"]
         task = load_task(domain, 1, data_root)
-        sa = run_single_agent(task, FAST)
-        run = run_twostep(
-            task, agents, PlanDeal(preds), preds, FAST, sa_plan=sa.planner_calls[0].result
+        sa = run_single_agent(MethodRequest(task, planner=FAST))
+        run = run_plan_deal(
+            MethodRequest(task, agents, FAST, preds, sa_plan=sa.planner_calls[0].result)
         )
         assert run.success and run.exec_length is not None and sa.exec_length is not None
         assert run.exec_length <= sa.exec_length
@@ -191,14 +199,14 @@ def test_the_deal_does_not_depend_on_the_hash_seed(data_root: Path, tmp_path: Pa
     import sys
 
     task = load_task("termes", 2, data_root)
-    sa = run_single_agent(task, FAST).planner_calls[0].result
+    sa = run_single_agent(MethodRequest(task, planner=FAST)).planner_calls[0].result
     assert sa.plan is not None
     (tmp_path / "plan.json").write_text(json.dumps(list(sa.plan)))
     script = (
         "import json, sys\n"
         "from pathlib import Path\n"
         "from twostep.benchmark import load_task\n"
-        "from twostep.dealing.deal import deal_plan\n"
+        "from twostep.dealing import deal_plan\n"
         "task = load_task('termes', 2, Path(sys.argv[1]))\n"
         "plan = json.loads(Path(sys.argv[2]).read_text())\n"
         "print(json.dumps(deal_plan(task.problem, plan, 3, ['at', 'has-block']).plans))\n"

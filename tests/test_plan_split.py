@@ -19,7 +19,7 @@ from tests.test_benchmark import make_root
 from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.base import DecompositionRequest
 from twostep.decomposers.plan_split import PlanSplitDecomposer, split_plan
-from twostep.methods.twostep import RunResult, check_run, run_single_agent, run_twostep
+from twostep.methods import MethodRequest, RunResult, check_run, run_single_agent, run_twostep
 from twostep.multiagent import compile_multi_agent_problem
 from twostep.pddl import Goal, Problem, parse_goal
 from twostep.planner import PlannerSettings, PlanResult, Status
@@ -152,7 +152,9 @@ def test_two_independent_towers(tmp_path: Path) -> None:
         assert split.owner == [0, 0, 1, 1] and split.makespan == 4
         assert split.subgoals == [goal(problem, "(and (on a b) (on b c) (arm-empty))")]
     run = run_twostep(
-        task, 2, PlanSplitDecomposer(BW), BW, FAST, sa_plan=sa_result(TWO_TOWERS_PLAN)
+        MethodRequest(
+            task, 2, FAST, BW, PlanSplitDecomposer(BW), sa_plan=sa_result(TWO_TOWERS_PLAN)
+        )
     )
     assert [s["status"] for s in run.subgoals] == ["accepted"] and run.fallback is None
     assert run.exec_length == 4  # each agent builds one tower, 4 actions each, in parallel
@@ -180,7 +182,9 @@ def test_one_tall_tower_gives_partial_progress(tmp_path: Path) -> None:
         goal(problem, "(and (on c d) (arm-empty))"),
     ]
     run = run_twostep(
-        task, 2, PlanSplitDecomposer(BW), BW, FAST, sa_plan=sa_result(TALL_TOWER_PLAN)
+        MethodRequest(
+            task, 2, FAST, BW, PlanSplitDecomposer(BW), sa_plan=sa_result(TALL_TOWER_PLAN)
+        )
     )
     assert [s["status"] for s in run.subgoals] == ["accepted"]
     assert run.exec_length is not None and run.exec_length < len(TALL_TOWER_PLAN)
@@ -213,7 +217,9 @@ def test_barman_three_shakers(tmp_path: Path, data_root: Path) -> None:
         goal(problem, f"(and (contains shot1 cocktail1) (contains shot4 cocktail3) {hands})")
     ]
     run = run_twostep(
-        task, 3, PlanSplitDecomposer(BARMAN), BARMAN, FAST, sa_plan=sa_result(BARMAN_PLAN)
+        MethodRequest(
+            task, 3, FAST, BARMAN, PlanSplitDecomposer(BARMAN), sa_plan=sa_result(BARMAN_PLAN)
+        )
     )
     assert [s["status"] for s in run.subgoals] == ["accepted", "accepted"]
     assert run.exec_length is not None and run.exec_length < len(BARMAN_PLAN)
@@ -241,15 +247,14 @@ def test_termes_tower_helper_builds_the_ramp(tmp_path: Path, data_root: Path) ->
     assert held.subgoals == split.subgoals
     # lama-first's main plan after the ramp is not the shortest (it dismantles the ramp
     # for the base): the joint schedule is valid, and the fallback keeps it from costing.
-    run = run_twostep(
-        task, 2, PlanSplitDecomposer(TERMES), TERMES, FAST, sa_plan=sa_result(TERMES_PLAN),
-        fallback_if_longer=False,
-    )  # fmt: skip
+    run = run_twostep(MethodRequest(task, 2, FAST, TERMES, PlanSplitDecomposer(TERMES), sa_plan=sa_result(TERMES_PLAN), fallback_if_longer=False))  # fmt: skip
     assert [s["status"] for s in run.subgoals] == ["accepted"]
     assert run.plans["agent1"] == ["(create-block d)", "(place-block d p1 n0 n1)"]
     _check(problem, run, TERMES)
     run = run_twostep(
-        task, 2, PlanSplitDecomposer(TERMES), TERMES, FAST, sa_plan=sa_result(TERMES_PLAN)
+        MethodRequest(
+            task, 2, FAST, TERMES, PlanSplitDecomposer(TERMES), sa_plan=sa_result(TERMES_PLAN)
+        )
     )
     assert run.exec_length is not None and run.exec_length <= len(TERMES_PLAN)
     _check(problem, run, TERMES)
@@ -257,9 +262,9 @@ def test_termes_tower_helper_builds_the_ramp(tmp_path: Path, data_root: Path) ->
 
 def test_pipeline_plans_sa_itself_when_not_given(tmp_path: Path) -> None:
     task = _blocks(tmp_path, TWO_TOWERS)
-    run = run_twostep(task, 2, PlanSplitDecomposer(BW), BW, FAST)
+    run = run_twostep(MethodRequest(task, 2, FAST, BW, PlanSplitDecomposer(BW)))
     assert [c.role for c in run.planner_calls][-2:] == ["helper", "main"]
-    assert run.sa_length is not None and "sa_time_included_s" in run.extra
+    assert run.sa_length is not None and run.sa_time_included_s is not None
     assert run.planning_time_s >= sum(c.result.planner_time_s for c in run.planner_calls)
     _check(task.problem, run, BW)
 
@@ -283,7 +288,7 @@ def test_fallback_if_longer(tmp_path: Path) -> None:
             "a b c",
         ),
     )
-    sa = run_single_agent(task, FAST)
+    sa = run_single_agent(MethodRequest(task, planner=FAST))
     assert sa.exec_length == 4
     sa_plan = sa.planner_calls[0].result
 
@@ -295,14 +300,16 @@ def test_fallback_if_longer(tmp_path: Path) -> None:
 
             return [SubgoalProposal(helper=1, pddl="(and (on c a) (arm-empty))")]
 
-    kept = run_twostep(task, 2, Wasteful(), BW, FAST, sa_plan=sa_plan, fallback_if_longer=False)
+    kept = run_twostep(
+        MethodRequest(task, 2, FAST, BW, Wasteful(), sa_plan=sa_plan, fallback_if_longer=False)
+    )
     assert kept.exec_length is not None and kept.exec_length > 4 and kept.fallback is None
     _check(task.problem, kept, BW)
-    back = run_twostep(task, 2, Wasteful(), BW, FAST, sa_plan=sa_plan)
+    back = run_twostep(MethodRequest(task, 2, FAST, BW, Wasteful(), sa_plan=sa_plan))
     assert back.exec_length == 4 and list(back.plans) == ["agent0"]
     assert back.fallback == f"joint schedule longer than SA ({kept.exec_length} > 4)"
     assert [s["status"] for s in back.subgoals] == ["unused"]
-    assert back.extra["sa_time_included_s"] == round(sa_plan.planner_time_s, 4)
+    assert back.to_dict()["sa_time_included_s"] == round(sa_plan.planner_time_s, 4)
     _check(task.problem, back, BW)
 
 
@@ -313,6 +320,8 @@ def test_real_sa_plans_revalidate(tmp_path: Path, data_root: Path, agents: int) 
     for domain, preds in (("barman", BARMAN), ("termes", TERMES)):
         task = load_task(domain, 1, data_root)
         run = run_twostep(
-            task, agents, PlanSplitDecomposer(preds), preds, FAST, fallback_if_longer=False
+            MethodRequest(
+                task, agents, FAST, preds, PlanSplitDecomposer(preds), fallback_if_longer=False
+            )
         )
         _check(task.problem, run, preds)

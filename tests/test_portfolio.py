@@ -22,8 +22,7 @@ from tests.test_plan_split import (
 )
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import GoalSplitDecomposer
-from twostep.methods.portfolio import Portfolio
-from twostep.methods.twostep import run_twostep
+from twostep.methods import MethodRequest, Portfolio, run_portfolio
 
 
 class Scripted:
@@ -42,8 +41,8 @@ def test_portfolio_keeps_the_shortest_candidate(tmp_path: Path) -> None:
     # main agent must take a off again before b goes on c: longer than 4.
     task = _blocks(tmp_path, TWO_TOWERS)
     wasteful = Scripted("wasteful", "(and (on a b) (arm-empty))")
-    portfolio = Portfolio(BW, members=[wasteful, GoalSplitDecomposer(BW)])
-    run = run_twostep(task, 2, portfolio, BW, FAST)
+    portfolio = Portfolio(members=[wasteful, GoalSplitDecomposer(BW)], deals=())
+    run = run_portfolio(MethodRequest(task, 2, FAST, BW), portfolio)
     rows = run.extra["candidates"]
     assert [(r["decomposer"], r["agents"]) for r in rows] == [("wasteful", 2), ("goal-split", 2)]
     assert rows[1]["exec_length"] == 4 and rows[0]["exec_length"] > 4
@@ -52,7 +51,7 @@ def test_portfolio_keeps_the_shortest_candidate(tmp_path: Path) -> None:
     assert run.subgoals[0]["pddl"] == "(and (arm-empty) (on d e) (on e f))"
     # every candidate's planner time counts, and the SA plan's once
     candidates = sum(r["planning_time_s"] for r in rows)
-    assert abs(run.planning_time_s - candidates - run.extra["sa_time_included_s"]) < 1e-3
+    assert abs(run.planning_time_s - candidates - (run.sa_time_included_s or 0.0)) < 1e-3
     _check(task.problem, run, BW)
     assert run.to_dict()["candidates"] == rows  # result.json lists them
 
@@ -64,7 +63,7 @@ def test_portfolio_finds_partial_progress_and_fewer_agents(tmp_path: Path) -> No
     # 3 agents, then with 2; the repeats are recognised, not planned again.
     task = _blocks(tmp_path, TALL_TOWER)
     sa = sa_result(TALL_TOWER_PLAN)
-    run = run_twostep(task, 3, Portfolio(BW), BW, FAST, sa_plan=sa)
+    run = run_portfolio(MethodRequest(task, 3, FAST, BW, sa_plan=sa), Portfolio())
     rows = run.extra["candidates"]
     members = ["plan-split", "plan-split-holding", "plan-split-holding-goal", "goal-split"]
     members += [f"{m}-chunks" for m in members[:3]]
@@ -93,16 +92,16 @@ def test_portfolio_falls_back_to_sa_when_every_candidate_is_longer(tmp_path: Pat
             "a b c",
         ),
     )
-    portfolio = Portfolio(BW, members=[Scripted("wasteful", "(and (on c a) (arm-empty))")])
-    run = run_twostep(task, 2, portfolio, BW, FAST)
+    portfolio = Portfolio(members=[Scripted("wasteful", "(and (on c a) (arm-empty))")], deals=())
+    run = run_portfolio(MethodRequest(task, 2, FAST, BW), portfolio)
     (row,) = run.extra["candidates"]
     assert row["exec_length"] > 4
     assert run.exec_length == 4 and list(run.plans) == ["agent0"]
     assert run.fallback == f"joint schedule longer than SA ({row['exec_length']} > 4)"
     _check(task.problem, run, BW)
-    kept = run_twostep(task, 2, portfolio, BW, FAST, fallback_if_longer=False)
+    kept = run_portfolio(MethodRequest(task, 2, FAST, BW, fallback_if_longer=False), portfolio)
     assert kept.exec_length == row["exec_length"] and kept.fallback is None
     _check(task.problem, kept, BW)
-    one = run_twostep(task, 1, portfolio, BW, FAST)
+    one = run_portfolio(MethodRequest(task, 1, FAST, BW), portfolio)
     assert one.extra["candidates"] == [] and one.exec_length == 4
     assert one.fallback == "no candidate (one agent)"

@@ -19,7 +19,8 @@ from typing import Any
 
 import pytest
 
-from flows.checks import value_problems, write_problem
+from flows.checks import value_problems
+from flows.locations import write_problem
 from flows.store import JobStore
 from flows.sweep_callback import _refuse_running_sweep
 from flows.sweep_state import SweepState

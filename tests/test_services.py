@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from flows import services_cli as services
+from flows import services
 from flows.servers import is_healthy, pid_alive
 from tests.test_flows import make_data
 

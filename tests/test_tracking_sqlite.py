@@ -1,4 +1,4 @@
-"""flows/tracking_sqlite.py: a single run's rows written directly equal MLflow's own.
+"""flows/tracking/sqlite.py: a single run's rows written directly equal MLflow's own.
 
 The reference is MLflow: the same record is logged once through
 :func:`flows.tracking.client.log_job_run` (MLflow's client and SQLAlchemy store) and once through
@@ -17,9 +17,10 @@ from typing import Any
 
 import pytest
 
-from flows.tracking import sqlite as tracking_sqlite
+from flows.tracking import template as store_template
 from flows.tracking.client import Tracker, log_job_run
-from flows.tracking.sqlite import SCHEMA_VERSION, SqliteJobLog, make_template, seed_store
+from flows.tracking.sqlite import SqliteJobLog
+from flows.tracking.template import SCHEMA_VERSION, make_template, seed_store
 
 EXPERIMENT = "twostep"
 
@@ -31,7 +32,7 @@ def store(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     base = tmp_path_factory.mktemp("light")
     uri = f"sqlite:///{base / 'mlflow.db'}"
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(tracking_sqlite, "template_path", lambda: base / "no-template.db")
+        patch.setattr(store_template, "template_path", lambda: base / "no-template.db")
         tracker = Tracker(uri, str(base / "mlruns"))
         experiment_id = tracker.experiment_id(EXPERIMENT)
     files = base / "job"
@@ -199,7 +200,7 @@ def schema(db_path: Path) -> list[tuple[str, list[str]]]:
 def test_a_seeded_store_is_the_store_mlflow_creates(
     store: dict[str, Any], template: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(tracking_sqlite, "template_path", lambda: template)
+    monkeypatch.setattr(store_template, "template_path", lambda: template)
     monkeypatch.chdir(tmp_path)
     seeded = tmp_path / "out" / "mlflow.db"
     assert seed_store(seeded)
@@ -220,7 +221,7 @@ def test_a_seeded_store_is_the_store_mlflow_creates(
 def test_the_experiment_is_added_as_mlflow_adds_it(
     store: dict[str, Any], template: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(tracking_sqlite, "template_path", lambda: template)
+    monkeypatch.setattr(store_template, "template_path", lambda: template)
     base = tmp_path / "out"
     uri = f"sqlite:///{base / 'mlflow.db'}"
     light = SqliteJobLog.open(uri, EXPERIMENT, str(base / "mlruns"))  # seeds, then adds

@@ -11,21 +11,27 @@ One module per step of the paper's pipeline:
 - :mod:`twostep.multiagent`   the MA-PDDL baseline compilation
 - :mod:`twostep.progression`  hand-off of the environment state between agents
 - :mod:`twostep.execution`    parallel execution length (A*) and joint schedule check
-- :mod:`twostep.decomposers`  where helper subgoals come from (goal-split, expert, llm)
+- :mod:`twostep.decomposers`  where helper subgoals come from (goal-split, plan-split,
+                              expert, llm)
 - :mod:`twostep.llm`          LLM access (litellm), prompts and answer parsing
-- :mod:`twostep.methods.twostep`     SA, MA and TwoStep end to end
+- :mod:`twostep.methods`      the methods side by side (SA, MA, TwoStep, plan-deal,
+                              portfolio), one request in, one result out; the registry
+- :mod:`twostep.dealing`      plan-deal's algorithm: the SA plan's pieces dealt to N agents
 - :mod:`twostep.benchmark`    tasks on disk in the LLM+P layout
 
 Quick start::
 
     from twostep.benchmark import load_task
     from twostep.decomposers.goal_split import GoalSplitDecomposer
-    from twostep.methods.twostep import run_twostep
+    from twostep.methods import MethodRequest, run_twostep
     from twostep.planner import PlannerSettings
 
     task = load_task("blocksworld", 5)
     agent_facts = ["arm-empty", "holding"]
-    result = run_twostep(task, 2, GoalSplitDecomposer(agent_facts), agent_facts, PlannerSettings())
+    request = MethodRequest(task, agents=2, planner=PlannerSettings(),
+                            agent_predicates=agent_facts,
+                            decomposer=GoalSplitDecomposer(agent_facts))
+    result = run_twostep(request)
     print(result.exec_length, result.schedule)
 """
 

@@ -29,7 +29,8 @@ from pathlib import Path
 from typing import Any
 
 # Bump when a change to the pipeline makes stored results stale.
-JOB_VERSION = "job-2"
+# job-3: the methods moved into twostep/methods (one request, enums, typed SA time)
+JOB_VERSION = "job-3"
 
 # Config groups (top-level keys) that say where or how a job runs. ``experiment`` only
 # selects values for other keys, which are in the config themselves.

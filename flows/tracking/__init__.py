@@ -1,0 +1,28 @@
+"""MLflow tracking, as docs/tracking.md lays it out; the rest of ``flows/`` calls only the
+names exported here.
+
+==============  ================================================================
+module          what it is for
+==============  ================================================================
+``runs``        the interface: :class:`JobRunLog` (a job's run), :func:`end_sweep_run`
+``contents``    what a run holds: params, metrics, tags, the record of one job
+``client``      MLflow's own client (:class:`~flows.tracking.client.Tracker`), the store check
+``worker``      a single run's logging in a helper process that imports MLflow meanwhile
+``sqlite``      a single run's rows written directly into a warm SQLite store
+``template``    the environment's empty store, copied for every new store
+==============  ================================================================
+"""
+
+from flows.tracking.client import TrackingError, check_store
+from flows.tracking.contents import DEFAULT_EXPERIMENT, experiment_name_for, job_record
+from flows.tracking.runs import JobRunLog, end_sweep_run
+
+__all__ = [
+    "DEFAULT_EXPERIMENT",
+    "JobRunLog",
+    "TrackingError",
+    "check_store",
+    "end_sweep_run",
+    "experiment_name_for",
+    "job_record",
+]

@@ -1,12 +1,11 @@
-"""MLflow bookkeeping for sweeps and jobs, exactly as docs/tracking.md lays it out.
+"""MLflow's own client on a store: experiments, the sweep's parent run, job runs
+(:class:`Tracker`, :func:`log_job_run`), and the check of a store before any work.
 
 * :func:`check_store` runs before any work: a store that cannot be reached or written
   is a one-line :class:`TrackingError`, not a traceback after an hour of planning.
 * One experiment per sweep; the sweep's parent run is found again by its
   ``twostep.sweep_key`` tag and each job's run by its ``twostep.job_key`` tag, so a
   sweep started again after ``kill -9`` reuses them instead of adding duplicates.
-* :func:`job_params` / :func:`job_metrics` turn a resolved config and a result.json
-  dict into MLflow params and metrics; nothing that looks like a secret is logged.
 
 MLflow is imported lazily (seconds): a finished job that needs no logging never pays it.
 """
@@ -24,33 +23,26 @@ from pathlib import Path
 from typing import Any, TypeVar
 from urllib.parse import urlparse
 
-from twostep.params import flatten_config
-
-KIND = "twostep.kind"
-JOB_KEY = "twostep.job_key"
-SWEEP_KEY = "twostep.sweep_key"
-STATUS = "twostep.status"
-ERROR = "twostep.error"
-SCRIPTED = "twostep.scripted_llm"
-REUSED = "twostep.reused"
-PARENT = "mlflow.parentRunId"
-
-DEFAULT_EXPERIMENT = "twostep"
-_SECRET = re.compile(r"api_key|secret|token|password|authorization", re.IGNORECASE)
-_PARAM_LIMIT = 6000
-_TAG_LIMIT = 5000
+from flows.console import one_line
+from flows.locations import sqlite_path, write_problem
+from flows.tracking.contents import (
+    JOB_KEY,
+    KIND,
+    PARENT,
+    STATUS,
+    SWEEP_KEY,
+    TAG_LIMIT,
+    clip,
+    job_tags,
+    metric_points,
+)
+from flows.tracking.template import quiet_mlflow_logging, seed_store
 
 T = TypeVar("T")
 
 
 class TrackingError(Exception):
     """The MLflow store cannot be used; the message is one line for the terminal."""
-
-
-def _one_line(error: BaseException) -> str:
-    lines = str(error).strip().splitlines()
-    text = lines[0] if lines else ""
-    return f"{type(error).__name__}: {text}"[:300] if text else type(error).__name__
 
 
 def check_store(tracking_uri: str, timeout_s: float = 10.0) -> None:
@@ -79,21 +71,21 @@ def check_store(tracking_uri: str, timeout_s: float = 10.0) -> None:
             raise TrackingError(f"MLflow tracking server {tracking_uri} answered {status} ({hint})")
         return
     if scheme == "sqlite":
-        path = tracking_uri[len("sqlite:///") :] if tracking_uri.startswith("sqlite:///") else ""
-        if not path or path == ":memory:":
+        database = sqlite_path(tracking_uri)
+        if database is None:
             return
-        _check_writable(Path(path).parent, f"MLflow store {tracking_uri}", hint)
-        if Path(path).exists():
-            _check_sqlite(Path(path), tracking_uri, hint)
+        _check_writable(database.parent, f"MLflow store {tracking_uri}", hint)
+        if database.exists():
+            _check_sqlite(database, tracking_uri, hint)
         return
     if scheme in ("", "file"):
         _check_writable(Path(parsed.path or tracking_uri), f"MLflow store {tracking_uri}", hint)
         return
     try:
-        _client(tracking_uri).search_experiments(max_results=1)
+        mlflow_client(tracking_uri).search_experiments(max_results=1)
     except Exception as error:
         raise TrackingError(
-            f"MLflow store {tracking_uri} cannot be used: {_one_line(error)}"
+            f"MLflow store {tracking_uri} cannot be used: {one_line(error, limit=300)}"
         ) from None
 
 
@@ -108,37 +100,25 @@ def _check_sqlite(path: Path, uri: str, hint: str) -> None:
             connection.close()
     except sqlite3.Error as error:
         raise TrackingError(
-            f"MLflow store {uri} cannot be read: {_one_line(error)} ({hint})"
+            f"MLflow store {uri} cannot be read: {one_line(error, limit=300)} ({hint})"
         ) from None
 
 
 def _check_writable(folder: Path, what: str, hint: str) -> None:
-    from flows.checks import write_problem
-
     problem = write_problem(folder)
     if problem is not None:
         raise TrackingError(f"{what} is not writable: {problem} ({hint})")
 
 
-def _client(tracking_uri: str, seed: bool = True) -> Any:
+def mlflow_client(tracking_uri: str) -> Any:
     """MLflow's client; a SQLite store that does not exist yet is seeded from the
-    environment's template (:func:`flows.tracking.sqlite.seed_store`) unless ``seed`` is
-    False (MLflow then creates and migrates it: how the template itself is made)."""
-    import logging
-
+    environment's template (:func:`flows.tracking.template.seed_store`)."""
     from mlflow.tracking import MlflowClient
 
-    # MLflow announces schema migrations at INFO on the job's console (it sets its
-    # logger's level when imported, hence after the import): keep it quiet.
-    for name in ("mlflow", "alembic"):
-        logging.getLogger(name).setLevel(logging.WARNING)
-
-    if seed and tracking_uri.startswith("sqlite:///"):  # a new store: copied, not migrated
-        from flows.tracking.sqlite import seed_store
-
-        path = Path(tracking_uri[len("sqlite:///") :])
-        if not path.exists():
-            seed_store(path)
+    quiet_mlflow_logging()
+    database = sqlite_path(tracking_uri)
+    if database is not None and not database.exists():  # copied, not migrated
+        seed_store(database)
     return MlflowClient(tracking_uri=tracking_uri)
 
 
@@ -152,15 +132,6 @@ def _retry(call: Callable[[], T], attempts: int = 5) -> T:
                 raise
             time.sleep(0.2 * 2**attempt)
     raise AssertionError("unreachable")
-
-
-def experiment_name_for(overrides: Iterable[str]) -> str:
-    """A readable experiment name from a sweep's overrides (same command, same name)."""
-    name = "sweep " + " ".join(overrides) if overrides else "sweep (defaults)"
-    if len(name) > 200:
-        digest = hashlib.sha256(name.encode()).hexdigest()[:10]
-        name = f"{name[:180]} ... #{digest}"
-    return name
 
 
 def experiment_location(artifact_root: str | None, name: str) -> str | None:
@@ -179,7 +150,7 @@ class Tracker:
     def __init__(self, tracking_uri: str, artifact_location: str | None = None) -> None:
         self.tracking_uri = tracking_uri
         self.artifact_location = artifact_location
-        self.client = _client(tracking_uri)
+        self.client = mlflow_client(tracking_uri)
 
     # ------------------------------------------------------------- experiments
 
@@ -217,7 +188,7 @@ class Tracker:
             run_id = str(found.info.run_id)
             self.client.update_run(run_id, status="RUNNING")
             for key, value in tags.items():
-                self.client.set_tag(run_id, key, _clip(value, _TAG_LIMIT))
+                self.client.set_tag(run_id, key, clip(value, TAG_LIMIT))
             return run_id
         run = self.client.create_run(
             experiment_id,
@@ -225,7 +196,7 @@ class Tracker:
             tags={
                 KIND: "sweep",
                 SWEEP_KEY: sweep_key,
-                **{k: _clip(v, _TAG_LIMIT) for k, v in tags.items()},
+                **{k: clip(v, TAG_LIMIT) for k, v in tags.items()},
             },
         )
         return str(run.info.run_id)
@@ -288,41 +259,9 @@ class Tracker:
             )
         for path, folder in files:
             _retry(partial(self.client.log_artifact, run_id, str(path), folder))
-        run_tags = [RunTag(k, _clip(v, _TAG_LIMIT)) for k, v in tags.items()]
+        run_tags = [RunTag(k, clip(v, TAG_LIMIT)) for k, v in tags.items()]
         _retry(lambda: self.client.log_batch(run_id, tags=run_tags))
         _retry(lambda: self.client.set_terminated(run_id, status=terminated))
-
-
-def _clip(text: str, limit: int) -> str:
-    return text if len(text) <= limit else text[: limit - 3] + "..."
-
-
-def metric_points(
-    metrics: Mapping[str, float | list[float]], timestamp_ms: int
-) -> list[tuple[str, float, int, int]]:
-    """``(key, value, timestamp, step)`` of every metric point: a list is one point per step."""
-    points: list[tuple[str, float, int, int]] = []
-    for key, value in metrics.items():
-        if isinstance(value, list):
-            points += [(key, float(v), timestamp_ms, step) for step, v in enumerate(value)]
-        else:
-            points.append((key, float(value), timestamp_ms, 0))
-    return points
-
-
-def job_tags(record: Mapping[str, Any]) -> dict[str, str]:
-    """The status tags written at the end of a job run's logging, in one batch."""
-    tags = {
-        STATUS: str(record["status"]),
-        SCRIPTED: "true" if record["scripted"] else "false",
-        REUSED: "true" if record["reused"] else "false",
-    }
-    if record["error"]:
-        tags[ERROR] = str(record["error"])
-    return tags
-
-
-# ----------------------------------------------------------------- params / metrics
 
 
 def log_job_run(
@@ -347,69 +286,3 @@ def log_job_run(
         terminated="FAILED" if record["status"] == "failed" else "FINISHED",
     )
     return run_id
-
-
-def job_params(config: Mapping[str, Any]) -> dict[str, str]:
-    """The flattened resolved config as params; secret-looking keys are left out.
-
-    ``*_env`` keys name an environment variable (``llm.api_key_env: OPENAI_API_KEY``),
-    never hold its value, so they are kept.
-    """
-    params: dict[str, str] = {}
-    for key, text in flatten_config(config).items():
-        if key.startswith("hydra.") or (_SECRET.search(key) and not key.endswith("_env")):
-            continue
-        params[key] = _clip(text, _PARAM_LIMIT)
-    return params
-
-
-def _number(value: Any) -> float | None:
-    if isinstance(value, bool):
-        return float(value)
-    if isinstance(value, int | float):
-        return float(value)
-    return None
-
-
-def job_metrics(result: Mapping[str, Any], timings: Mapping[str, float]) -> dict[str, Any]:
-    """Metrics of one job (docs/tracking.md); a value that is absent is not logged."""
-    metrics: dict[str, Any] = {"success": 1.0 if result.get("success") else 0.0}
-    for key in (
-        "exec_length",
-        "sa_length",
-        "planning_time_s",
-        "llm_time_s",
-        "state_editing_time_s",
-        "wall_time_s",
-        "sa_planning_time_s",
-        "embodied_length",  # executor=embodied
-        "waits",
-        "backoffs",
-    ):
-        number = _number(result.get(key))
-        if number is not None:
-            metrics[key] = number
-    exec_length, sa_length = _number(result.get("exec_length")), _number(result.get("sa_length"))
-    if exec_length and sa_length is not None:
-        metrics["speedup_exec"] = sa_length / exec_length
-    subgoals = result.get("subgoals")
-    if result.get("method") == "twostep" and isinstance(subgoals, list):
-        statuses = [s.get("status") for s in subgoals if isinstance(s, Mapping)]
-        metrics["subgoals_proposed"] = float(len(statuses))
-        metrics["subgoals_accepted"] = float(statuses.count("accepted"))
-        metrics["subgoals_discarded"] = float(statuses.count("discarded"))
-    calls = [c for c in result.get("planner_calls") or [] if isinstance(c, Mapping)]
-    for call in calls:
-        number = _number(call.get("planner_time_s"))
-        if number is not None:
-            metrics[f"planner_time_s.{call.get('role')}.{call.get('agent')}"] = number
-    per_call = [_number(c.get("planner_time_s")) for c in calls]
-    if per_call and all(v is not None for v in per_call):
-        metrics["planner_time_s"] = [v for v in per_call if v is not None]
-    if calls:  # Table II's "timeout": planner calls stopped by their time limit
-        from twostep.report.table2 import planner_limit_hits
-
-        metrics["planner_timeouts"] = float(planner_limit_hits(result))
-    for key, value in timings.items():
-        metrics[key] = float(value)
-    return metrics

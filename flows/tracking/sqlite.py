@@ -11,12 +11,9 @@ the run's end) in one transaction, and copies the artifacts as MLflow's local ar
 repository does. The contents are MLflow's: tests/test_tracking_sqlite.py compares
 every row with what MLflow itself writes for the same record.
 
-A store that does not exist yet is seeded from a template: an empty store that MLflow
-itself created and migrated once per environment (:func:`make_template`, run by ``make
-setup``; it lives in the virtual environment, beside the MLflow that made it). Creating a
-store through MLflow runs its whole migration history (4-5 s); copying the template takes
-milliseconds, and the run's experiment is then added as MLflow adds it (one row). Without
-a template the first run creates the store through MLflow, as before.
+A store that does not exist yet is seeded from the environment's template
+(:mod:`flows.tracking.template`), and the run's experiment is then added as MLflow adds it
+(one row).
 
 Anything else answers ``None`` and the caller logs with MLflow as before: no template and
 no store, another schema, an experiment deleted or without a local artifact root, a run
@@ -27,34 +24,23 @@ its error message stays MLflow's).
 from __future__ import annotations
 
 import math
-import os
 import posixpath
 import re
 import shutil
 import sqlite3
-import sys
-import tempfile
-import time
 import uuid
 from collections.abc import Mapping
-from contextlib import closing, suppress
+from contextlib import closing
 from pathlib import Path
 from typing import Any
 from urllib.parse import urlparse
 from urllib.request import url2pathname
 
-from flows.tracking.client import (
-    JOB_KEY,
-    KIND,
-    STATUS,
-    experiment_location,
-    job_tags,
-    metric_points,
-)
+from flows.locations import sqlite_path
+from flows.tracking.client import experiment_location
+from flows.tracking.contents import JOB_KEY, KIND, STATUS, job_tags, metric_points
+from flows.tracking.template import SCHEMA_VERSION, millis, seed_store
 
-# The alembic revision of MLflow 3.17.2's tracking schema (test_tracking_sqlite checks it
-# against the installed MLflow): another schema is written by MLflow itself.
-SCHEMA_VERSION = "dc11669786a5"
 RUN_NAME = "mlflow.runName"
 # MLflow's own limits and name rule (mlflow.utils.validation; POSIX systems).
 _NAME = re.compile(r"^[/\w.\- :]*$")
@@ -62,60 +48,6 @@ _MAX_KEY = 250
 _MAX_PARAM_VALUE = 6000
 _MAX_TAG_VALUE = 8000
 _MAX_DOUBLE = 1.7976931348623157e308  # what MLflow stores for +-inf
-
-
-def template_path() -> Path:
-    """The empty store of the installed MLflow, inside this environment."""
-    return Path(sys.prefix) / "share" / "twostep" / f"mlflow-{SCHEMA_VERSION}.db"
-
-
-def make_template(target: Path | None = None) -> Path:
-    """Have MLflow create and migrate an empty store, and keep it as the template."""
-    target = target or template_path()
-    if target.is_file():
-        return target
-    from flows.tracking.client import _client
-
-    with tempfile.TemporaryDirectory() as folder:
-        db = Path(folder) / "mlflow.db"
-        _client(f"sqlite:///{db}", seed=False).search_experiments()  # MLflow makes it here
-        with closing(sqlite3.connect(db)) as con:
-            version = con.execute("SELECT version_num FROM alembic_version").fetchall()
-        if version != [(SCHEMA_VERSION,)]:
-            raise RuntimeError(f"MLflow created schema {version}, not {SCHEMA_VERSION}")
-        target.parent.mkdir(parents=True, exist_ok=True)
-        partial = target.with_name(f".{target.name}.{uuid.uuid4().hex}")
-        shutil.copyfile(db, partial)
-        os.replace(partial, target)
-    return target
-
-
-def seed_store(path: Path) -> bool:
-    """Copy the template to ``path`` if no store is there yet (False: no template).
-
-    The Default experiment (id 0) gets the artifact folder MLflow gives it, ``mlruns/0``
-    under the working directory, and the current time. Two processes seeding at once
-    both succeed: the first copy is linked into place, the other is dropped."""
-    template = template_path()
-    if not template.is_file():
-        return False
-    path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f".{path.name}.{uuid.uuid4().hex}")
-    try:
-        shutil.copyfile(template, partial)
-        now = _millis()
-        with closing(sqlite3.connect(partial)) as db:
-            db.execute(
-                "UPDATE experiments SET artifact_location = ?, creation_time = ?,"
-                " last_update_time = ? WHERE experiment_id = 0",
-                (str(Path("mlruns").resolve() / "0"), now, now),
-            )
-            db.commit()
-        with suppress(FileExistsError):  # never over a store another process put there
-            os.link(partial, path)
-    finally:
-        partial.unlink(missing_ok=True)
-    return True
 
 
 def _experiment_rows(db: sqlite3.Connection, name: str) -> list[tuple[Any, ...]]:
@@ -133,7 +65,7 @@ def _create_experiment(db: sqlite3.Connection, name: str, location: str) -> list
     db.execute("BEGIN IMMEDIATE")
     try:
         if not _experiment_rows(db, name):  # else a parallel job created it first
-            now = _millis()
+            now = millis()
             db.execute(
                 "INSERT INTO experiments (name, artifact_location, lifecycle_stage,"
                 " creation_time, last_update_time, workspace)"
@@ -163,10 +95,6 @@ def _artifact_root(location: str) -> tuple[str, Path] | None:
     return None
 
 
-def _millis() -> int:
-    return int(time.time() * 1000)
-
-
 class SqliteJobLog:
     """One experiment of one SQLite store, ready to take a single run's record."""
 
@@ -183,10 +111,8 @@ class SqliteJobLog:
 
         A missing store is seeded from the template; a missing experiment is added when
         ``artifact_root`` (``mlflow.artifact_location``) is a local folder."""
-        if not tracking_uri.startswith("sqlite:///"):
-            return None
-        path = Path(tracking_uri[len("sqlite:///") :])
-        if not path.is_file() and not seed_store(path):
+        path = sqlite_path(tracking_uri)
+        if path is None or (not path.is_file() and not seed_store(path)):
             return None
         try:
             with closing(cls._connect(path)) as db:
@@ -277,7 +203,7 @@ class SqliteJobLog:
             " artifact_uri, experiment_id, deleted_time)"
             " VALUES (?, ?, 'UNKNOWN', '', '', 'unknown', 'RUNNING', ?, NULL, '', 'active',"
             " ?, ?, NULL)",
-            (run_id, name, _millis(), artifact_uri, self.experiment_id),
+            (run_id, name, millis(), artifact_uri, self.experiment_id),
         )
         first_tags = {KIND: "job", JOB_KEY: str(record["key"]), RUN_NAME: name}
         db.executemany(
@@ -301,7 +227,7 @@ class SqliteJobLog:
         status = "FAILED" if record["status"] == "failed" else "FINISHED"
         db.execute(
             "UPDATE runs SET status = ?, end_time = ? WHERE run_uuid = ?",
-            (status, _millis(), run_id),
+            (status, millis(), run_id),
         )
         return run_id
 
@@ -312,7 +238,7 @@ class SqliteJobLog:
         """Metric points and each key's latest point (by step, timestamp, value), with
         MLflow's storage of NaN (0, is_nan) and infinities (the largest double)."""
         rows: list[tuple[str, float, int, int, int]] = []
-        for key, value, timestamp, step in metric_points(metrics, _millis()):
+        for key, value, timestamp, step in metric_points(metrics, millis()):
             is_nan = math.isnan(value)
             if is_nan:
                 value = 0.0
@@ -335,13 +261,3 @@ class SqliteJobLog:
             " VALUES (?, ?, ?, ?, ?, ?)",
             [(k, v, t, s, n, run_id) for k, v, t, s, n in latest.values()],
         )
-
-
-if __name__ == "__main__":  # `make setup`: the template store for this environment
-    from flows.environment import quiet_defaults
-
-    quiet_defaults()  # offline: no telemetry from MLflow
-    try:
-        print(f"MLflow store template: {make_template()}")
-    except Exception as error:  # a run then creates its first store through MLflow
-        print(f"no MLflow store template ({type(error).__name__}: {error})", file=sys.stderr)

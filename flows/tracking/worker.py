@@ -20,6 +20,8 @@ import sys
 from collections.abc import Sequence
 from typing import IO, Any
 
+from flows.console import one_line
+
 
 class TrackingWorker:
     """The job's side: start the process, send the record, read the run id."""
@@ -77,8 +79,7 @@ def serve(argv: Sequence[str], stdin: IO[str], stdout: IO[str]) -> int:
         run_id = log_job_run(tracker, experiment_id, None, json.loads(line))
         answer: dict[str, str] = {"run_id": run_id}
     except Exception as error:
-        text = (str(error).strip().splitlines() or [""])[0]
-        answer = {"error": f"{type(error).__name__}: {text}"[:300]}
+        answer = {"error": one_line(error, limit=300)}
     stdout.write(json.dumps(answer) + "\n")
     stdout.flush()
     return 0

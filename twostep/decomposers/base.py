@@ -2,8 +2,8 @@
 
 A decomposer proposes, for N agents, up to N-1 helper subgoals. Each proposal carries the
 PDDL goal text (and, for the LLM, the English subgoal and every prompt and answer). The
-pipeline (:mod:`twostep.methods.twostep`) then checks every proposal against the task
-(:mod:`twostep.subgoals`) and plans the accepted ones; a decomposer never plans.
+TwoStep method (:mod:`twostep.methods.twostep`) then checks every proposal against the
+task (:mod:`twostep.subgoals`) and plans the accepted ones; a decomposer never plans.
 
 A decomposer that cannot propose at all (its LLM calls failed) raises
 :class:`DecomposerError`; the run then fails with the error's status instead of falling
@@ -12,6 +12,7 @@ back to the single-agent plan, which is only for subgoals that turned out unusab
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -48,22 +49,45 @@ class SubgoalProposal:
         }
 
 
+Exchange = dict[str, Any]
+"""One prompt and its raw answer, as result.json records them."""
+LLMStep = Callable[..., tuple[str | None, Exchange]]
+"""An LLM call of a decomposer (:func:`twostep.decomposers.llm.generate_subgoal` and
+``translate_subgoal``, or a replacement with the same signature and result)."""
+
+
 @dataclass(frozen=True)
 class DecompositionRequest:
+    """What a decomposer is asked: helpers for ``agents`` agents on ``task``.
+
+    ``sa_plan`` is the single-agent plan, for decomposers that read it (plan-split); the
+    TwoStep method fills it in when :func:`reads_sa_plan` says so. ``generate`` and
+    ``translate`` are the LLM calls an LLM decomposer makes (None: its own functions), so
+    that a workflow engine can run each call as a task of its own.
+    """
+
     task: BenchmarkTask
     agents: int
     seed: int = 0
-    # The single-agent plan, for decomposers that read it (plan-split); the pipeline fills
-    # it in when the decomposer sets ``needs_sa_plan = True``.
     sa_plan: tuple[str, ...] | None = None
+    generate: LLMStep | None = None
+    translate: LLMStep | None = None
 
 
 class Decomposer(Protocol):
-    """Proposes helper subgoals for a task; at most ``request.agents - 1`` of them."""
+    """Proposes helper subgoals for a task; at most ``request.agents - 1`` of them.
+
+    A decomposer that reads the single-agent plan says so with ``needs_sa_plan = True``.
+    """
 
     name: str
 
     def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]: ...
+
+
+def reads_sa_plan(decomposer: Decomposer) -> bool:
+    """Whether ``decomposer`` reads the SA plan (``needs_sa_plan``; absent: it does not)."""
+    return bool(getattr(decomposer, "needs_sa_plan", False))
 
 
 class DecomposerError(Exception):

@@ -11,26 +11,31 @@ spent, or credentials are missing) is no answer at all: :meth:`LLMDecomposer.pro
 raises :class:`~twostep.decomposers.base.DecomposerError` with status ``llm_error``, and
 the run fails instead of falling back to the single-agent plan.
 
-The two steps are plain functions that :meth:`LLMDecomposer.decompose` takes as
-arguments (the pipeline passes :attr:`twostep.methods.twostep.Steps.generate` and ``translate``),
-so a workflow engine can run each call as its own task.
+The two steps are plain functions; :meth:`LLMDecomposer.decompose` calls the ones the
+request names (:attr:`~twostep.decomposers.base.DecompositionRequest.generate` and
+``translate``: the TwoStep method passes :attr:`twostep.methods.steps.Steps.generate` and
+``translate``), so a workflow engine can run each call as its own task.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 from twostep.benchmark import BenchmarkTask
-from twostep.decomposers.base import DecomposerError, DecompositionRequest, SubgoalProposal
+from twostep.decomposers.base import (
+    DecomposerError,
+    DecompositionRequest,
+    Exchange,
+    LLMStep,
+    SubgoalProposal,
+)
 from twostep.llm.client import LLMCallError, LLMClient, LLMResponse
 from twostep.llm.parsing import parse_english_subgoal, parse_pddl_subgoal
 from twostep.llm.prompts import Message, generator_messages, translator_messages
 from twostep.pddl import parse_goal
 from twostep.subgoals import SubgoalError, SubgoalStatus, goal_conflict
 
-Exchange = dict[str, Any]
 # The run status of a decomposition whose LLM call failed (result.json ``status``).
 LLM_ERROR = "llm_error"
 
@@ -120,11 +125,6 @@ def translate_subgoal(
     return goal.to_pddl(), exchange
 
 
-# The signatures of the two steps, as :class:`twostep.methods.twostep.Steps` holds them.
-GenerateStep = Callable[..., tuple[str | None, Exchange]]
-TranslateStep = Callable[..., tuple[str | None, Exchange]]
-
-
 @dataclass
 class LLMDecomposition:
     """Everything one decomposition produced, including a stopping "none" answer."""
@@ -152,26 +152,18 @@ class LLMDecomposer:
         self.client = client
         self.fixed_example = fixed_example
 
-    def propose(
-        self,
-        request: DecompositionRequest,
-        generate: GenerateStep = generate_subgoal,
-        translate: TranslateStep = translate_subgoal,
-    ) -> list[SubgoalProposal]:
+    def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]:
         """The proposals; :class:`DecomposerError` (``llm_error``) when a call failed."""
-        result = self.decompose(request, generate, translate)
+        result = self.decompose(request)
         if result.error is not None:
             raise DecomposerError(f"LLM call failed: {result.error}", LLM_ERROR, result.proposals)
         return result.proposals
 
-    def decompose(
-        self,
-        request: DecompositionRequest,
-        generate: GenerateStep = generate_subgoal,
-        translate: TranslateStep = translate_subgoal,
-    ) -> LLMDecomposition:
-        """Generate and translate a subgoal per helper with the given step functions."""
+    def decompose(self, request: DecompositionRequest) -> LLMDecomposition:
+        """Generate and translate a subgoal per helper with the request's step functions."""
         task, seed = request.task, request.seed
+        generate: LLMStep = request.generate or generate_subgoal
+        translate: LLMStep = request.translate or translate_subgoal
         result = LLMDecomposition(proposals=[])
         english_so_far: list[str] = []
         accepted: dict[int, str] = {}
@@ -261,10 +253,8 @@ class LLMDecomposer:
 __all__ = [
     "LLM_ERROR",
     "Exchange",
-    "GenerateStep",
     "LLMDecomposer",
     "LLMDecomposition",
-    "TranslateStep",
     "generate_subgoal",
     "translate_subgoal",
 ]

@@ -186,7 +186,7 @@ def holding_pieces(
     return sorted(groups.values())
 
 
-def _merge_cycles(pieces: list[list[int]], edges: set[tuple[int, int]]) -> list[list[int]]:
+def merge_cycles(pieces: list[list[int]], edges: set[tuple[int, int]]) -> list[list[int]]:
     """Merge pieces that must interleave (a cycle between them in the order of step 1)."""
     piece_of = {i: p for p, members in enumerate(pieces) for i in members}
     succ: dict[int, set[int]] = defaultdict(set)
@@ -277,7 +277,7 @@ def split_plan(
     durations: dict[int, int] = defaultdict(int)  # by first action of a piece
     if cut == "holding":
         free_states(problem, grounded, agent_predicates)  # the plan must be applicable
-        pieces = _merge_cycles(holding_pieces(problem, grounded, agent_predicates), edges)
+        pieces = merge_cycles(holding_pieces(problem, grounded, agent_predicates), edges)
         acting = [
             members
             for members in pieces
@@ -299,7 +299,7 @@ def split_plan(
         pieces = free_pieces(problem, grounded, agent_predicates)
         for members in pieces:
             durations[members[0]] = len(members)
-    pieces = _topological_pieces(pieces, edges)
+    pieces = topological_pieces(pieces, edges)
     piece_of = {i: p for p, members in enumerate(pieces) for i in members}
     preds: list[set[int]] = [set() for _ in pieces]
     for i, j in edges:
@@ -383,7 +383,7 @@ def split_plan(
     return split
 
 
-def _topological_pieces(pieces: list[list[int]], edges: set[tuple[int, int]]) -> list[list[int]]:
+def topological_pieces(pieces: list[list[int]], edges: set[tuple[int, int]]) -> list[list[int]]:
     """The pieces in an order their edges allow; among ready pieces, the earliest in the plan."""
     piece_of = {i: p for p, members in enumerate(pieces) for i in members}
     succ: dict[int, set[int]] = defaultdict(set)

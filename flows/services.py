@@ -1,4 +1,5 @@
-"""``twostep-services up|down|status``: a long-lived Prefect server and MLflow UI.
+"""``twostep-services up|down|status``: a long-lived Prefect server and MLflow UI, and
+the Prefect server a run finds running (:func:`running_prefect_api`).
 
 Without them a single run uses the library directly (logging to MLflow's SQLite store)
 and each sweep starts a Prefect server of its own (``flows/server.py``). With them up,
@@ -16,11 +17,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
 from flows.environment import quiet_defaults
 from flows.servers import (
@@ -95,6 +98,14 @@ def prefect_api_url(root: str | Path) -> str | None:
     return service.url
 
 
+def running_prefect_api(orchestration: Any, root: str | Path) -> str | None:
+    """The running Prefect server a job or sweep uses, if any: ``orchestration.
+    prefect_api_url``, else ``PREFECT_API_URL``, else the long-lived services' (up and
+    answering)."""
+    external = orchestration.prefect_api_url or os.environ.get("PREFECT_API_URL")
+    return str(external) if external else prefect_api_url(root)
+
+
 def _mlflow_command(root: Path, host: str, port: int) -> list[str]:
     return [
         sys.executable, "-m", "mlflow", "server",
@@ -106,8 +117,6 @@ def _mlflow_command(root: Path, host: str, port: int) -> list[str]:
 
 
 def _mlflow_environment() -> dict[str, str]:
-    import os
-
     from flows.environment import DEFAULTS
 
     # Forced, not defaults: without them the server hangs at start-up offline

@@ -1,0 +1,160 @@
+"""What a job's MLflow run holds (docs/tracking.md): the tag names, params from the
+resolved config (nothing that looks like a secret), metrics from result.json, the status
+tags written last, and the record of one job that every writer takes
+(:func:`job_record`); also the experiment name of a sweep.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
+from twostep.params import flatten_config
+
+KIND = "twostep.kind"
+JOB_KEY = "twostep.job_key"
+SWEEP_KEY = "twostep.sweep_key"
+STATUS = "twostep.status"
+ERROR = "twostep.error"
+SCRIPTED = "twostep.scripted_llm"
+REUSED = "twostep.reused"
+PARENT = "mlflow.parentRunId"
+
+DEFAULT_EXPERIMENT = "twostep"
+_SECRET = re.compile(r"api_key|secret|token|password|authorization", re.IGNORECASE)
+PARAM_LIMIT = 6000
+TAG_LIMIT = 5000
+
+
+def clip(text: str, limit: int) -> str:
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def metric_points(
+    metrics: Mapping[str, float | list[float]], timestamp_ms: int
+) -> list[tuple[str, float, int, int]]:
+    """``(key, value, timestamp, step)`` of every metric point: a list is one point per step."""
+    points: list[tuple[str, float, int, int]] = []
+    for key, value in metrics.items():
+        if isinstance(value, list):
+            points += [(key, float(v), timestamp_ms, step) for step, v in enumerate(value)]
+        else:
+            points.append((key, float(value), timestamp_ms, 0))
+    return points
+
+
+def job_tags(record: Mapping[str, Any]) -> dict[str, str]:
+    """The status tags written at the end of a job run's logging, in one batch."""
+    tags = {
+        STATUS: str(record["status"]),
+        SCRIPTED: "true" if record["scripted"] else "false",
+        REUSED: "true" if record["reused"] else "false",
+    }
+    if record["error"]:
+        tags[ERROR] = str(record["error"])
+    return tags
+
+
+def experiment_name_for(overrides: Iterable[str]) -> str:
+    """A readable experiment name from a sweep's overrides (same command, same name)."""
+    name = "sweep " + " ".join(overrides) if overrides else "sweep (defaults)"
+    if len(name) > 200:
+        digest = hashlib.sha256(name.encode()).hexdigest()[:10]
+        name = f"{name[:180]} ... #{digest}"
+    return name
+
+
+def job_params(config: Mapping[str, Any]) -> dict[str, str]:
+    """The flattened resolved config as params; secret-looking keys are left out.
+
+    ``*_env`` keys name an environment variable (``llm.api_key_env: OPENAI_API_KEY``),
+    never hold its value, so they are kept.
+    """
+    params: dict[str, str] = {}
+    for key, text in flatten_config(config).items():
+        if key.startswith("hydra.") or (_SECRET.search(key) and not key.endswith("_env")):
+            continue
+        params[key] = clip(text, PARAM_LIMIT)
+    return params
+
+
+def _number(value: Any) -> float | None:
+    if isinstance(value, bool):
+        return float(value)
+    if isinstance(value, int | float):
+        return float(value)
+    return None
+
+
+def job_metrics(result: Mapping[str, Any], timings: Mapping[str, float]) -> dict[str, Any]:
+    """Metrics of one job (docs/tracking.md); a value that is absent is not logged."""
+    metrics: dict[str, Any] = {"success": 1.0 if result.get("success") else 0.0}
+    for key in (
+        "exec_length",
+        "sa_length",
+        "planning_time_s",
+        "llm_time_s",
+        "state_editing_time_s",
+        "wall_time_s",
+        "sa_planning_time_s",
+        "embodied_length",  # executor=embodied
+        "waits",
+        "backoffs",
+    ):
+        number = _number(result.get(key))
+        if number is not None:
+            metrics[key] = number
+    exec_length, sa_length = _number(result.get("exec_length")), _number(result.get("sa_length"))
+    if exec_length and sa_length is not None:
+        metrics["speedup_exec"] = sa_length / exec_length
+    subgoals = result.get("subgoals")
+    if result.get("method") == "twostep" and isinstance(subgoals, list):
+        statuses = [s.get("status") for s in subgoals if isinstance(s, Mapping)]
+        metrics["subgoals_proposed"] = float(len(statuses))
+        metrics["subgoals_accepted"] = float(statuses.count("accepted"))
+        metrics["subgoals_discarded"] = float(statuses.count("discarded"))
+    calls = [c for c in result.get("planner_calls") or [] if isinstance(c, Mapping)]
+    for call in calls:
+        number = _number(call.get("planner_time_s"))
+        if number is not None:
+            metrics[f"planner_time_s.{call.get('role')}.{call.get('agent')}"] = number
+    per_call = [_number(c.get("planner_time_s")) for c in calls]
+    if per_call and all(v is not None for v in per_call):
+        metrics["planner_time_s"] = [v for v in per_call if v is not None]
+    if calls:  # Table II's "timeout": planner calls stopped by their time limit
+        from twostep.report.table2 import planner_limit_hits
+
+        metrics["planner_timeouts"] = float(planner_limit_hits(result))
+    for key, value in timings.items():
+        metrics[key] = float(value)
+    return metrics
+
+
+def job_record(
+    *,
+    key: str,
+    name: str,
+    status: str,
+    error: str | None,
+    reused: bool,
+    config: Mapping[str, Any],
+    result: Mapping[str, Any],
+    timings: Mapping[str, float],
+    files: Iterable[tuple[Path, str | None]],
+) -> dict[str, Any]:
+    """One job as plain data, as every writer logs it (:func:`flows.tracking.client.
+    log_job_run`, the helper process, the direct SQLite writer)."""
+    return {
+        "key": key,
+        "name": name,
+        "status": status,
+        "error": error,
+        "reused": reused,
+        "scripted": bool(result.get("scripted_llm")),
+        "params": job_params(config),
+        "metrics": job_metrics(result, timings),
+        "files": [[str(path), folder] for path, folder in files],
+    }

@@ -1,0 +1,132 @@
+"""The one way the rest of ``flows/`` writes to MLflow: :class:`JobRunLog` for a job's run,
+:func:`end_sweep_run` for a sweep's parent run.
+
+Behind :class:`JobRunLog` are three writers, chosen when the job starts so that the slow
+part (importing MLflow, opening its store: 2-4 s) overlaps the job or is skipped:
+
+* a single run of the command into a warm SQLite store: the rows written directly
+  (:class:`~flows.tracking.sqlite.SqliteJobLog`, milliseconds);
+* a single run otherwise: a helper process that imports MLflow while the job runs
+  (:class:`~flows.tracking.worker.TrackingWorker`);
+* a job of a sweep (and whatever the first two cannot take): MLflow's client in this
+  process (:class:`~flows.tracking.client.Tracker`), under the sweep's parent run, which
+  the first job that logs creates (:func:`sweep_parent`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+from collections.abc import Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from flows.locations import sqlite_path
+from flows.servers import file_lock
+from flows.tracking.client import Tracker, log_job_run
+from flows.tracking.sqlite import SqliteJobLog
+from flows.tracking.worker import TrackingWorker
+from twostep.files import write_json_atomic
+
+if TYPE_CHECKING:
+    from flows.sweep_state import SweepState
+
+
+class JobRunLog:
+    """Where one job's MLflow run is written: opened before the job runs, written once
+    after it (:meth:`log`), then closed."""
+
+    def __init__(
+        self,
+        tracking_uri: str,
+        artifact_location: str | None,
+        experiment: str,
+        sweep: SweepState | None = None,
+        direct: SqliteJobLog | None = None,
+        worker: TrackingWorker | None = None,
+    ) -> None:
+        self.tracking_uri = tracking_uri
+        self.artifact_location = artifact_location
+        self.experiment = experiment
+        self.sweep = sweep
+        self.direct = direct
+        self.worker = worker
+
+    @classmethod
+    def open(
+        cls,
+        tracking_uri: str,
+        artifact_location: str | None,
+        experiment: str,
+        sweep: SweepState | None = None,
+        single_run: bool = False,
+    ) -> JobRunLog:
+        """The job's log; a ``single_run`` of the command (no sweep) prepares the store now,
+        while the job runs (module docstring)."""
+        direct, worker = None, None
+        if single_run and sweep is None:
+            direct = SqliteJobLog.open(tracking_uri, experiment, artifact_location)
+            if direct is None:
+                worker = TrackingWorker.start(tracking_uri, artifact_location, experiment)
+        return cls(tracking_uri, artifact_location, experiment, sweep, direct, worker)
+
+    def log(self, record: Mapping[str, Any]) -> str:
+        """Log the job (:func:`flows.tracking.contents.job_record`); return its run id."""
+        if self.direct is not None:
+            run_id = self.direct.log(record)
+            if run_id is not None:
+                return run_id
+        if self.worker is not None:
+            return self.worker.log(dict(record))
+        sweep = self.sweep
+        if sweep is not None and sweep.tracking_uri == self.tracking_uri:
+            tracker, experiment_id, parent = sweep_parent(sweep)
+            return log_job_run(tracker, experiment_id, parent, record)
+        tracker = Tracker(self.tracking_uri, self.artifact_location)
+        return log_job_run(tracker, tracker.experiment_id(self.experiment), None, record)
+
+    def close(self) -> None:
+        """Let the helper process go (after :meth:`log`, or with nothing logged)."""
+        if self.worker is not None:
+            self.worker.close()
+
+
+def sweep_parent(state: SweepState) -> tuple[Tracker, str, str]:
+    """(Tracker, experiment id, parent run id) of the sweep, made by the first job that logs.
+
+    Under a lock because the first MlflowClient on a new SQLite file creates its
+    tables, which two processes must not do at once: a lock beside the SQLite file, so
+    that two sweeps sharing one store take turns too (else the sweep's own).
+    """
+    assert state.tracking_uri is not None and state.experiment is not None
+    record = state.folder / "mlflow.json"
+    database = sqlite_path(state.tracking_uri)
+    lock = state.folder / "mlflow.lock" if database is None else Path(f"{database}.lock")
+    with file_lock(lock):
+        tracker = Tracker(state.tracking_uri, state.artifact_location)
+        with contextlib.suppress(OSError, ValueError, KeyError):
+            data = json.loads(record.read_text())
+            return tracker, str(data["experiment_id"]), str(data["parent_run_id"])
+        experiment_id = tracker.experiment_id(state.experiment)
+        folder = Path(state.sweep_dir)
+        parent = tracker.sweep_run(
+            experiment_id,
+            state.sweep_key,
+            name=f"sweep {folder.parent.name}/{folder.name}",
+            tags={
+                "twostep.sweep_dir": state.sweep_dir,
+                "twostep.overrides": " ".join(state.overrides),
+            },
+        )
+        write_json_atomic(record, {"experiment_id": experiment_id, "parent_run_id": parent})
+        return tracker, experiment_id, parent
+
+
+def end_sweep_run(state: SweepState, metrics: Mapping[str, float], failed: bool) -> bool:
+    """End the sweep's parent run with its summary metrics (False: no job logged one)."""
+    record = state.folder / "mlflow.json"
+    if state.tracking_uri is None or not record.is_file():
+        return False  # no job logged anything (all reused and recorded before)
+    parent = json.loads(record.read_text())["parent_run_id"]
+    Tracker(state.tracking_uri).end_sweep(parent, metrics, failed)
+    return True

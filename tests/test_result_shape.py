@@ -1,0 +1,140 @@
+"""What a job leaves behind keeps its shape: result.json's keys, the job's files, the job
+store's files and its MLflow run's params, metrics and tags, for SA, MA, TwoStep with
+goal-split, plan-deal and the portfolio.
+
+The expected sets are the contract as the jobs of ``twostep domain=blocksworld task=6
+agents=2`` wrote it before the methods moved into ``twostep/methods/`` (read from those
+files, not from the code under test); ``docs/tracking.md`` describes every key.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from hydra import compose, initialize_config_dir
+
+from flows.config import register
+from flows.job import execute_job
+
+REPO = Path(__file__).resolve().parent.parent
+
+COMMON = {
+    "agent_order", "agents", "decomposer", "domain", "exact", "exec_length", "fallback",
+    "job_key", "llm_time_s", "lower_bound", "message", "method", "orchestration",
+    "planner_calls", "planning_time_s", "plans", "sa_cost", "sa_length", "schedule",
+    "score_time_s", "scripted_llm", "seed", "state_editing_time_s", "status", "subgoals",
+    "success", "task", "wall_time_s",
+}  # fmt: skip
+TWOSTEP = {"fallback_if_longer", "sa_planning_time_s", "sa_time_included_s"}
+JOBS = {  # name: (overrides, result.json keys beyond COMMON)
+    "sa": (["method=sa"], set()),
+    "ma": (["method=ma"], {"sa_planning_time_s", "sequential_length"}),
+    "goal-split": (["method=twostep", "decomposer=goal-split"], TWOSTEP),
+    "plan-deal": (["method=twostep", "decomposer=plan-deal"], TWOSTEP | {"deal"}),
+    "portfolio": (
+        ["method=twostep", "decomposer=portfolio"],
+        TWOSTEP | {"deal", "candidate", "candidates", "agents_used"},
+    ),
+}
+ORCHESTRATION = {
+    "job_wall_time_s", "llm_cache_hits", "llm_calls", "llm_wall_s", "orchestration_overhead_s",
+    "plan_cache_hits", "plan_calls", "planner_wall_s", "prefect", "reused", "server_wait_s",
+    "task_load_s",
+}  # fmt: skip
+PLANNER_CALL = {
+    "agent", "cost", "exit_code", "goal", "message", "plan", "planner_time_s", "plans_found",
+    "role", "status", "wall_time_s",
+}  # fmt: skip
+JOB_FILES = {  # beyond result.json, schedule.txt and plans/agent0.plan
+    "sa": set(),
+    "ma": {"plans/agent1.plan"},
+    "goal-split": {"plans/agent1.plan", "subgoals/helper1.pddl"},
+    "plan-deal": {"plans/agent1.plan"},
+    "portfolio": {"plans/agent1.plan"},
+}
+METRICS = {
+    "exec_length", "job_wall_time_s", "llm_time_s", "orchestration_overhead_s",
+    "planner_time_s", "planner_timeouts", "planning_time_s", "sa_length", "server_wait_s",
+    "speedup_exec", "state_editing_time_s", "success", "wall_time_s",
+}  # fmt: skip
+SUBGOAL_METRICS = {"subgoals_accepted", "subgoals_discarded", "subgoals_proposed"}
+JOB_METRICS = {  # beyond METRICS
+    "sa": {"planner_time_s.single.agent0"},
+    "ma": {"planner_time_s.multi.all", "sa_planning_time_s"},
+    "goal-split": {"planner_time_s.helper.agent1", "planner_time_s.main.agent0"}
+    | {"sa_planning_time_s"}
+    | SUBGOAL_METRICS,
+    "plan-deal": {"planner_time_s.single.agent0", "sa_planning_time_s"} | SUBGOAL_METRICS,
+    "portfolio": {"planner_time_s.single.agent0", "sa_planning_time_s"} | SUBGOAL_METRICS,
+}
+TAGS = {
+    "mlflow.runName", "twostep.job_key", "twostep.kind", "twostep.reused",
+    "twostep.scripted_llm", "twostep.status",
+}  # fmt: skip
+PARAMS = {
+    "agents", "compare_sa", "data.root", "decomposer.cut", "decomposer.link_degree",
+    "decomposer.name", "domain.agent_predicates", "domain.name", "executor.backoff_radius",
+    "executor.max_steps", "executor.name", "executor.random_start", "executor.render",
+    "executor.stall_limit", "experiment", "llm.api_base", "llm.api_key_env", "llm.backoff_s",
+    "llm.cache_dir", "llm.local", "llm.max_retries", "llm.mode", "llm.model", "llm.script",
+    "llm.temperature", "llm.timeout_s", "llm.top_p", "llm.use_cache",
+    "method.fallback_if_longer", "method.name", "mlflow.artifact_location",
+    "mlflow.connect_timeout_s", "mlflow.enabled", "mlflow.experiment", "mlflow.tracking_uri",
+    "orchestration.dask_address", "orchestration.dask_workers", "orchestration.job_store",
+    "orchestration.prefect", "orchestration.prefect_api_url", "orchestration.prefect_home",
+    "orchestration.prefect_log_level", "orchestration.progress", "orchestration.result_storage",
+    "orchestration.reuse_results", "orchestration.server_host",
+    "orchestration.server_startup_timeout_s", "orchestration.task_runner", "output.root",
+    "planner.alias", "planner.memory_limit_mb", "planner.time_limit_s", "score_max_nodes",
+    "score_mode", "score_time_limit_s", "seed", "task",
+}  # fmt: skip
+
+
+@pytest.fixture(scope="module", autouse=True)
+def hydra_conf() -> Iterator[None]:
+    register()
+    with initialize_config_dir(config_dir=str(REPO / "conf"), version_base="1.3"):
+        yield
+
+
+def run(name: str, out: Path, data_root: Path, *extra: str) -> tuple[Path, dict[str, object]]:
+    overrides = [f"data.root={data_root}", f"output.root={out}", "domain=blocksworld",
+                 "task=6", "agents=2", "orchestration.prefect=false", *JOBS[name][0], *extra]  # fmt: skip
+    job_dir = out / "jobs_dirs" / name
+    outcome = execute_job(compose("config", overrides=overrides), job_dir)
+    assert outcome.status == "success", outcome.error
+    return job_dir, json.loads((job_dir / "result.json").read_text())
+
+
+@pytest.mark.parametrize("name", list(JOBS))
+def test_result_json_and_files_keep_their_shape(name: str, tmp_path: Path, data_root: Path) -> None:
+    job_dir, result = run(name, tmp_path, data_root, "mlflow.enabled=false")
+    assert set(result) == COMMON | JOBS[name][1]
+    assert set(result["orchestration"]) == ORCHESTRATION  # type: ignore[arg-type]
+    assert all(set(call) == PLANNER_CALL for call in result["planner_calls"])  # type: ignore[attr-defined]
+    files = {p.relative_to(job_dir).as_posix() for p in job_dir.rglob("*") if p.is_file()}
+    assert files == {"result.json", "schedule.txt", "plans/agent0.plan"} | JOB_FILES[name]
+    stored = tmp_path / "jobs" / str(result["job_key"])
+    assert {p.name for p in stored.iterdir()} == {"config.json", "result.json"}
+    # the vocabularies: the same strings as before the enums
+    assert result["status"] == "solved"
+    assert result["method"] == {"sa": "sa", "ma": "ma"}.get(name, "twostep")
+
+
+@pytest.mark.slow  # MLflow's client in the test process: a few seconds per job
+@pytest.mark.parametrize("name", list(JOBS))
+def test_mlflow_run_keeps_its_shape(name: str, tmp_path: Path, data_root: Path) -> None:
+    from mlflow.tracking import MlflowClient
+
+    _, result = run(name, tmp_path, data_root)
+    stored = tmp_path / "jobs" / str(result["job_key"])
+    assert {p.name for p in stored.iterdir()} == {"config.json", "mlflow.json", "result.json"}
+    client = MlflowClient(f"sqlite:///{tmp_path}/mlflow.db")
+    (experiment,) = [e for e in client.search_experiments() if e.name == "twostep"]
+    (found,) = client.search_runs([experiment.experiment_id])
+    assert set(found.data.params) == PARAMS
+    assert set(found.data.metrics) == METRICS | JOB_METRICS[name]
+    assert set(found.data.tags) == TAGS and found.data.tags["twostep.status"] == "success"

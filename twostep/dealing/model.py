@@ -1,0 +1,21 @@
+"""What a deal is: :class:`Deal`, the outcome of dealing one SA plan, and :class:`DealError`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+class DealError(Exception):
+    """The SA plan could not be dealt (a walk not found, a piece not applicable)."""
+
+
+@dataclass
+class Deal:
+    """What :func:`twostep.dealing.deal_plan` decided: pieces, their agents, the agents' plans."""
+
+    pieces: list[list[int]]  # SA action indices of each piece, in the order replayed
+    owner: list[int]  # per piece: its agent (0-based)
+    plans: list[list[str]]  # per agent, its actions
+    estimate: int  # the list schedule's makespan, in actions
+    walks: int  # walking actions the agents' plans have (SA's own were dropped)
+    cleaned: int  # the SA plan's length after action elimination

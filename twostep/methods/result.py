@@ -1,0 +1,289 @@
+"""What a method returns (:class:`RunResult`, the result.json shape), and the one place for
+each rule the methods share when they fill it in:
+
+* :func:`new_run` starts a run of a request;
+* :func:`adopt_schedule` makes a scored joint schedule the run's outcome;
+* :func:`adopt_sa_plan` makes the single-agent plan the outcome;
+* :func:`longer_than_sa` decides when a joint schedule gives way to the SA plan
+  (``fallback_if_longer``);
+* :func:`count_sa_time` counts the SA plan's planner time in the run's planning time
+  (:attr:`RunResult.sa_time_included_s`, result.json ``sa_time_included_s``);
+* the vocabularies, as enums serialised to stable strings: :class:`MethodName`,
+  :class:`RunStatus` and :class:`FallbackReason` (:class:`Fallback` is a reason and its
+  details, as result.json's ``fallback`` text).
+
+Plans and schedules are kept in the compiled domain's terms here, and result.json names
+them in the task's own (:mod:`twostep.pddl.origins`); :func:`check_run` re-validates a
+run's schedule against the task.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Mapping, Sequence
+from dataclasses import dataclass, field
+from enum import StrEnum
+from typing import Any
+
+from twostep.decomposers.base import SubgoalProposal
+from twostep.execution import ParallelExecution, check_schedule
+from twostep.methods.request import MethodRequest
+from twostep.pddl import Problem
+from twostep.pddl.model import ActionOrigin
+from twostep.pddl.origins import original_action, original_plan
+from twostep.planner import PlanResult, Status
+from twostep.strips import Grounder
+
+
+class MethodName(StrEnum):
+    """The methods as result.json's ``method`` names them (plan-deal and the portfolio are
+    TwoStep runs: their ``decomposer`` says which)."""
+
+    SA = "sa"
+    MA = "ma"
+    TWOSTEP = "twostep"
+
+
+class RunStatus(StrEnum):
+    """How a run ended (result.json ``status``): the deciding planner call's status, or
+    ``llm_error`` when the decomposer's LLM calls failed (``message`` says why)."""
+
+    SOLVED = Status.SOLVED.value
+    TIMEOUT = Status.TIMEOUT.value
+    UNSOLVABLE = Status.UNSOLVABLE.value
+    INCOMPLETE = Status.INCOMPLETE.value
+    ERROR = Status.ERROR.value
+    LLM_ERROR = "llm_error"
+
+
+class FallbackReason(StrEnum):
+    """Why a run's outcome is the single-agent plan (the kinds of result.json ``fallback``)."""
+
+    NO_SUBGOAL_PROPOSED = "no helper subgoal proposed"
+    NO_SUBGOAL_ACCEPTED = "no helper subgoal accepted"
+    MAIN_AGENT_FAILED = "main agent after helpers"
+    SCHEDULE_INVALID = "joint schedule invalid"
+    LONGER_THAN_SA = "joint schedule longer than SA"
+    ONE_AGENT = "one agent"
+    NO_SA_PLAN = "no SA plan to deal"
+    NO_DEAL = "no deal"  # recorded as the deals' errors alone
+    NO_CANDIDATE_SOLVED = "no candidate solved"
+    NO_CANDIDATE = "no candidate (one agent)"
+
+    def describe(self, detail: str = "") -> str:
+        """The recorded text: the reason, and its details when there are any."""
+        if self is FallbackReason.NO_DEAL:
+            return detail
+        if not detail:
+            return self.value
+        if self is FallbackReason.LONGER_THAN_SA:
+            return f"{self.value} ({detail})"
+        return f"{self.value}: {detail}"
+
+
+class Fallback(str):
+    """Result.json's ``fallback`` text, knowing its :class:`FallbackReason` and details."""
+
+    reason: FallbackReason
+    detail: str
+
+    def __new__(cls, reason: FallbackReason, detail: str = "") -> Fallback:
+        fallback = super().__new__(cls, reason.describe(detail))
+        fallback.reason, fallback.detail = reason, detail
+        return fallback
+
+    def __reduce__(self) -> tuple[type[Fallback], tuple[FallbackReason, str]]:
+        return Fallback, (self.reason, self.detail)
+
+
+@dataclass
+class AgentPlan:
+    """One planner call of a run: which agent, towards which goal, and what came back."""
+
+    agent: str
+    role: str  # "single", "multi", "helper" or "main"
+    goal: str
+    result: PlanResult
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"agent": self.agent, "role": self.role, "goal": self.goal, **self.result.to_dict()}
+
+
+@dataclass
+class RunResult:
+    """What every method returns; :meth:`to_dict` is the result.json shape."""
+
+    domain: str
+    task: int
+    method: MethodName
+    agents: int
+    seed: int = 0
+    success: bool = False
+    exec_length: int | None = None
+    exact: bool = True  # False when the scorer hit its node budget (exec_length is an upper bound)
+    lower_bound: int | None = None  # the scorer's proven lower bound on exec_length
+    sa_length: int | None = None
+    sa_cost: int | None = None  # the SA plan's cost (its length unless the domain has costs)
+    planning_time_s: float = 0.0
+    llm_time_s: float = 0.0
+    plans: dict[str, list[str]] = field(default_factory=dict)
+    agent_order: list[str] = field(default_factory=list)  # hand-off order: who planned after whom
+    schedule: list[list[tuple[str, str]]] = field(default_factory=list)
+    subgoals: list[dict[str, Any]] = field(default_factory=list)
+    decomposer: str | None = None
+    status: RunStatus = RunStatus.SOLVED
+    message: str = ""
+    fallback: Fallback | None = None
+    planner_calls: list[AgentPlan] = field(default_factory=list)
+    state_editing_time_s: float = 0.0
+    score_time_s: float = 0.0
+    wall_time_s: float = 0.0
+    scripted_llm: bool = False
+    # The SA plan's planner time when it counts in planning_time_s (count_sa_time)
+    sa_time_included_s: float | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+    # The compiled domain's action origins (an ADL task): plans and schedule are in its
+    # terms here, in the task's own in result.json; empty for a STRIPS task.
+    origins: Mapping[str, ActionOrigin] = field(default_factory=dict, repr=False)
+
+    def task_plans(self) -> dict[str, list[str]]:
+        """The plans in the task's own action names (goal actions of a compilation left out)."""
+        if not self.origins:
+            return self.plans
+        return {agent: original_plan(self.origins, steps) for agent, steps in self.plans.items()}
+
+    def task_schedule(self) -> list[list[tuple[str, str]]]:
+        """The joint schedule in the task's own action names (a step keeps its place even
+        when it only held a compilation's goal action, so its length is ``exec_length``)."""
+        if not self.origins:
+            return self.schedule
+        named = []
+        for step in self.schedule:
+            pairs = [(agent, original_action(self.origins, action)) for agent, action in step]
+            named.append([(agent, action) for agent, action in pairs if action is not None])
+        return named
+
+    def to_dict(self) -> dict[str, Any]:
+        compiled = (
+            {"compiled_plans": self.plans} if self.task_plans() != self.plans else {}
+        )  # kept so that a schedule can be re-validated against the compiled task
+        sa_time = (
+            {"sa_time_included_s": round(self.sa_time_included_s, 4)}
+            if self.sa_time_included_s is not None
+            else {}
+        )
+        return {
+            "domain": self.domain,
+            "task": self.task,
+            "method": self.method.value,
+            "agents": self.agents,
+            "seed": self.seed,
+            "success": self.success,
+            "exec_length": self.exec_length,
+            "exact": self.exact,
+            "lower_bound": self.lower_bound,
+            "sa_length": self.sa_length,
+            "sa_cost": self.sa_cost,
+            "planning_time_s": round(self.planning_time_s, 4),
+            "llm_time_s": round(self.llm_time_s, 4),
+            "plans": self.task_plans(),
+            **compiled,
+            "agent_order": self.agent_order,
+            "schedule": [[list(pair) for pair in step] for step in self.task_schedule()],
+            "subgoals": self.subgoals,
+            "decomposer": self.decomposer,
+            "status": self.status.value,
+            "message": self.message,
+            "fallback": None if self.fallback is None else str(self.fallback),
+            "planner_calls": [c.to_dict() for c in self.planner_calls],
+            "state_editing_time_s": round(self.state_editing_time_s, 6),
+            "score_time_s": round(self.score_time_s, 6),
+            "wall_time_s": round(self.wall_time_s, 4),
+            "scripted_llm": self.scripted_llm,
+            **self.extra,
+            **sa_time,
+        }
+
+
+def new_run(request: MethodRequest, method: MethodName) -> RunResult:
+    """An empty run of ``method`` on the request's task (a single-agent run has 1 agent)."""
+    agents = 1 if method is MethodName.SA else request.agents
+    task = request.task
+    run = RunResult(task.domain_name, task.task_id, method, agents, request.seed)
+    run.sa_length = request.sa_length if method is not MethodName.SA else None
+    run.origins = task.problem.domain.origins
+    return run
+
+
+def solved_steps(result: PlanResult | None) -> tuple[str, ...] | None:
+    """The plan of a planner result that solved its task, else None."""
+    if result is None or not result.solved or result.plan is None:
+        return None
+    return tuple(result.plan)
+
+
+def adopt_schedule(
+    run: RunResult,
+    execution: ParallelExecution,
+    names: Sequence[str],
+    plans: Sequence[Sequence[str]],
+) -> None:
+    """Make the scored joint schedule of ``plans`` (agents ``names``, in hand-off order)
+    the run's outcome."""
+    run.agent_order = list(names)
+    run.plans = {name: list(steps) for name, steps in zip(names, plans, strict=True)}
+    run.schedule = [[(names[agent], action) for agent, action in step] for step in execution.steps]
+    run.exec_length = execution.length
+    run.exact, run.lower_bound = execution.exact, execution.lower_bound
+    run.success = True
+
+
+def adopt_sa_plan(run: RunResult, result: PlanResult) -> None:
+    """Make ``result`` (one agent on the whole task) the run's outcome."""
+    run.status = RunStatus(result.status.value)
+    if not result.solved or result.plan is None:
+        run.message = result.message
+        return
+    run.success = True
+    run.plans = {"agent0": list(result.plan)}
+    run.agent_order = ["agent0"]
+    run.exec_length = len(result.plan)
+    run.schedule = [[("agent0", a)] for a in result.plan]
+    if run.sa_length is None:
+        run.sa_length = len(result.plan)
+        run.sa_cost = result.cost
+
+
+def longer_than_sa(
+    request: MethodRequest, length: int, sa_steps: Sequence[str] | None
+) -> Fallback | None:
+    """With ``fallback_if_longer`` and an SA plan at hand: the fallback of a joint schedule
+    of ``length`` steps that is longer than the SA plan (None: the schedule stands)."""
+    if not request.fallback_if_longer or sa_steps is None or length <= len(sa_steps):
+        return None
+    return Fallback(FallbackReason.LONGER_THAN_SA, f"{length} > {len(sa_steps)}")
+
+
+def count_sa_time(run: RunResult, sa_plan: PlanResult) -> float:
+    """Record that the SA plan's planner time counts in the run's planning time; return it."""
+    run.sa_time_included_s = sa_plan.planner_time_s
+    return sa_plan.planner_time_s
+
+
+def record_proposals(run: RunResult, proposals: Sequence[SubgoalProposal]) -> None:
+    """The proposals as result.json records them, with their LLM time."""
+    run.llm_time_s = sum(p.llm_time_s for p in proposals)
+    run.scripted_llm = any(x.get("scripted") for p in proposals for x in p.exchanges)
+    run.subgoals = [p.to_dict() for p in proposals]
+
+
+def check_run(problem: Problem, run: RunResult, agent_predicates: Collection[str]) -> None:
+    """Re-validate a run's joint schedule against the original ``problem`` by simulation.
+
+    Raises :class:`~twostep.execution.ScheduleError` (or :class:`PlanError` for a plan
+    step the task does not know) when the schedule does not reach the goal.
+    """
+    grounder = Grounder(problem)
+    index = {agent: i for i, agent in enumerate(run.agent_order)}
+    plans = [grounder.ground_plan(run.plans[agent]) for agent in run.agent_order]
+    steps = [tuple((index[agent], action) for agent, action in step) for step in run.schedule]
+    check_schedule(steps, plans, problem.init, problem.goal, agent_predicates)
