@@ -4,7 +4,7 @@ the longest functions.
 Every import counts: at module level, under ``if TYPE_CHECKING:`` and inside functions
 (they all tie one module to another). An import of ``a.b.c`` points at module ``a.b.c``
 when it exists, else at the package or module that defines the name. A *cycle* is a
-strongly connected group of two or more modules (or a module importing itself); a
+group of modules that import each other, directly or not (or a module importing itself); a
 *back-arrow* is an import that closes a cycle: an edge to a module still open in a
 depth-first walk over the modules in sorted order (so the count is reproducible). A
 *private import* names another module's ``_name``. Function length counts every line
@@ -92,46 +92,31 @@ def functions(module: str, path: Path) -> Iterator[Function]:
     yield from walk(tree, "")
 
 
-def strongly_connected(graph: Mapping[str, set[str]]) -> list[list[str]]:
-    """Tarjan's components, each sorted; iterative so deep graphs do not hit recursion."""
-    index: dict[str, int] = {}
-    low: dict[str, int] = {}
-    on_stack: set[str] = set()
-    stack: list[str] = []
-    components: list[list[str]] = []
-    for start in sorted(graph):
-        if start in index:
+def reachable(graph: Mapping[str, set[str]], start: str) -> set[str]:
+    """Every module ``start`` reaches by imports (itself only through a cycle)."""
+    seen: set[str] = set()
+    frontier = list(graph[start])
+    while frontier:
+        node = frontier.pop()
+        if node not in seen:
+            seen.add(node)
+            frontier.extend(graph[node])
+    return seen
+
+
+def cycles_of(graph: Mapping[str, set[str]]) -> list[list[str]]:
+    """The groups of modules that import each other, directly or not (a module importing
+    itself is a group of one); the graphs here are small enough to compare reach sets."""
+    reach = {node: reachable(graph, node) for node in graph}
+    groups: list[list[str]] = []
+    placed: set[str] = set()
+    for node in sorted(graph):
+        if node in placed or node not in reach[node]:
             continue
-        work = [(start, iter(sorted(graph[start])))]
-        index[start] = low[start] = len(index)
-        stack.append(start)
-        on_stack.add(start)
-        while work:
-            node, children = work[-1]
-            child = next(children, None)
-            if child is not None:
-                if child not in index:
-                    index[child] = low[child] = len(index)
-                    stack.append(child)
-                    on_stack.add(child)
-                    work.append((child, iter(sorted(graph[child]))))
-                elif child in on_stack:
-                    low[node] = min(low[node], index[child])
-                continue
-            work.pop()
-            if work:
-                parent = work[-1][0]
-                low[parent] = min(low[parent], low[node])
-            if low[node] == index[node]:
-                component = []
-                while True:
-                    member = stack.pop()
-                    on_stack.discard(member)
-                    component.append(member)
-                    if member == node:
-                        break
-                components.append(sorted(component))
-    return components
+        group = sorted(other for other in reach[node] if node in reach[other])
+        placed.update(group)
+        groups.append(group)
+    return groups
 
 
 def back_arrows(graph: Mapping[str, set[str]]) -> list[tuple[str, str]]:
@@ -171,7 +156,7 @@ def main(argv: list[str] | None = None) -> int:
             graph[module].add(target)
             if name is not None and target != module:
                 private.append((module, target, name))
-    cycles = [c for c in strongly_connected(graph) if len(c) > 1 or c[0] in graph[c[0]]]
+    cycles = cycles_of(graph)
     arrows = back_arrows(graph)
     print(f"package {args.package} under {args.root}")
     print(f"modules: {len(modules)}, imports between them: {sum(map(len, graph.values()))}")

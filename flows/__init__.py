@@ -17,7 +17,7 @@ module              what it is for
 ``sweep_state``     what a sweep's jobs share on disk: state, identity, job records
 ``servers``         Prefect servers we start: spawned, watched, shared by a sweep, stopped
 ``services``        ``twostep-services``: long-lived Prefect server and MLflow UI
-``tracking``        MLflow: one interface (:class:`~flows.tracking.JobRunLog`), its writers
+``tracking``        MLflow: one interface (:mod:`flows.tracking.runs`), its writers
 ``locations``       the local files and folders behind URIs; whether they can be written
 ``environment``     offline-safe environment defaults (telemetry off)
 ``report_cli``      ``twostep-report``: the paper's figures from the runs

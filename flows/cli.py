@@ -12,6 +12,7 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import hydra
 from hydra.core.hydra_config import HydraConfig
@@ -22,6 +23,9 @@ from flows.artifacts import picture_paths
 from flows.config import register
 from flows.console import format_schedule, format_summary
 from flows.environment import quiet_defaults
+
+if TYPE_CHECKING:
+    from flows.job import JobOutcome
 
 CONF_DIR = str(Path(__file__).resolve().parent.parent / "conf")
 
@@ -35,10 +39,9 @@ _SINGLE_RUN_DONE = False
 
 @hydra.main(config_path=CONF_DIR, config_name="config", version_base="1.3")
 def app(cfg: DictConfig) -> None:
-    from flows.console import progress_line
     from flows.job import execute_job
     from flows.sweep_state import SweepState, record_job
-    from flows.tracking import TrackingError
+    from flows.tracking.runs import TrackingError
 
     hydra_cfg = HydraConfig.get()
     job_dir = Path(hydra_cfg.runtime.output_dir)
@@ -50,12 +53,8 @@ def app(cfg: DictConfig) -> None:
         print(f"error: {error}", file=sys.stderr, flush=True)
         if not multirun:
             sys.exit(2)
-        record = {
-            "num": hydra_cfg.job.num,
-            "name": job_dir.name,
-            "status": "failed",
-            "error": str(error),
-        }
+        record = {"num": hydra_cfg.job.num, "name": job_dir.name, "status": "failed",
+                  "error": str(error)}  # fmt: skip
         record_job(Path(hydra_cfg.sweep.dir), hydra_cfg.job.num, record)
         return
     global _SINGLE_RUN_DONE
@@ -67,21 +66,36 @@ def app(cfg: DictConfig) -> None:
         hits, runs = outcome.stats.plan_cache_hits, outcome.stats.plan_calls
         line += f" | planner cache: {hits} hit(s), {runs} run"
     if not multirun:
-        if "error" in outcome.result:  # the job raised: one line, no traceback
-            print(f"error: {outcome.error}", file=sys.stderr, flush=True)
-            sys.exit(2 if outcome.input_error else 1)
-        print(line)
-        table = format_schedule(outcome.result)
-        if table:
-            print(table)
-        print(f"result: {job_dir / 'result.json'}")
-        for label, path in picture_paths(job_dir):
-            print(f"{label}: {path}")
-        if outcome.status != "success":  # no plan (unsolvable, timeout): scripts see it
-            sys.exit(1)
+        _finish_single_run(outcome, line, job_dir)
         return
-    record = {
-        "num": hydra_cfg.job.num,
+    record_job(Path(hydra_cfg.sweep.dir), hydra_cfg.job.num, _sweep_record(outcome))
+    if cfg.orchestration.progress and sweep is not None:
+        from flows.console import progress_line
+
+        line = f"{progress_line(sweep)} {line}"
+    print(line, flush=True)
+
+
+def _finish_single_run(outcome: JobOutcome, line: str, job_dir: Path) -> None:
+    """Print what a single run did; exit 2 for bad input, 1 for a crash or no plan."""
+    if "error" in outcome.result:  # the job raised: one line, no traceback
+        print(f"error: {outcome.error}", file=sys.stderr, flush=True)
+        sys.exit(2 if outcome.input_error else 1)
+    print(line)
+    table = format_schedule(outcome.result)
+    if table:
+        print(table)
+    print(f"result: {job_dir / 'result.json'}")
+    for label, path in picture_paths(job_dir):
+        print(f"{label}: {path}")
+    if outcome.status != "success":  # no plan (unsolvable, timeout): scripts see it
+        sys.exit(1)
+
+
+def _sweep_record(outcome: JobOutcome) -> dict[str, Any]:
+    """The job's record in its sweep (``.twostep/jobs/<num>.json``)."""
+    return {
+        "num": HydraConfig.get().job.num,
         "name": outcome.name,
         "job_key": outcome.key,
         "status": outcome.status,
@@ -93,10 +107,6 @@ def app(cfg: DictConfig) -> None:
         **outcome.stats.to_dict(),
         **outcome.timings,
     }
-    record_job(Path(hydra_cfg.sweep.dir), hydra_cfg.job.num, record)
-    if cfg.orchestration.progress and sweep is not None:
-        line = f"{progress_line(sweep)} {line}"
-    print(line, flush=True)
 
 
 def main() -> None:

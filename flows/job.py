@@ -4,7 +4,7 @@
 and in each job of a sweep (any launcher):
 
 1. check the MLflow store (single run; a sweep's callback checked it already):
-   :class:`~flows.tracking.TrackingError` before any work;
+   :class:`~flows.tracking.runs.TrackingError` before any work;
 2. a job whose key is in the job store is read back, not recomputed (``reused``);
 3. otherwise build it from its config, once (:func:`flows.build.build_job`), and run it
    (:func:`compute_job`): as the Prefect flow on the sweep's server (started on demand by
@@ -14,7 +14,7 @@ and in each job of a sweep (any launcher):
    ``orchestration.prefect=false``) the library directly;
 4. write result.json and the other files to the job's Hydra directory;
 5. log params, metrics, artifacts and status to the job's MLflow run
-   (:class:`~flows.tracking.JobRunLog`), found again by ``twostep.job_key`` (a re-run
+   (:class:`~flows.tracking.runs.JobRunLog`), found again by ``twostep.job_key`` (a re-run
    adds no duplicate), child of the sweep's parent run; skipped when the reused result is
    known to be logged there already.
 
@@ -42,7 +42,7 @@ from flows.services import running_prefect_api
 from flows.step_stats import StepStats, counting_steps
 from flows.store import JobStore, job_config, job_inputs, job_key
 from flows.sweep_state import SweepState
-from flows.tracking import DEFAULT_EXPERIMENT, JobRunLog, check_store, job_record
+from flows.tracking.runs import DEFAULT_EXPERIMENT, JobRunLog, check_store, job_record
 from twostep.benchmark import BenchmarkError
 from twostep.identity import job_name
 from twostep.pddl import PDDLError
@@ -222,11 +222,11 @@ def execute_job(
 ) -> JobOutcome:
     """Run (or reuse) one job and record it; see the module docstring for the order.
 
-    Raises :class:`~flows.tracking.TrackingError` when the MLflow store of a single run
+    Raises :class:`~flows.tracking.runs.TrackingError` when the MLflow store of a single run
     cannot be used, before any planning; every other error is a ``failed`` outcome.
 
     ``tracking_worker`` (single runs of the command): MLflow's store is prepared while the
-    job runs (:class:`~flows.tracking.JobRunLog`); the job still returns after its run
+    job runs (:class:`~flows.tracking.runs.JobRunLog`); the job still returns after its run
     is logged.
     """
     start = time.perf_counter()
@@ -262,28 +262,8 @@ def execute_job(
         else:
             result = failed_result(config, error)
     store.release(key)  # a second process waiting for this job reads its result now
-    status, status_error = job_status(result)
-    job_wall = time.perf_counter() - start
-    work = compute_timings["server_wait_s"] + stats.planner_wall_s + stats.llm_wall_s
-    timings = {
-        "job_wall_time_s": job_wall,
-        **compute_timings,
-        "orchestration_overhead_s": max(0.0, job_wall - work),
-    }
-    outcome = JobOutcome(
-        name, key, result, status, status_error, stored is not None, stats, timings,
-        input_error=input_error,
-    )  # fmt: skip
-    outcome.result = {
-        **result,
-        "job_key": key,
-        "orchestration": {
-            "reused": outcome.reused,
-            "prefect": "flow_wall_s" in compute_timings,
-            **stats.to_dict(),
-            **{k: round(v, 4) for k, v in timings.items()},
-        },
-    }
+    outcome = _outcome(name, key, result, stored is not None, stats, compute_timings, start)
+    outcome.input_error = input_error
     files = write_job_files(job_dir, outcome.result)
     if details:
         (job_dir / "error.txt").write_text(details)
@@ -293,7 +273,46 @@ def execute_job(
     # With MLflow logging: what the job cost end to end (the progress record, the bench).
     outcome.timings["tracking_s"] = time.perf_counter() - tracking_start
     outcome.timings["job_wall_time_s"] = job_wall = time.perf_counter() - start
-    outcome.timings["orchestration_overhead_s"] = max(0.0, job_wall - work)
+    outcome.timings["orchestration_overhead_s"] = max(0.0, job_wall - _work(outcome))
+    return outcome
+
+
+def _work(outcome: JobOutcome) -> float:
+    """What the job spent on work, not orchestration: fresh planner and LLM calls, and
+    waiting for its server."""
+    stats = outcome.stats
+    return outcome.timings["server_wait_s"] + stats.planner_wall_s + stats.llm_wall_s
+
+
+def _outcome(
+    name: str,
+    key: str,
+    result: dict[str, Any],
+    reused: bool,
+    stats: StepStats,
+    compute_timings: dict[str, float],
+    start: float,
+) -> JobOutcome:
+    """The job's outcome; its result gains ``job_key`` and ``orchestration`` (what ran
+    where, and the timings so far)."""
+    status, status_error = job_status(result)
+    outcome = JobOutcome(name, key, result, status, status_error, reused, stats, compute_timings)
+    job_wall = time.perf_counter() - start
+    outcome.timings = {
+        "job_wall_time_s": job_wall,
+        **compute_timings,
+        "orchestration_overhead_s": max(0.0, job_wall - _work(outcome)),
+    }
+    outcome.result = {
+        **result,
+        "job_key": key,
+        "orchestration": {
+            "reused": reused,
+            "prefect": "flow_wall_s" in compute_timings,
+            **stats.to_dict(),
+            **{k: round(v, 4) for k, v in outcome.timings.items()},
+        },
+    }
     return outcome
 
 

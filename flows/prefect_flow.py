@@ -41,6 +41,7 @@ import json
 import logging
 import time
 from collections.abc import Callable, Collection, Mapping, Sequence
+from contextvars import ContextVar
 from dataclasses import asdict
 from functools import cache
 from importlib import metadata
@@ -363,6 +364,26 @@ def job_settings(api_url: str, storage: Path) -> SettingsContext:
     return SettingsContext(profile=current.profile, settings=_SETTINGS[key])
 
 
+# The job the current flow run computes, with its step counts and whether planner calls go
+# to the task runner: built once by flows.job and handed over here, since the flow's
+# parameter is the config (what the UI shows). Prefect pickles the flow's function by value
+# into Dask's workers: it must not hold the job (nor this variable) itself.
+_RUNNING: ContextVar[tuple[Job, StepStats, bool]] = ContextVar("twostep_running_job")
+
+
+def running_job() -> tuple[Job, StepStats, bool]:
+    """The job :func:`run_flow` is running in this context."""
+    return _RUNNING.get()
+
+
+@flow(name="twostep-job", persist_result=False, validate_parameters=False, log_prints=False)
+def job_flow(job: dict[str, Any]) -> dict[str, Any]:
+    """One job (``job``: its resolved config); the steps, the LLM calls among them, run as
+    tasks and the library keeps the control flow."""
+    built, stats, submit = running_job()
+    return built.run(prefect_steps(stats, submit=submit)).to_dict()
+
+
 def run_flow(
     built: Job,
     config: Mapping[str, Any],
@@ -378,19 +399,16 @@ def run_flow(
     quiet_logs(str(config["orchestration"]["prefect_log_level"]))
     storage = Path(config["orchestration"]["result_storage"])
     storage.mkdir(parents=True, exist_ok=True)
-    counted = stats if stats is not None else StepStats()
     submit = config["orchestration"]["task_runner"] == "dask"
-
-    @flow(name="twostep-job", persist_result=False, validate_parameters=False, log_prints=False)
-    def job_flow(job: dict[str, Any]) -> dict[str, Any]:
-        # The steps, the LLM calls among them, as task runs; the library keeps the control flow.
-        return built.run(prefect_steps(counted, submit=submit)).to_dict()
-
     options: dict[str, Any] = {"flow_run_name": name}
     runner = _task_runner(config, dask_address)
     if runner is not None:
         options["task_runner"] = runner
-    with job_settings(api_url, storage), tags(*flow_tags):
-        state = job_flow.with_options(**options)(dict(config), return_state=True)
+    running = _RUNNING.set((built, stats if stats is not None else StepStats(), submit))
+    try:
+        with job_settings(api_url, storage), tags(*flow_tags):
+            state = job_flow.with_options(**options)(dict(config), return_state=True)
+    finally:
+        _RUNNING.reset(running)
     result: dict[str, Any] = state.result()  # raises the exception the job raised
     return result

@@ -123,7 +123,7 @@ class SweepCallback(Callback):
             overrides=overrides,
         )
         if config.mlflow.enabled:
-            from flows.tracking import TrackingError, check_store, experiment_name_for
+            from flows.tracking.runs import TrackingError, check_store, experiment_name_for
 
             try:
                 check_store(str(config.mlflow.tracking_uri), float(config.mlflow.connect_timeout_s))
@@ -206,7 +206,7 @@ class SweepCallback(Callback):
     def _end_parent_run(state: SweepState, summary: Mapping[str, Any], failed: bool) -> None:
         if state.tracking_uri is None:
             return
-        from flows.tracking import end_sweep_run
+        from flows.tracking.runs import end_sweep_run
 
         metrics = {
             key: float(value)

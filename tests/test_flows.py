@@ -33,8 +33,8 @@ from flows.job import execute_job
 from flows.servers import pid_alive, stop_server
 from flows.store import JobStore, job_config, job_key
 from flows.sweep_state import SweepState, record_job
-from flows.tracking import TrackingError
 from flows.tracking.contents import job_metrics, job_params
+from flows.tracking.runs import TrackingError
 from tests.conftest import blocks_problem
 from tests.test_prompts import make_blocksworld_data
 

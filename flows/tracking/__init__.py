@@ -1,5 +1,6 @@
-"""MLflow tracking, as docs/tracking.md lays it out; the rest of ``flows/`` calls only the
-names exported here.
+"""MLflow tracking, as docs/tracking.md lays it out; the rest of ``flows/`` calls only
+:mod:`flows.tracking.runs` (this package imports nothing itself, so that its helper process
+and its template maker start light).
 
 ==============  ================================================================
 module          what it is for
@@ -12,17 +13,3 @@ module          what it is for
 ``template``    the environment's empty store, copied for every new store
 ==============  ================================================================
 """
-
-from flows.tracking.client import TrackingError, check_store
-from flows.tracking.contents import DEFAULT_EXPERIMENT, experiment_name_for, job_record
-from flows.tracking.runs import JobRunLog, end_sweep_run
-
-__all__ = [
-    "DEFAULT_EXPERIMENT",
-    "JobRunLog",
-    "TrackingError",
-    "check_store",
-    "end_sweep_run",
-    "experiment_name_for",
-    "job_record",
-]

@@ -1,5 +1,7 @@
-"""The one way the rest of ``flows/`` writes to MLflow: :class:`JobRunLog` for a job's run,
-:func:`end_sweep_run` for a sweep's parent run.
+"""The one interface the rest of ``flows/`` calls for MLflow: :func:`check_store` before
+any work, :class:`JobRunLog` for a job's run, :func:`end_sweep_run` for a sweep's parent
+run (and the names they need: :class:`TrackingError`, :func:`job_record`,
+:func:`experiment_name_for`).
 
 Behind :class:`JobRunLog` are three writers, chosen when the job starts so that the slow
 part (importing MLflow, opening its store: 2-4 s) overlaps the job or is skipped:
@@ -23,13 +25,24 @@ from typing import TYPE_CHECKING, Any
 
 from flows.locations import sqlite_path
 from flows.servers import file_lock
-from flows.tracking.client import Tracker, log_job_run
+from flows.tracking.client import Tracker, TrackingError, check_store, log_job_run
+from flows.tracking.contents import DEFAULT_EXPERIMENT, experiment_name_for, job_record
 from flows.tracking.sqlite import SqliteJobLog
 from flows.tracking.worker import TrackingWorker
 from twostep.files import write_json_atomic
 
 if TYPE_CHECKING:
     from flows.sweep_state import SweepState
+
+__all__ = [
+    "DEFAULT_EXPERIMENT",
+    "JobRunLog",
+    "TrackingError",
+    "check_store",
+    "end_sweep_run",
+    "experiment_name_for",
+    "job_record",
+]
 
 
 class JobRunLog:

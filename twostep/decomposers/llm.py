@@ -135,6 +135,21 @@ class LLMDecomposition:
     error: str | None = None  # an LLM call that failed after retries: the loop stopped
     exchanges: list[Exchange] = field(default_factory=list)
 
+    def fail(self, helper: int, step: str, error: Exception, done: list[Exchange]) -> None:
+        """Record a call that failed after its retries (``done``: the exchanges before it)."""
+        self.error = f"{step} for agent{helper}: {error}"
+        self.proposals.append(
+            SubgoalProposal(
+                helper,
+                None,
+                None,
+                SubgoalStatus.DISCARDED,
+                f"LLM call failed: {error}",
+                _seconds(*done),
+                done,
+            )
+        )
+
 
 def _seconds(*exchanges: Exchange) -> float:
     return float(sum(e["seconds"] for e in exchanges))
@@ -168,86 +183,64 @@ class LLMDecomposer:
         english_so_far: list[str] = []
         accepted: dict[int, str] = {}
         for helper in range(1, request.agents):
-            step = "generate"
             try:
                 english, gen = generate(
-                    self.client,
-                    task,
-                    request.agents,
-                    helper,
-                    english_so_far,
-                    seed,
+                    self.client, task, request.agents, helper, english_so_far, seed,
                     fixed_example=self.fixed_example,
-                )
-                result.exchanges.append(gen)
-                if gen["status"] == "none":
-                    result.stopped_at, result.stop_exchange = helper, gen
-                    # kept as a proposal so that result.json records the answer
-                    result.proposals.append(
-                        SubgoalProposal(
-                            helper,
-                            None,
-                            None,
-                            SubgoalStatus.STOPPED,
-                            NONE_REASON,
-                            _seconds(gen),
-                            [gen],
-                        )
-                    )
-                    break
-                if english is None:
-                    result.proposals.append(
-                        SubgoalProposal(
-                            helper,
-                            None,
-                            None,
-                            SubgoalStatus.DISCARDED,
-                            gen["reason"],
-                            _seconds(gen),
-                            [gen],
-                        )
-                    )
-                    continue
-                english_so_far.append(english)
-                step = "translate"
-                pddl, tr = translate(
-                    self.client, task, english, seed, helper=helper, earlier=accepted
-                )
+                )  # fmt: skip
             except LLMCallError as exc:
-                result.error = f"{step} for agent{helper}: {exc}"
-                done = [gen] if step == "translate" else []  # the answer given before it
+                result.fail(helper, "generate", exc, [])
+                break
+            result.exchanges.append(gen)
+            if gen["status"] == "none":
+                result.stopped_at, result.stop_exchange = helper, gen
+                # kept as a proposal so that result.json records the answer
+                result.proposals.append(
+                    SubgoalProposal(
+                        helper, None, None, SubgoalStatus.STOPPED, NONE_REASON, _seconds(gen), [gen]
+                    )
+                )
+                break
+            if english is None:
                 result.proposals.append(
                     SubgoalProposal(
                         helper,
                         None,
                         None,
                         SubgoalStatus.DISCARDED,
-                        f"LLM call failed: {exc}",
-                        _seconds(*done),
-                        done,
+                        gen["reason"],
+                        _seconds(gen),
+                        [gen],
                     )
                 )
+                continue
+            english_so_far.append(english)
+            try:
+                pddl, tr = translate(
+                    self.client, task, english, seed, helper=helper, earlier=accepted
+                )
+            except LLMCallError as exc:
+                result.fail(helper, "translate", exc, [gen])  # the answer given before it
                 break
             result.exchanges.append(tr)
-            status, reason = (
-                (SubgoalStatus.PROPOSED, None)
-                if pddl is not None
-                else (SubgoalStatus.DISCARDED, tr["reason"])
-            )
             if pddl is not None:
                 accepted[helper] = pddl
-            result.proposals.append(
-                SubgoalProposal(
-                    helper,
-                    pddl if pddl is not None else tr["parsed"],
-                    english,
-                    status,
-                    reason,
-                    _seconds(gen, tr),
-                    [gen, tr],
-                )
-            )
+            result.proposals.append(_translated(helper, english, pddl, gen, tr))
         return result
+
+
+def _translated(
+    helper: int, english: str, pddl: str | None, gen: Exchange, tr: Exchange
+) -> SubgoalProposal:
+    """The proposal of a translated subgoal: proposed, or discarded with the reason."""
+    if pddl is not None:
+        return SubgoalProposal(
+            helper, pddl, english, SubgoalStatus.PROPOSED, None, _seconds(gen, tr), [gen, tr]
+        )
+    return SubgoalProposal(
+        helper, tr["parsed"], english, SubgoalStatus.DISCARDED, tr["reason"],
+        _seconds(gen, tr), [gen, tr],
+    )  # fmt: skip
 
 
 __all__ = [

@@ -274,89 +274,129 @@ def split_plan(
     """
     grounded = Grounder(problem).ground_plan(plan)
     edges, links = plan_order(problem, grounded, agent_predicates)
-    durations: dict[int, int] = defaultdict(int)  # by first action of a piece
-    if cut == "holding":
-        free_states(problem, grounded, agent_predicates)  # the plan must be applicable
-        pieces = merge_cycles(holding_pieces(problem, grounded, agent_predicates), edges)
-        acting = [
-            members
-            for members in pieces
-            if any(
-                environment_part(grounded[i].add | grounded[i].delete, agent_predicates)
-                for i in members
-            )
-        ]
-        acting_piece = {i: members[0] for members in acting for i in members}
-        for members in acting:
-            durations[members[0]] = len(members)
-        for i in range(len(grounded)):  # walking counts towards the next action that acts
-            if i not in acting_piece:
-                after = [j for j in sorted(acting_piece) if j > i]
-                if after:
-                    durations[acting_piece[after[0]]] += 1
-        pieces = acting
-    else:
-        pieces = free_pieces(problem, grounded, agent_predicates)
-        for members in pieces:
-            durations[members[0]] = len(members)
+    pieces, durations = _pieces(problem, grounded, agent_predicates, edges, cut)
     pieces = topological_pieces(pieces, edges)
     piece_of = {i: p for p, members in enumerate(pieces) for i in members}
     preds: list[set[int]] = [set() for _ in pieces]
     for i, j in edges:
         if i in piece_of and j in piece_of and piece_of[i] != piece_of[j]:
             preds[piece_of[j]].add(piece_of[i])
+    lengths = [durations[piece[0]] for piece in pieces]
+    total = sum(lengths)
+    schedule = _HandOffSchedule(agents, len(grounded))
+    for p, before in enumerate(preds):
+        schedule.place(before, lengths[p], chunk=assign == "chunks", total=total)
+    used = sorted(set(schedule.agent_of), key=lambda a: (schedule.first_start[a], a))
+    order = _topological(used, schedule.agent_edges, schedule.first_start)
+    position = {a: k for k, a in enumerate(order)}
+    owner = [position[a] for a in schedule.agent_of]
+    split = Split(pieces, owner, max(schedule.finish, default=0))
+    split.subgoals = _subgoals(
+        problem, grounded, agent_predicates, links, pieces, owner, len(order) - 1, keep
+    )
+    return split
 
-    # 3. list scheduling under the hand-off constraint
-    agent_of: list[int] = []
-    finish: list[int] = []
-    free_at = [0] * max(agents, 1)
-    first_start = [len(grounded) + 1] * max(agents, 1)
-    agent_edges: set[tuple[int, int]] = set()
-    total = sum(durations[piece[0]] for piece in pieces)
-    done = 0
-    for p, piece in enumerate(pieces):
-        length = durations[piece[0]]
-        if assign == "chunks":  # the stretch the middle of this piece falls in
-            a = min(int((done + length / 2) * max(agents, 1) / max(total, 1)), agents - 1)
-            done += length
-            ready = max((finish[q] for q in preds[p]), default=0)
-            agent_edges |= {(agent_of[q], a) for q in preds[p] if agent_of[q] != a}
-            agent_of.append(a)
-            finish.append(max(ready, free_at[a]) + length)
-            first_start[a] = min(first_start[a], finish[-1] - length)
-            free_at[a] = finish[-1]
-            continue
-        ready = max((finish[q] for q in preds[p]), default=0)
-        # key: earliest finish, then fewest hand-offs from other agents, then the idlest agent
+
+def _pieces(
+    problem: Problem,
+    grounded: Sequence[GroundAction],
+    agent_predicates: Collection[str],
+    edges: set[tuple[int, int]],
+    cut: str,
+) -> tuple[list[list[int]], dict[int, int]]:
+    """Step 2: the pieces, and their durations by first action (with ``cut="holding"``,
+    walking counts towards the next piece that acts)."""
+    durations: dict[int, int] = defaultdict(int)  # by first action of a piece
+    if cut != "holding":
+        pieces = free_pieces(problem, grounded, agent_predicates)
+        for members in pieces:
+            durations[members[0]] = len(members)
+        return pieces, durations
+    free_states(problem, grounded, agent_predicates)  # the plan must be applicable
+    pieces = merge_cycles(holding_pieces(problem, grounded, agent_predicates), edges)
+    acting = [
+        members
+        for members in pieces
+        if any(
+            environment_part(grounded[i].add | grounded[i].delete, agent_predicates)
+            for i in members
+        )
+    ]
+    acting_piece = {i: members[0] for members in acting for i in members}
+    for members in acting:
+        durations[members[0]] = len(members)
+    for i in range(len(grounded)):  # walking counts towards the next action that acts
+        if i not in acting_piece:
+            after = [j for j in sorted(acting_piece) if j > i]
+            if after:
+                durations[acting_piece[after[0]]] += 1
+    return acting, durations
+
+
+class _HandOffSchedule:
+    """Step 3: list scheduling under the hand-off constraint, one piece at a time (in an
+    order the edges allow); or, with ``chunk``, consecutive stretches of equal length."""
+
+    def __init__(self, agents: int, actions: int) -> None:
+        self.agents = agents
+        self.agent_of: list[int] = []  # per piece placed: its agent
+        self.finish: list[int] = []  # per piece placed: when it ends
+        self.free_at = [0] * max(agents, 1)
+        self.first_start = [actions + 1] * max(agents, 1)
+        self.agent_edges: set[tuple[int, int]] = set()  # agent a hands off to agent b
+        self.done = 0  # chunks: the length placed so far
+
+    def place(self, preds: set[int], length: int, chunk: bool, total: int) -> None:
+        ready = max((self.finish[q] for q in preds), default=0)
+        if chunk:  # the stretch the middle of this piece falls in
+            agents = max(self.agents, 1)
+            a = min(int((self.done + length / 2) * agents / max(total, 1)), self.agents - 1)
+            self.done += length
+            end = max(ready, self.free_at[a]) + length
+        else:
+            a, end = self._earliest(preds, length, ready)
+        self.agent_edges |= {(self.agent_of[q], a) for q in preds if self.agent_of[q] != a}
+        self.agent_of.append(a)
+        self.finish.append(end)
+        self.first_start[a] = min(self.first_start[a], end - length)
+        self.free_at[a] = end
+
+    def _earliest(self, preds: set[int], length: int, ready: int) -> tuple[int, int]:
+        """The agent on which the piece ends earliest, then with the fewest hand-offs from
+        other agents, then the idlest, without making the agents' hand-offs cyclic."""
         best: tuple[int, int, int, int] | None = None
-        for a in range(max(agents, 1)):
-            new = {(agent_of[q], a) for q in preds[p] if agent_of[q] != a}
-            if new - agent_edges and _cyclic(agent_edges | new, len(free_at)):
+        for a in range(max(self.agents, 1)):
+            new = {(self.agent_of[q], a) for q in preds if self.agent_of[q] != a}
+            if new - self.agent_edges and _cyclic(self.agent_edges | new, len(self.free_at)):
                 continue
-            start = max(ready, free_at[a])
-            crossing = sum(agent_of[q] != a for q in preds[p])
-            key = (start + length, crossing, free_at[a], a)
+            start = max(ready, self.free_at[a])
+            crossing = sum(self.agent_of[q] != a for q in preds)
+            key = (start + length, crossing, self.free_at[a], a)
             if best is None or key < best:
                 best = key
         # never None: the agent that comes last among the predecessors' agents closes no cycle
         assert best is not None
-        a = best[3]
-        agent_edges |= {(agent_of[q], a) for q in preds[p] if agent_of[q] != a}
-        agent_of.append(a)
-        finish.append(best[0])
-        first_start[a] = min(first_start[a], best[0] - length)
-        free_at[a] = best[0]
-    used = sorted(set(agent_of), key=lambda a: (first_start[a], a))
-    order = _topological(used, agent_edges, first_start)
-    position = {a: k for k, a in enumerate(order)}
-    split = Split(pieces, [position[a] for a in agent_of], max(finish, default=0))
+        return best[3], best[0]
 
-    # 4. subgoals of every agent but the last (the main agent)
+
+def _subgoals(
+    problem: Problem,
+    grounded: Sequence[GroundAction],
+    agent_predicates: Collection[str],
+    links: Sequence[CausalLink],
+    pieces: Sequence[Sequence[int]],
+    owner: Sequence[int],
+    helpers: int,
+    keep: str,
+) -> list[Goal]:
+    """Step 4: the subgoal of each of the first ``helpers`` agents in hand-off order."""
+    piece_of = {i: p for p, members in enumerate(pieces) for i in members}
     release = release_literals(problem, agent_predicates)
     goal_facts = environment_part(problem.goal.positive, agent_predicates)
     env = environment_part(problem.init, agent_predicates)
-    for k in range(len(order) - 1):
-        mine = sorted(i for p, members in enumerate(pieces) if split.owner[p] == k for i in members)
+    subgoals: list[Goal] = []
+    for k in range(helpers):
+        mine = sorted(i for p, members in enumerate(pieces) if owner[p] == k for i in members)
         before = env
         added: set[Fact] = set()
         for i in mine:
@@ -370,7 +410,7 @@ def split_plan(
             if link.producer in mine
             and (
                 link.consumer >= len(grounded)
-                or (link.consumer in piece_of and split.owner[piece_of[link.consumer]] > k)
+                or (link.consumer in piece_of and owner[piece_of[link.consumer]] > k)
             )
         }
         if keep == "goal":
@@ -379,8 +419,8 @@ def split_plan(
             f for f in added & env if f not in before and (f in goal_facts or f in later)
         )
         if wanted:
-            split.subgoals.append(Goal(wanted | release.positive, release.negative))
-    return split
+            subgoals.append(Goal(wanted | release.positive, release.negative))
+    return subgoals
 
 
 def topological_pieces(pieces: list[list[int]], edges: set[tuple[int, int]]) -> list[list[int]]:
