@@ -31,6 +31,7 @@ from collections.abc import Collection
 
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.pddl import Domain, Fact, Goal, Problem
+from twostep.progression import agent_part, environment_part
 
 
 def positional_predicates(domain: Domain) -> set[str]:
@@ -46,9 +47,7 @@ def open_goal_components(
     problem: Problem, agent_predicates: Collection[str], link_degree: int = 2
 ) -> list[list[Fact]]:
     """Connected groups of the open environment goal literals (see the module docstring)."""
-    open_literals = sorted(
-        f for f in problem.goal.positive - problem.init if f[0] not in agent_predicates
-    )
+    open_literals = sorted(environment_part(problem.goal.positive - problem.init, agent_predicates))
     degree: dict[str, int] = defaultdict(int)
     for fact in open_literals:
         for obj in set(fact[1:]):
@@ -78,11 +77,11 @@ def open_goal_components(
 
 def release_literals(problem: Problem, agent_predicates: Collection[str]) -> Goal:
     """What every helper must leave true at its end (step 4 of the module docstring)."""
-    positional = positional_predicates(problem.domain)
-    positive = {f for f in problem.goal.positive if f[0] in agent_predicates}
-    negative = {f for f in problem.goal.negative if f[0] in agent_predicates}
-    positive |= {f for f in problem.init if f[0] in agent_predicates and f[0] not in positional}
-    return Goal(frozenset(positive), frozenset(negative - positive))
+    capacity = set(agent_predicates) - positional_predicates(problem.domain)
+    positive = agent_part(problem.goal.positive, agent_predicates)
+    negative = agent_part(problem.goal.negative, agent_predicates)
+    positive |= agent_part(problem.init, capacity)
+    return Goal(positive, negative - positive)
 
 
 def split_goal(

@@ -61,7 +61,7 @@ from dataclasses import dataclass, field
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import positional_predicates, release_literals
 from twostep.pddl import Fact, Goal, Problem
-from twostep.progression import environment_part
+from twostep.progression import agent_part, environment_part
 from twostep.strips import GroundAction, Grounder, simulate
 
 
@@ -121,10 +121,10 @@ def free_states(
     problem: Problem, plan: Sequence[GroundAction], agent_predicates: Collection[str]
 ) -> list[int]:
     """Step 2: the indices t (0..n) after which the agent holds nothing (see the docstring)."""
-    positional = positional_predicates(problem.domain)
+    capacity = set(agent_predicates) - positional_predicates(problem.domain)
 
     def holding(state: frozenset[Fact]) -> frozenset[Fact]:
-        return frozenset(f for f in state if f[0] in agent_predicates and f[0] not in positional)
+        return agent_part(state, capacity)
 
     free = holding(problem.init)
     state = problem.init
@@ -161,7 +161,7 @@ def holding_pieces(
     and shaker are separate pieces even where the SA plan held one while using the other.
     """
     positional = positional_predicates(problem.domain)
-    own = {f for f in problem.init if f[0] in agent_predicates}
+    own = agent_part(problem.init, agent_predicates)
     parent = list(range(len(plan)))
 
     def find(i: int) -> int:
