@@ -26,13 +26,9 @@ from tests.test_plan_split import (
 )
 from twostep.benchmark import load_task
 from twostep.dealing import deal_plan, eliminate_actions, eliminate_joint, walks
-from twostep.methods import (
-    MethodRequest,
-    Portfolio,
-    run_plan_deal,
-    run_portfolio,
-    run_single_agent,
-)
+from twostep.methods import MethodRequest, run_single_agent
+from twostep.methods.plan_deal import run_plan_deal
+from twostep.methods.portfolio import Portfolio, run_portfolio
 from twostep.strips import Grounder
 
 

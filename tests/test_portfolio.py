@@ -22,7 +22,8 @@ from tests.test_plan_split import (
 )
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import GoalSplitDecomposer
-from twostep.methods import MethodRequest, Portfolio, run_portfolio
+from twostep.methods import MethodRequest
+from twostep.methods.portfolio import Portfolio, run_portfolio
 
 
 class Scripted:

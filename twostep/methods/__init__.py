@@ -20,11 +20,12 @@ module            what it is for
     request = MethodRequest(task, agents=3, planner=settings, agent_predicates=facts,
                             decomposer=GoalSplitDecomposer(facts))
     run = method_for("twostep", "goal-split")(request)
+
+plan-deal and the portfolio load on first use (:func:`method_for`, or their modules), so that
+importing the package stays light.
 """
 
 from twostep.methods.multi_agent import run_multi_agent
-from twostep.methods.plan_deal import run_plan_deal
-from twostep.methods.portfolio import Portfolio, run_portfolio
 from twostep.methods.registry import Method, method_for
 from twostep.methods.request import MethodRequest
 from twostep.methods.result import (
@@ -48,15 +49,12 @@ __all__ = [
     "Method",
     "MethodName",
     "MethodRequest",
-    "Portfolio",
     "RunResult",
     "RunStatus",
     "Steps",
     "check_run",
     "method_for",
     "run_multi_agent",
-    "run_plan_deal",
-    "run_portfolio",
     "run_single_agent",
     "run_twostep",
 ]

@@ -14,8 +14,6 @@ from collections.abc import Callable
 from functools import partial
 
 from twostep.methods.multi_agent import run_multi_agent
-from twostep.methods.plan_deal import BEST, check_cut, run_plan_deal
-from twostep.methods.portfolio import Portfolio, run_portfolio
 from twostep.methods.request import MethodRequest
 from twostep.methods.result import MethodName, RunResult
 from twostep.methods.single_agent import run_single_agent
@@ -36,12 +34,14 @@ class UnknownMethod(ValueError):
 
 
 def method_for(
-    method: str, decomposer: str | None = None, *, cut: str = BEST, link_degree: int = 2
+    method: str, decomposer: str | None = None, *, cut: str = "best", link_degree: int = 2
 ) -> Method:
     """The function that runs ``method`` (with ``decomposer`` for ``twostep``).
 
     ``cut`` is plan-deal's (``free``, ``holding`` or ``best``), ``link_degree`` the
-    portfolio's for its goal-split members; the other methods have no options.
+    portfolio's for its goal-split members; the other methods have no options. plan-deal
+    and the portfolio are imported here, when asked for: a job of another method never
+    loads their algorithms.
     """
     if method == MethodName.SA:
         return run_single_agent
@@ -50,9 +50,13 @@ def method_for(
     if method != MethodName.TWOSTEP:
         raise UnknownMethod(f"unknown method '{method}' (known: {', '.join(METHODS)})")
     if decomposer == "plan-deal":
+        from twostep.methods.plan_deal import check_cut, run_plan_deal
+
         check_cut(cut)  # a ValueError now, not at the first run
         return partial(run_plan_deal, cut=cut)
     if decomposer == "portfolio":
+        from twostep.methods.portfolio import Portfolio, run_portfolio
+
         return partial(run_portfolio, portfolio=Portfolio(link_degree))
     if decomposer is None or decomposer in SUBGOAL_SOURCES:
         return run_twostep
