@@ -154,15 +154,17 @@ class Job:
         solved first (its length is reported beside the result, and TwoStep reuses the
         plan), then the embodied executor runs the plans when configured."""
         request = replace(self.request, steps=steps)
-        if self.method_name is MethodName.SA or not self.compare_sa:
+        if self.method_name is MethodName.SA:
             return self.execute(self.method(request))
-        sa = run_single_agent(request)
-        request = replace(request, sa_length=sa.sa_length, sa_plan=sa.planner_calls[0].result)
+        sa = run_single_agent(request) if self.compare_sa else None
+        if sa is not None:
+            request = replace(request, sa_length=sa.sa_length, sa_plan=sa.planner_calls[0].result)
         result = self.method(request)
         if self.method_name is MethodName.TWOSTEP:
             result.extra["fallback_if_longer"] = request.fallback_if_longer
-        # The SA comparison is solved in the same job; its planner time is reported apart.
-        result.extra["sa_planning_time_s"] = round(sa.planning_time_s, 4)
+        if sa is not None:
+            # The SA comparison is solved in the same job; its planner time is reported apart.
+            result.extra["sa_planning_time_s"] = round(sa.planning_time_s, 4)
         return self.execute(result)
 
     def execute(self, run: RunResult) -> RunResult:
