@@ -1,0 +1,503 @@
+"""Conformance bench: does twostep read, plan and validate real PDDL as Fast Downward does?
+
+For every problem of a corpus:
+
+* **Fast Downward** (lama-first, ``--time-limit`` seconds of search) on the ORIGINAL files:
+  solved?, wall time; its plan is also given to the independent validator (a validator that
+  rejected Fast Downward's own plan would be reported as a failure of the validator).
+* **twostep, SA**: ``twostep method=sa data.root=... domain.name=<folder> task=<n>
+  mlflow.enabled=false output.root=<fresh tmp>`` through the command line, as a user runs
+  it (a fresh ``output.root`` per run: nothing reused, the parsed-task cache cold). Loaded?
+  (the run got past reading the task), load time (``orchestration.task_load_s`` of
+  result.json), solved?, and is the plan valid on the ORIGINAL files by the independent
+  validator (``bench/independent``: unified-planning where its reader accepts the files,
+  Fast Downward's translator plus a simulator written apart from twostep everywhere)? Also
+  checked: ``sa_length`` is the plan's action count, ``sa_cost`` its cost.
+* with ``--agents FILE`` (YAML: ``domain: [agent predicates]``), for the domains it lists:
+  **MA** (``method=ma agents=2``) and **TwoStep plan-deal** (``method=twostep
+  decomposer=plan-deal agents=2``). A schedule is valid when each agent's actions in it are
+  its plan, in order, and (check_run's job, done independently) its time steps replay on the
+  original task's grounding with each agent owning a copy of the agent-specific facts
+  (every order of a step's actions must run and reach the same state), and
+  unified-planning accepts the sequentialised schedule in an N-agent formulation it builds
+  itself from the original files (each agent-specific fluent and each action copied per
+  agent). We do not validate against twostep's own MA compilation: a bug there would
+  then pass unnoticed. The N-agent formulation is the one the paper and twostep's scorer
+  define (agents share environment facts, each keeps its own agent facts, agent-specific
+  goal literals must hold for every agent).
+
+Prints a table (domain, problem, loaded, load s, solved, FD solved, plan valid, MA valid,
+plan-deal valid), every failure with its one-line reason, and a summary line. Rows go to
+``--out`` as they finish; a re-run with the same ``--out`` skips the rows it holds (resume).
+
+Corpus layouts: the LLM+P layout (``<domain>/domain.pddl`` + ``pNN.pddl``), or any tree of
+folders with a ``domain.pddl`` beside problem files (any ``*.pddl`` that is a
+``(define (problem``; such problems are given to twostep through a staging folder of links).
+
+    .venv/bin/python bench/bench_conformance.py --corpus ../shared/ipc-sample \\
+        --agents ../shared/ipc-sample/agents.yaml --out docs/bench/conformance.json
+    .venv/bin/python bench/bench_conformance.py --corpus DIR --only blocks,gripper --workers 2
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+
+from bench.independent import IndependentValidator, Verdict  # noqa: E402
+from bench.independent import fast_downward as fd  # noqa: E402
+
+AGENTS = 2
+PROBLEM_FILE = re.compile(r"^p(\d+)\.pddl$")
+ENVIRONMENT = {  # as the Makefile sets them: offline, no telemetry
+    "LITELLM_LOCAL_MODEL_COST_MAP": "True",
+    "MLFLOW_DISABLE_TELEMETRY": "true",
+    "PREFECT_SERVER_ANALYTICS_ENABLED": "false",
+    "DO_NOT_TRACK": "1",
+}
+COLUMNS = ("domain", "problem", "loaded", "load s", "solved", "FD solved", "plan valid",
+           "MA valid", "plan-deal valid")  # fmt: skip
+
+
+# ----------------------------------------------------------------------- the corpus
+
+
+@dataclass(frozen=True)
+class ProblemFiles:
+    domain_name: str  # the folder, relative to the corpus
+    domain: Path
+    problem: Path
+    task: int | None  # the LLM+P task number when the file is pNN.pddl
+
+    @property
+    def key(self) -> str:
+        return f"{self.domain_name}/{self.problem.name}"
+
+
+def is_problem_file(path: Path) -> bool:
+    try:
+        head = path.read_text(errors="replace")[:4000]
+    except OSError:
+        return False
+    head = re.sub(r";[^\n]*", " ", head)
+    return re.match(r"\s*\(\s*define\s*\(\s*problem\b", head, re.I) is not None
+
+
+def find_problems(corpus: Path) -> list[ProblemFiles]:
+    """Every problem of ``corpus``: pNN.pddl beside a domain.pddl (LLM+P layout), else any
+    problem file beside a domain.pddl."""
+    found = []
+    for domain in sorted(corpus.rglob("domain.pddl")):
+        folder = domain.parent
+        name = folder.relative_to(corpus).as_posix() if folder != corpus else folder.name
+        numbered = {
+            p: int(m.group(1)) for p in folder.iterdir() if (m := PROBLEM_FILE.match(p.name))
+        }
+        if numbered:
+            for path, task in sorted(numbered.items(), key=lambda item: item[1]):
+                found.append(ProblemFiles(name, domain, path, task))
+            continue
+        for path in sorted(folder.glob("*.pddl")):
+            if path.name != "domain.pddl" and is_problem_file(path):
+                found.append(ProblemFiles(name, domain, path, None))
+    return found
+
+
+# ----------------------------------------------------------------------- twostep runs
+
+
+def twostep_command() -> str:
+    beside = Path(sys.executable).parent / "twostep"
+    return str(beside) if beside.is_file() else (shutil.which("twostep") or "twostep")
+
+
+@dataclass(frozen=True)
+class TwostepRun:
+    exit_code: int | None  # None: killed at the wall-clock limit
+    result: dict[str, Any] | None
+    error: str  # the last line of stderr (a failure's reason)
+    wall_s: float
+
+
+def run_twostep(
+    files: ProblemFiles, overrides: Sequence[str], time_limit_s: float, timeout_s: float
+) -> TwostepRun:
+    """One ``twostep`` run on ``files``, on a fresh output root, through the command line."""
+    with tempfile.TemporaryDirectory(prefix="conformance-") as tmp:
+        out = Path(tmp)
+        if files.task is not None:
+            data_root, name, task = files.domain.parent.parent, files.domain.parent.name, files.task
+        else:  # stage the original files as <root>/<name>/{domain,p01}.pddl (links)
+            name, task = "task", 1
+            data_root = out / "data"
+            (data_root / name).mkdir(parents=True)
+            (data_root / name / "domain.pddl").symlink_to(files.domain.resolve())
+            (data_root / name / "p01.pddl").symlink_to(files.problem.resolve())
+        command = [
+            twostep_command(),
+            f"data.root={data_root}",
+            "domain=tyreworld",  # any domain config: its name and agent predicates are set here
+            f"domain.name={name}",
+            f"task={task}",
+            "planner=lama-first",
+            f"planner.time_limit_s={time_limit_s:g}",
+            "mlflow.enabled=false",
+            "orchestration.prefect=false",
+            f"output.root={out / 'outputs'}",
+            f"hydra.run.dir={out / 'run'}",
+            *overrides,
+        ]
+        start = time.perf_counter()
+        try:
+            done = subprocess.run(
+                command,
+                capture_output=True,
+                text=True,
+                timeout=timeout_s,
+                env={**os.environ, **ENVIRONMENT},
+                cwd=out,
+                check=False,
+            )
+        except subprocess.TimeoutExpired:
+            return TwostepRun(
+                None, None, f"killed after {timeout_s:g} s", time.perf_counter() - start
+            )
+        wall = time.perf_counter() - start
+        result_file = out / "run" / "result.json"
+        result = json.loads(result_file.read_text()) if result_file.is_file() else None
+        lines = [line for line in done.stderr.splitlines() if line.strip()]
+        return TwostepRun(done.returncode, result, lines[-1][:300] if lines else "", wall)
+
+
+def loaded(run: TwostepRun) -> bool:
+    """The run got past reading the task (a planner ran, or it failed later than loading)."""
+    result = run.result or {}
+    return bool(result.get("planner_calls")) or result.get("status") not in (None, "failed")
+
+
+def load_seconds(run: TwostepRun) -> float | None:
+    value = ((run.result or {}).get("orchestration") or {}).get("task_load_s")
+    return round(float(value), 3) if loaded(run) and value is not None else None
+
+
+def reason_of(run: TwostepRun) -> str:
+    result = run.result or {}
+    text = result.get("message") or result.get("error") or run.error or f"exit {run.exit_code}"
+    return " ".join(str(text).split())[:300]
+
+
+# ----------------------------------------------------------------------- one problem
+
+
+def check_single_agent(
+    files: ProblemFiles, validator: IndependentValidator, args: Any
+) -> dict[str, Any]:
+    run = run_twostep(files, ["method=sa"], args.time_limit, args.run_timeout)
+    result = run.result or {}
+    row: dict[str, Any] = {
+        "exit_code": run.exit_code,
+        "wall_s": round(run.wall_s, 2),
+        "loaded": loaded(run),
+        "load_s": load_seconds(run),
+        "status": result.get("status"),
+        "solved": bool(result.get("success")),
+        "sa_length": result.get("sa_length"),
+        "sa_cost": result.get("sa_cost"),
+        "valid": None,
+        "failures": [],
+    }
+    if not row["loaded"]:
+        row["failures"].append(f"SA: not loaded: {reason_of(run)}")
+        return row
+    if not row["solved"]:
+        row["failures"].append(f"SA: not solved ({row['status']}): {reason_of(run)}")
+        return row
+    order = result.get("agent_order") or ["agent0"]
+    plan = list((result.get("plans") or {}).get(order[0], []))
+    row["length"] = len(plan)
+    verdict = validator.check_plan(plan)
+    row.update(
+        valid=verdict.valid, reason=verdict.reason, cost=verdict.cost, checkers=verdict.checkers
+    )
+    if not verdict.valid:
+        row["failures"].append(f"SA: plan invalid on the original files: {verdict.reason}")
+    if row["sa_length"] != len(plan):
+        row["failures"].append(
+            f"SA: sa_length {row['sa_length']} but the plan has {len(plan)} actions"
+        )
+    if verdict.valid and row["sa_cost"] != verdict.cost:
+        row["failures"].append(
+            f"SA: sa_cost {row['sa_cost']} but the plan costs {verdict.cost} on the original task"
+        )
+    return row
+
+
+def check_schedule_run(
+    label: str,
+    files: ProblemFiles,
+    overrides: list[str],
+    agent_predicates: list[str],
+    validator: IndependentValidator,
+    args: Any,
+) -> dict[str, Any]:
+    preds = f"domain.agent_predicates=[{','.join(agent_predicates)}]"
+    run = run_twostep(
+        files, [*overrides, f"agents={AGENTS}", preds], args.time_limit, args.run_timeout
+    )
+    result = run.result or {}
+    row: dict[str, Any] = {
+        "exit_code": run.exit_code,
+        "wall_s": round(run.wall_s, 2),
+        "status": result.get("status"),
+        "success": bool(result.get("success")),
+        "exec_length": result.get("exec_length"),
+        "fallback": result.get("fallback"),
+        "valid": None,
+        "failures": [],
+    }
+    if not row["success"]:
+        row["failures"].append(f"{label}: no schedule ({row['status']}): {reason_of(run)}")
+        return row
+    schedule = result.get("schedule") or []
+    verdict: Verdict = validator.check_schedule(
+        result.get("agent_order") or [], result.get("plans") or {}, schedule, agent_predicates
+    )
+    row.update(
+        valid=verdict.valid, reason=verdict.reason, checkers=verdict.checkers, steps=len(schedule)
+    )
+    if not verdict.valid:
+        row["failures"].append(f"{label}: schedule invalid: {verdict.reason}")
+    if row["exec_length"] != len(schedule):
+        row["failures"].append(
+            f"{label}: exec_length {row['exec_length']} but the schedule has {len(schedule)} steps"
+        )
+    return row
+
+
+def check_problem(
+    files: ProblemFiles, agent_predicates: list[str] | None, args: Any
+) -> dict[str, Any]:
+    """Everything the bench measures on one problem, as a JSON-ready row."""
+    start = time.perf_counter()
+    validator = IndependentValidator(files.domain, files.problem)
+    row: dict[str, Any] = {
+        "key": files.key,
+        "domain": files.domain_name,
+        "problem": files.problem.name,
+    }
+    planner = fd.plan(files.domain, files.problem, time_limit_s=args.time_limit)
+    row["fd"] = {"status": planner.status, "solved": planner.plan is not None,
+                 "wall_s": round(planner.wall_s, 2), "cost": planner.cost,
+                 "length": len(planner.plan) if planner.plan is not None else None}  # fmt: skip
+    failures: list[str] = []
+    if planner.plan is None:
+        failures.append(f"FD: not solved ({planner.status}): {planner.message}")
+    else:
+        own = validator.check_plan(planner.plan)
+        row["fd"]["plan_valid"] = own.valid
+        if not own.valid:
+            failures.append(f"validator: rejects Fast Downward's own plan: {own.reason}")
+    row["sa"] = check_single_agent(files, validator, args)
+    failures += row["sa"].pop("failures")
+    for label, key, overrides in (
+        ("MA", "ma", ["method=ma", "compare_sa=false"]),
+        ("plan-deal", "deal", ["method=twostep", "decomposer=plan-deal"]),
+    ):
+        if agent_predicates is None or not row["sa"]["loaded"]:
+            row[key] = None
+            continue
+        row[key] = check_schedule_run(label, files, overrides, agent_predicates, validator, args)
+        failures += row[key].pop("failures")
+    row["checkers"] = validator._checkers()
+    row["failures"] = failures
+    row["seconds"] = round(time.perf_counter() - start, 1)
+    return row
+
+
+# ----------------------------------------------------------------------- reporting
+
+
+def mark(value: bool | None) -> str:
+    return "-" if value is None else ("yes" if value else "no")
+
+
+def schedule_mark(run: dict[str, Any] | None) -> str:
+    if not run:
+        return "-"
+    return mark(run["valid"]) if run["success"] else f"no ({run['status']})"
+
+
+def table_rows(rows: list[dict[str, Any]]) -> list[tuple[str, ...]]:
+    out: list[tuple[str, ...]] = []
+    for row in rows:
+        sa = row["sa"]
+        load = sa.get("load_s")
+        out.append((
+            row["domain"], row["problem"], mark(sa["loaded"]),
+            "-" if load is None else f"{load:.2f}",
+            mark(sa["solved"]) if sa["loaded"] else "-", mark(row["fd"]["solved"]),
+            mark(sa.get("valid")),
+            schedule_mark(row.get("ma")), schedule_mark(row.get("deal")),
+        ))  # fmt: skip
+    return out
+
+
+def summary(rows: list[dict[str, Any]]) -> list[str]:
+    total = len(rows)
+    fd_solved = [r for r in rows if r["fd"]["solved"]]
+    good = [r for r in rows if r["sa"]["solved"] and r["sa"].get("valid")]
+    good_of_fd = [r for r in fd_solved if r["sa"]["solved"] and r["sa"].get("valid")]
+    ma = [r["ma"] for r in rows if r.get("ma")]
+    deal = [r["deal"] for r in rows if r.get("deal")]
+    return [
+        f"problems {total}; twostep loaded {sum(r['sa']['loaded'] for r in rows)}/{total}; "
+        f"Fast Downward solves {len(fd_solved)}/{total}",
+        f"SA solved+valid {len(good_of_fd)}/{len(fd_solved)} of the problems FD solves "
+        f"({len(good)}/{total} of all)",
+        f"MA valid {sum(bool(m['valid']) for m in ma)}/{len(ma)}, "
+        f"plan-deal valid {sum(bool(d['valid']) for d in deal)}/{len(deal)} (N = {AGENTS})",
+    ]
+
+
+def report(rows: list[dict[str, Any]]) -> str:
+    lines = ["| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
+    lines += ["| " + " | ".join(cells) + " |" for cells in table_rows(rows)]
+    failures = [(row["key"], f) for row in rows for f in row["failures"]]
+    if failures:
+        lines += ["", "Failures:"]
+        lines += [f"- {key}: {text}" for key, text in failures]
+    lines += ["", *summary(rows)]
+    return "\n".join(lines)
+
+
+def load_average() -> str:
+    return " ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
+def write_json(path: Path, data: dict[str, Any]) -> None:
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(json.dumps(data, indent=1) + "\n")
+    tmp.replace(path)
+
+
+def progress_line(done: int, total: int, row: dict[str, Any]) -> str:
+    sa = row["sa"]
+    state = "not loaded" if not sa["loaded"] else ("solved" if sa["solved"] else "not solved")
+    if sa.get("valid") is not None:
+        state += ", valid" if sa["valid"] else ", INVALID"
+    extra = "".join(
+        f" | {label} {mark(row[key]['valid'])}"
+        for label, key in (("MA", "ma"), ("deal", "deal"))
+        if row.get(key)
+    )
+    fd_state = "solved" if row["fd"]["solved"] else row["fd"]["status"]
+    return f"[{done}/{total}] {row['key']}: SA {state} | FD {fd_state}{extra} | {row['seconds']} s"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument(
+        "--corpus",
+        type=Path,
+        required=True,
+        help="LLM+P layout or any tree of domain.pddl + problems",
+    )
+    parser.add_argument(
+        "--agents", type=Path, help="YAML: domain -> agent predicates (MA and plan-deal, N = 2)"
+    )
+    parser.add_argument(
+        "--time-limit", type=float, default=30, help="search seconds, FD and twostep (default 30)"
+    )
+    parser.add_argument(
+        "--run-timeout", type=float, default=600, help="wall-clock limit of one twostep run"
+    )
+    parser.add_argument(
+        "--out", type=Path, help="JSON file of rows; rows already there are not run again"
+    )
+    parser.add_argument("--only", help="comma-separated domain folders")
+    parser.add_argument("--workers", type=int, default=1, help="problems at once (default 1)")
+    args = parser.parse_args(argv)
+
+    corpus = args.corpus.resolve()
+    problems = find_problems(corpus)
+    if args.only:
+        wanted = {d.strip() for d in args.only.split(",") if d.strip()}
+        problems = [p for p in problems if p.domain_name in wanted]
+    if not problems:
+        print(f"no problems found under {corpus}", file=sys.stderr)
+        return 2
+    agents: dict[str, list[str]] = {}
+    if args.agents:
+        agents = {
+            str(k): [str(p) for p in v]
+            for k, v in (yaml.safe_load(args.agents.read_text()) or {}).items()
+        }
+    meta = {"corpus": str(corpus), "time_limit_s": args.time_limit, "agents_file": str(args.agents or ""),
+            "planner": "lama-first", "agents": AGENTS}  # fmt: skip
+    rows: list[dict[str, Any]] = []
+    loads: list[str] = []  # the machine's load average at each start and end (timings depend on it)
+    if args.out and args.out.is_file():
+        stored = json.loads(args.out.read_text())
+        if stored.get("meta") != meta:
+            print(
+                f"{args.out} holds rows of another setting ({stored.get('meta')}); use another --out",
+                file=sys.stderr,
+            )
+            return 2
+        rows = stored.get("rows", [])
+        loads = stored.get("load_average", [])
+    done_keys = {row["key"] for row in rows}
+    todo = [p for p in problems if p.key not in done_keys]
+    print(
+        f"{len(problems)} problems, {len(problems) - len(todo)} already in {args.out}, {len(todo)} to run",
+        flush=True,
+    )
+
+    if todo:
+        loads.append(f"start {load_average()}")
+
+    def finished(row: dict[str, Any]) -> None:
+        rows.append(row)
+        print(progress_line(len(rows), len(problems), row), flush=True)
+        if args.out:
+            write_json(args.out, {"meta": meta, "load_average": loads, "rows": rows})
+
+    if args.workers <= 1:
+        for files in todo:
+            finished(check_problem(files, agents.get(files.domain_name), args))
+    else:
+        with concurrent.futures.ProcessPoolExecutor(args.workers) as pool:
+            futures = [pool.submit(check_problem, f, agents.get(f.domain_name), args) for f in todo]
+            for future in concurrent.futures.as_completed(futures):
+                finished(future.result())
+    if todo:
+        loads.append(f"end {load_average()}")
+    if args.out and todo:
+        write_json(args.out, {"meta": meta, "load_average": loads, "rows": rows})
+    keys = [p.key for p in problems]
+    chosen = sorted((r for r in rows if r["key"] in keys), key=lambda r: keys.index(r["key"]))
+    print()
+    print(report(chosen))
+    print("load average (1, 5, 15 min): " + "; ".join(loads))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
