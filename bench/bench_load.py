@@ -6,12 +6,15 @@ both see the same machine load):
 
 * **twostep**: ``twostep-score DOMAIN PROBLEM EMPTY_PLAN --no-cache``, twostep's load-only
   command line (it reads and grounds the task, then checks an empty plan), on a cold
-  parsed-task cache. Its wall time minus the median wall time of ``twostep-score --help``
-  (the same process's start-up and imports) is twostep's load time. A second call with a
-  cache folder measures the warm load (the parsed-task cache).
+  parsed-task cache; then with a cache folder, once to fill it and ``--repeats`` times warm
+  (the parsed-task cache). Process wall times, start to end: they include the process's
+  start-up, printed once as the wall time of ``twostep-score --help``.
 * **Fast Downward**: ``python -m fast_downward.translate`` from the up-fast-downward wheel
-  (the process's wall time, and the translator's own "Done!" wall-clock time: parse,
-  ground, write ``output.sas``).
+  (the process's wall time, start-up included, and the translator's own "Done!" wall-clock
+  time: parse, ground, write ``output.sas``).
+
+In-process load times of the ``twostep`` command (``orchestration.task_load_s``) are in the
+conformance bench's rows (``bench/bench_conformance.py``, column "load s").
 
 Reports per problem the medians, then the median and max over the corpus and the ratio.
 The AlfWorld-shaped problem is ``tests/fixtures/constructs/exists_goal/p02.pddl`` (our own
@@ -66,7 +69,7 @@ def startup_baseline(repeats: int) -> float:
     return statistics.median(timed([score_command(), "--help"])[0] for _ in range(max(3, repeats)))
 
 
-def measure(files: ProblemFiles, repeats: int, baseline: float, tmp: Path) -> dict[str, Any]:
+def measure(files: ProblemFiles, repeats: int, tmp: Path) -> dict[str, Any]:
     empty = tmp / "empty.plan"
     empty.write_text("")
     cold: list[float] = []
@@ -80,7 +83,7 @@ def measure(files: ProblemFiles, repeats: int, baseline: float, tmp: Path) -> di
         if done.returncode == EXIT_BAD_INPUT:
             errors["twostep"] = (done.stderr.strip().splitlines() or ["exit 2"])[-1][:200]
         else:
-            cold.append(wall - baseline)
+            cold.append(wall)
         try:
             translation = fd.translate(files.domain, files.problem, options=())
         except fd.TranslateError as failure:
@@ -95,7 +98,7 @@ def measure(files: ProblemFiles, repeats: int, baseline: float, tmp: Path) -> di
             command = [score_command(), str(files.domain), str(files.problem), str(empty)]
             command += ["--cache-dir", cache]
             timed(command)  # fills the cache
-            warm = [timed(command)[0] - baseline for _ in range(repeats)]
+            warm = [timed(command)[0] for _ in range(repeats)]
 
     def median(values: list[float]) -> float | None:
         return round(statistics.median(values), 3) if values else None
@@ -121,6 +124,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--alfworld-only", action="store_true", help="only the 65-object AlfWorld-shaped problem"
     )
+    parser.add_argument(
+        "--alfworld",
+        nargs=2,
+        type=Path,
+        metavar=("DOMAIN", "PROBLEM"),
+        help="another AlfWorld problem for the AlfWorld line (default: our 65-object fixture)",
+    )
     parser.add_argument("--out", type=Path, help="write the rows as JSON")
     args = parser.parse_args(argv)
 
@@ -130,16 +140,19 @@ def main(argv: list[str] | None = None) -> int:
         if args.only:
             wanted = {d.strip() for d in args.only.split(",")}
             problems = [p for p in problems if p.domain_name in wanted]
-    alfworld = ProblemFiles(
-        "alfworld-shape", ALFWORLD_SHAPE / "domain.pddl", ALFWORLD_SHAPE / "p02.pddl", None
+    alf_domain, alf_problem = args.alfworld or (
+        ALFWORLD_SHAPE / "domain.pddl",
+        ALFWORLD_SHAPE / "p02.pddl",
     )
+    alfworld = ProblemFiles("alfworld", alf_domain, alf_problem, None)
     print(f"load average before: {load_average()}", flush=True)
     baseline = startup_baseline(args.repeats)
-    print(f"twostep-score start-up (--help, median): {baseline:.3f} s", flush=True)
+    print(f"twostep-score start-up (--help, median wall): {baseline:.2f} s", flush=True)
+    print("process wall times, medians of the repeats:", flush=True)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for files in [*problems, alfworld]:
-            row = measure(files, args.repeats, baseline, Path(tmp))
+            row = measure(files, args.repeats, Path(tmp))
             rows.append(row)
             print(
                 f"{row['key']:45s} twostep {fmt(row['twostep_load_s'])} s (warm {fmt(row['twostep_warm_s'])})"
@@ -149,23 +162,28 @@ def main(argv: list[str] | None = None) -> int:
             )
     print(f"load average after: {load_average()}")
     corpus_rows = [r for r in rows if r["key"] != alfworld.key]
-    loads = [r["twostep_load_s"] for r in corpus_rows if r["twostep_load_s"] is not None]
+    both = [r for r in corpus_rows if r["twostep_load_s"] is not None and r["fd_translate_wall_s"]]
     fds = [r["fd_translate_wall_s"] for r in corpus_rows if r["fd_translate_wall_s"] is not None]
     if corpus_rows:
-        print(f"twostep loaded {len(loads)}/{len(corpus_rows)} problems")
-    if loads:
-        worst = max(corpus_rows, key=lambda r: r["twostep_load_s"] or 0)
+        print(f"twostep loads {len(both)}/{len(corpus_rows)} problems")
+    if both:
+        loads = [r["twostep_load_s"] for r in both]
+        worst = max(both, key=lambda r: r["twostep_load_s"])
         print(
-            f"twostep load: median {statistics.median(loads):.2f} s, max {max(loads):.2f} s ({worst['key']}), "
-            f"above 5 s: {sum(x > 5 for x in loads)}"
+            f"on those {len(both)}: twostep load (process) median {statistics.median(loads):.2f} s, "
+            f"max {max(loads):.2f} s ({worst['key']}), above 5 s: {sum(x > 5 for x in loads)}; "
+            f"Fast Downward translate (process) median "
+            f"{statistics.median(r['fd_translate_wall_s'] for r in both):.2f} s; "
+            f"ratio median {statistics.median(r['ratio'] for r in both):.1f}x"
         )
     if fds:
         print(
-            f"Fast Downward translate (process): median {statistics.median(fds):.2f} s, max {max(fds):.2f} s"
+            f"Fast Downward translate (process), all {len(fds)}: median {statistics.median(fds):.2f} s, "
+            f"max {max(fds):.2f} s"
         )
     alf = rows[-1]
     print(
-        f"AlfWorld-shaped 65 objects: twostep cold {fmt(alf['twostep_load_s'])} s, warm "
+        f"AlfWorld ({alf_problem.name}): twostep cold {fmt(alf['twostep_load_s'])} s, warm "
         f"{fmt(alf['twostep_warm_s'])} s; Fast Downward translate {fmt(alf['fd_translate_wall_s'])} s"
     )
     if args.out:
