@@ -267,7 +267,7 @@ def test_a_step_whose_actions_interfere_is_rejected_by_the_simulator() -> None:
     check = validator("disjunctive_preconditions")
     step = [["agent0", "(take k19)"], ["agent1", "(unlock d1)"]]
     verdict = check.check_schedule(["agent0", "agent1"], plans_of([step]), [step], [])
-    assert not verdict.valid and "time step 1" in verdict.reason
+    assert not verdict.valid and "step 1 in the order" in verdict.reason
     fine = [[["agent0", "(take k19)"]], [["agent1", "(unlock d1)"]]]
     assert check.check_schedule(["agent0", "agent1"], plans_of(fine), fine, []).valid
 

@@ -275,20 +275,7 @@ def cost_of(task: SASTask, action: str, state: Sequence[int]) -> int:
 
 def run_plan(task: SASTask, plan: Sequence[str]) -> PlanCheck:
     """Apply ``plan`` from the initial state; valid when every step applies and the goal holds."""
-    if task.trivially_unsolvable:
-        return PlanCheck(False, "the translator proved the goal unreachable (no relaxed plan)")
-    state = initial_state(task)
-    cost = 0
-    for number, action in enumerate(plan, start=1):
-        after = apply_step(task, state, action)
-        if isinstance(after, str):
-            return PlanCheck(False, f"step {number} {after}")
-        cost += cost_of(task, action, state)
-        state = after
-    missing = [c for c in task.goal if state[c[0]] != c[1]]
-    if missing:
-        return PlanCheck(False, f"the goal {task.fact(missing[0])} does not hold at the end")
-    return PlanCheck(True, cost=cost, final_state=tuple(state))
+    return run_parallel(task, [[action] for action in plan])
 
 
 def run_sequence(task: SASTask, state: Sequence[int], actions: Iterable[str]) -> list[int] | str:
@@ -320,8 +307,10 @@ def run_parallel(task: SASTask, steps: Sequence[Sequence[str]]) -> PlanCheck:
     for number, actions in enumerate(steps, start=1):
         reached = run_sequence(task, state, actions)
         if isinstance(reached, str):
-            return PlanCheck(False, f"time step {number}: {reached}")
-        if len(actions) <= MAX_ORDERS_CHECKED:
+            return PlanCheck(False, f"step {number}: {reached}")
+        if len(actions) < 2:
+            groups = []
+        elif len(actions) <= MAX_ORDERS_CHECKED:
             groups = [list(itertools.permutations(actions))]
         else:
             groups = [[(a, b), (b, a)] for a, b in itertools.combinations(actions, 2)]
@@ -332,12 +321,12 @@ def run_parallel(task: SASTask, steps: Sequence[Sequence[str]]) -> PlanCheck:
             for order, outcome in zip(orders, outcomes, strict=False):
                 if isinstance(outcome, str):
                     return PlanCheck(
-                        False, f"time step {number} in the order {', '.join(order)}: {outcome}"
+                        False, f"step {number} in the order {', '.join(order)}: {outcome}"
                     )
             if any(outcome != outcomes[0] for outcome in outcomes):
                 return PlanCheck(
                     False,
-                    f"time step {number}: {', '.join(orders[0])} reach different states in "
+                    f"step {number}: {', '.join(orders[0])} reach different states in "
                     "different orders (they interfere)",
                 )
         for action in actions:
