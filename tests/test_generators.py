@@ -38,7 +38,9 @@ def models() -> dict[str, Domain]:
 
 
 def type_counts(task: TaskSpec) -> dict[str, int]:
-    return dict(Counter(type_name for _, type_name in task.objects))
+    """Objects per type, the domain's constants (tyreworld's tools) included."""
+    objects = dict(task.objects) | domain_model(task.domain).constants
+    return dict(Counter(objects.values()))
 
 
 def words(text: str) -> set[str]:
@@ -123,12 +125,16 @@ def test_each_task_has_its_own_rng() -> None:
     assert benchmark_task("grippers", 16, seed=3) == benchmark_task("grippers", 16, seed=3)
 
 
-def test_termes_goal_is_one_tower_and_no_held_block() -> None:
+def test_termes_goal_is_towers_off_the_depot_and_no_held_block() -> None:
     for index in range(1, 21):
         task = benchmark_task("termes", index)
         assert task.negative_goal == (("has-block",),)
         tall = [f for f in task.goal if f[2] != "n0"]
-        assert len(tall) == 1 and 2 <= int(tall[0][2][1:]) <= 3
+        numbers = [name for name, type_name in task.objects if type_name == "numb"]
+        assert max(int(f[2][1:]) for f in tall) == len(numbers) - 1  # the tallest uses all
+        assert 1 <= len(tall) <= 6 and min(int(f[2][1:]) for f in tall) >= 2
+        (depot,) = [f[1] for f in task.init if f[0] == "is-depot"]
+        assert ("at", depot) in task.init and depot not in {f[1] for f in tall}
 
 
 def test_example_plans_reach_their_goal(models: dict[str, Domain]) -> None:
@@ -263,7 +269,8 @@ def test_scaled_tasks_have_the_requested_size() -> None:
     assert type_counts(scaled_task("tyreworld", 40))["hub"] == 40
     assert type_counts(scaled_task("grippers", 40))["object"] == 40
     assert type_counts(scaled_task("barman", 12))["cocktail"] == 12
-    assert type_counts(scaled_task("termes", 6))["position"] == 36
+    assert type_counts(scaled_task("termes", 6))["position"] == 30  # 5 x 6
+    assert sum(f[2] == "n3" for f in scaled_task("termes", 6).goal) == 6  # towers
     assert scaled_task("blocksworld", 30, 1) != scaled_task("blocksworld", 30, 2)
     for generator in GENERATORS.values():
         assert generator.scale_unit

@@ -14,7 +14,7 @@
     (height pos-2-0 n0)
     (height pos-2-1 n0)
     (height pos-2-2 n0)
-    (at pos-2-1)
+    (at pos-2-0)
     (succ n1 n0)
     (succ n2 n1)
     (neighbor pos-0-0 pos-1-0)
@@ -41,7 +41,7 @@
     (neighbor pos-2-1 pos-2-2)
     (neighbor pos-2-2 pos-1-2)
     (neighbor pos-2-2 pos-2-1)
-    (is-depot pos-2-1)
+    (is-depot pos-2-0)
   )
   (:goal (and
     (height pos-0-0 n0)

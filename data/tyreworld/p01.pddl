@@ -1,7 +1,6 @@
 (define (problem tyreworld-p01)
   (:domain tyreworld)
   (:objects
-    wrench jack pump - tool
     the-hub1 - hub
     nuts1 - nut
     boot - container

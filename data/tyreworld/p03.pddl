@@ -1,7 +1,6 @@
 (define (problem tyreworld-p03)
   (:domain tyreworld)
   (:objects
-    wrench jack pump - tool
     the-hub1 the-hub2 the-hub3 - hub
     nuts1 nuts2 nuts3 - nut
     boot - container

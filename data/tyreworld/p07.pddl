@@ -1,7 +1,6 @@
 (define (problem tyreworld-p07)
   (:domain tyreworld)
   (:objects
-    wrench jack pump - tool
     the-hub1 the-hub2 the-hub3 the-hub4 the-hub5 the-hub6 the-hub7 - hub
     nuts1 nuts2 nuts3 nuts4 nuts5 nuts6 nuts7 - nut
     boot - container

@@ -1,7 +1,6 @@
 (define (problem tyreworld-p18)
   (:domain tyreworld)
   (:objects
-    wrench jack pump - tool
     the-hub1 the-hub2 the-hub3 the-hub4 the-hub5 the-hub6 the-hub7 the-hub8 the-hub9 the-hub10 the-hub11 the-hub12 the-hub13 the-hub14 the-hub15 the-hub16 the-hub17 the-hub18 - hub
     nuts1 nuts2 nuts3 nuts4 nuts5 nuts6 nuts7 nuts8 nuts9 nuts10 nuts11 nuts12 nuts13 nuts14 nuts15 nuts16 nuts17 nuts18 - nut
     boot - container

@@ -2,13 +2,16 @@
 
 Object counts per type and number of goal atoms of tasks p01..p20, the same as the
 LLM+P benchmark used by the TwoStep paper (``benchmark-sizes.md``), with one deliberate
-change that the paper also makes: every barman task has 3 shakers instead of 1.
+change that the paper also makes: every barman task has 3 shakers instead of 1. Where
+the counts do not fix the shape of the goal, the paper's tasks do and it is kept here as
+well: each termes task builds towers of the same heights as the paper's task of the
+same number (1 or 2 towers in p01-p10, 3 to 6 in p11-p20), on positions of its own.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import MappingProxyType
 
 BARMAN_SHAKERS = 3
@@ -16,17 +19,28 @@ BARMAN_SHAKERS = 3
 
 @dataclass(frozen=True)
 class TaskSize:
-    """How many objects of each type a task has, and how many literals its goal has."""
+    """How many objects of each type a task has, and how many literals its goal has.
+
+    ``goal_shape`` says what the goal builds where the object counts leave it open
+    (termes: ``towers``, the height of each tower).
+    """
 
     objects: Mapping[str, int]
     goal_atoms: int
+    goal_shape: Mapping[str, tuple[int, ...]] = field(default_factory=dict)
 
     def count(self, type_name: str) -> int:
         return self.objects.get(type_name, 0)
 
 
-def _size(goal_atoms: int, **objects: int) -> TaskSize:
-    return TaskSize(MappingProxyType(dict(sorted(objects.items()))), goal_atoms)
+def _size(
+    goal_atoms: int, goal_shape: Mapping[str, tuple[int, ...]] | None = None, **objects: int
+) -> TaskSize:
+    return TaskSize(
+        MappingProxyType(dict(sorted(objects.items()))),
+        goal_atoms,
+        MappingProxyType(dict(goal_shape or {})),
+    )
 
 
 def _repeat(rows: Iterable[tuple[int, ...]], times: int) -> list[tuple[int, ...]]:
@@ -73,13 +87,18 @@ def _grippers() -> tuple[TaskSize, ...]:
 
 def _termes() -> tuple[TaskSize, ...]:
     # fmt: off
-    # (numbers, positions); the goal fixes every position's height and forbids a held block
-    rows = [(4, 12), (4, 12), (5, 12), (5, 12), (6, 12), (6, 12), (4, 20), (4, 20), (5, 20),
-            (5, 20), (4, 12), (4, 12), (5, 12), (5, 12), (6, 12), (6, 12), (4, 12), (4, 12),
-            (5, 12), (5, 12)]
+    # (numbers, positions, tower heights); the goal fixes every position's height (the
+    # towers, 0 elsewhere) and forbids a held block; the tallest tower uses every number
+    rows = [(4, 12, (3,)), (4, 12, (3, 3)), (5, 12, (4,)), (5, 12, (4, 3)), (6, 12, (5,)),
+            (6, 12, (5, 5)), (4, 20, (3,)), (4, 20, (3, 3)), (5, 20, (4,)), (5, 20, (4, 2)),
+            (4, 12, (3, 3, 3)), (4, 12, (3, 2, 2, 2)), (5, 12, (4, 3, 3)),
+            (5, 12, (4, 4, 3, 3)), (6, 12, (5, 3, 2)), (6, 12, (5, 5, 4, 2)),
+            (4, 12, (3, 3, 3, 3, 3)), (4, 12, (3, 3, 2, 2, 2, 2)), (5, 12, (4, 4, 2, 2, 2)),
+            (5, 12, (4, 4, 2, 2, 2, 2))]
     # fmt: on
     return tuple(
-        _size(positions + 1, numb=numbers, position=positions) for numbers, positions in rows
+        _size(positions + 1, {"towers": towers}, numb=numbers, position=positions)
+        for numbers, positions, towers in rows
     )
 
 

@@ -1,9 +1,11 @@
 """Tyreworld task generator: every hub has a flat tyre to replace by a spare from the boot.
 
 Hub ``the-hubK`` carries the flat ``wK`` held by ``nutsK``; the intact, uninflated spare
-``rK`` waits in the closed, unlocked ``boot`` with the tools. The goal puts every spare
-inflated on its hub with tight nuts, every flat and tool in the boot, and the boot
-closed: 4 atoms per hub plus 4. The tasks are fully determined by their number of hubs.
+``rK`` waits in the closed, unlocked ``boot`` with the tools. The tools (wrench, jack,
+pump) are constants of the domain file, so the problem files do not declare them. The
+goal puts every spare inflated on its hub with tight nuts, every flat and tool in the
+boot, and the boot closed: 4 atoms per hub plus 4. The tasks are fully determined by
+their number of hubs.
 """
 
 from __future__ import annotations
@@ -16,15 +18,14 @@ from twostep.pddl import Fact
 
 DOMAIN = "tyreworld"
 SCALE_UNIT = "hubs"
-TOOLS = ("wrench", "jack", "pump")
+TOOLS = ("wrench", "jack", "pump")  # the domain's constants, of type tool
 
 
 def make_task(name: str, hubs: int) -> TaskSpec:
     """A car with ``hubs`` flat tyres."""
     ks = range(1, hubs + 1)
     objects = (
-        tuple((tool, "tool") for tool in TOOLS)
-        + tuple((f"the-hub{k}", "hub") for k in ks)
+        tuple((f"the-hub{k}", "hub") for k in ks)
         + tuple((f"nuts{k}", "nut") for k in ks)
         + (("boot", "container"),)
         + tuple((wheel, "wheel") for k in ks for wheel in (f"r{k}", f"w{k}"))
