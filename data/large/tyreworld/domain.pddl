@@ -1,11 +1,15 @@
 ; Tyreworld: replace flat tyres by intact spares kept in the boot (twostep benchmark data).
-; Tools (wrench, jack, pump) are objects of the world but no action needs them in hand,
-; so no fact belongs to an agent: every fact is shared by whoever works on the car.
-; (have ?x) means item ?x lies out, ready to be used.
+; (have ?x) means item ?x is out of the boot, ready to be used. The three tools are
+; constants of the domain: every task has one wrench, one jack and one pump, and they
+; start in the boot. Nuts are turned only with the wrench out; a hub is lifted only with
+; the jack out, and the jack stays under that hub (it is no longer out) until the hub is
+; lowered again, so one hub at a time is in the air; a tyre is pumped up only with the
+; pump out. No fact belongs to one agent: whoever fetched a tool, anyone may use it.
 (define (domain tyreworld)
   (:requirements :strips :typing)
   (:types item container hub - object
           tool wheel nut - item)
+  (:constants wrench jack pump - tool)
   (:predicates
     (opened ?c - container)
     (closed ?c - container)
@@ -46,32 +50,32 @@
 
   (:action loosen
     :parameters (?n - nut ?h - hub)
-    :precondition (and (tight ?n ?h) (on-ground ?h))
+    :precondition (and (have wrench) (tight ?n ?h) (on-ground ?h))
     :effect (and (loose ?n ?h) (not (tight ?n ?h))))
 
   (:action tighten
     :parameters (?n - nut ?h - hub)
-    :precondition (and (loose ?n ?h) (on-ground ?h))
+    :precondition (and (have wrench) (loose ?n ?h) (on-ground ?h))
     :effect (and (tight ?n ?h) (not (loose ?n ?h))))
 
   (:action jack-up
     :parameters (?h - hub)
-    :precondition (on-ground ?h)
-    :effect (and (not-on-ground ?h) (not (on-ground ?h))))
+    :precondition (and (have jack) (on-ground ?h))
+    :effect (and (not-on-ground ?h) (not (on-ground ?h)) (not (have jack))))
 
   (:action jack-down
     :parameters (?h - hub)
     :precondition (not-on-ground ?h)
-    :effect (and (on-ground ?h) (not (not-on-ground ?h))))
+    :effect (and (on-ground ?h) (have jack) (not (not-on-ground ?h))))
 
   (:action undo
     :parameters (?n - nut ?h - hub)
-    :precondition (and (not-on-ground ?h) (fastened ?h) (loose ?n ?h))
+    :precondition (and (have wrench) (not-on-ground ?h) (fastened ?h) (loose ?n ?h))
     :effect (and (have ?n) (unfastened ?h) (not (fastened ?h)) (not (loose ?n ?h))))
 
   (:action do-up
     :parameters (?n - nut ?h - hub)
-    :precondition (and (not-on-ground ?h) (unfastened ?h) (have ?n))
+    :precondition (and (have wrench) (not-on-ground ?h) (unfastened ?h) (have ?n))
     :effect (and (loose ?n ?h) (fastened ?h) (not (unfastened ?h)) (not (have ?n))))
 
   (:action remove-wheel
@@ -86,5 +90,5 @@
 
   (:action inflate
     :parameters (?w - wheel)
-    :precondition (and (intact ?w) (not-inflated ?w))
+    :precondition (and (have pump) (intact ?w) (not-inflated ?w))
     :effect (and (inflated ?w) (not (not-inflated ?w)))))

@@ -1,7 +1,6 @@
 (define (problem tyreworld-s40-01)
   (:domain tyreworld)
   (:objects
-    wrench jack pump - tool
     the-hub1 the-hub2 the-hub3 the-hub4 the-hub5 the-hub6 the-hub7 the-hub8 the-hub9 the-hub10 the-hub11 the-hub12 the-hub13 the-hub14 the-hub15 the-hub16 the-hub17 the-hub18 the-hub19 the-hub20 the-hub21 the-hub22 the-hub23 the-hub24 the-hub25 the-hub26 the-hub27 the-hub28 the-hub29 the-hub30 the-hub31 the-hub32 the-hub33 the-hub34 the-hub35 the-hub36 the-hub37 the-hub38 the-hub39 the-hub40 - hub
     nuts1 nuts2 nuts3 nuts4 nuts5 nuts6 nuts7 nuts8 nuts9 nuts10 nuts11 nuts12 nuts13 nuts14 nuts15 nuts16 nuts17 nuts18 nuts19 nuts20 nuts21 nuts22 nuts23 nuts24 nuts25 nuts26 nuts27 nuts28 nuts29 nuts30 nuts31 nuts32 nuts33 nuts34 nuts35 nuts36 nuts37 nuts38 nuts39 nuts40 - nut
     boot - container

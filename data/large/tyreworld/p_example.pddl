@@ -1,7 +1,6 @@
 (define (problem tyreworld-p-example)
   (:domain tyreworld)
   (:objects
-    wrench jack pump - tool
     the-hub1 the-hub2 - hub
     nuts1 nuts2 - nut
     boot - container
