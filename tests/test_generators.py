@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 from tests.conftest import BLOCKS_DOMAIN, blocks_problem
-from twostep.cli.data import main
+from twostep.cli.data import build_parser, compare_files, main
 from twostep.generators import (
     DOMAINS,
     GENERATORS,
@@ -19,6 +19,7 @@ from twostep.generators import (
     benchmark_task,
     domain_model,
     example_task,
+    scale_files,
     scaled_task,
     static_file,
 )
@@ -262,6 +263,19 @@ def test_cli_scale(tmp_path: Path) -> None:
     problem = load_problem(out / "domain.pddl", out / "p02.pddl")
     assert Counter(problem.objects.values())["object"] == 12
     assert main(["scale", "--domain", "grippers", "--size", "0", "--out", str(out)]) == 2
+
+
+def test_stress_tasks_are_what_their_readme_commands_write(data_root: Path) -> None:
+    readme = (data_root / "stress" / "README.md").read_text()
+    commands = re.findall(r"twostep-data (scale .+)", readme)
+    assert len(commands) == 4
+    for command in commands:
+        args = build_parser().parse_args(command.split())
+        folder = Path(args.out)
+        assert folder.parts[:2] == ("data", "stress")
+        files = scale_files(args.domain, args.size, args.count, args.seed)
+        assert compare_files(data_root.parent / folder, files) == []
+        assert sorted(p.name for p in (data_root.parent / folder).iterdir()) == sorted(files)
 
 
 def test_scaled_tasks_have_the_requested_size() -> None:

@@ -1,0 +1,8 @@
+(unstack b1 b4)
+(stack b1 b2)
+(unstack b4 b3)
+(putdown b4)
+(unstack b1 b2)
+(stack b1 b4)
+(pickup b3)
+(stack b3 b2)

@@ -1,0 +1,41 @@
+(define (problem grippers-s8-04)
+  (:domain grippers)
+  (:objects
+    robot1 robot2 robot3 robot4 - robot
+    room1 room2 room3 room4 - room
+    lgripper1 rgripper1 lgripper2 rgripper2 lgripper3 rgripper3 lgripper4 rgripper4 - gripper
+    ball1 ball2 ball3 ball4 ball5 ball6 ball7 ball8 - object
+  )
+  (:init
+    (at-robby robot1 room1)
+    (free robot1 lgripper1)
+    (free robot1 rgripper1)
+    (at-robby robot2 room2)
+    (free robot2 lgripper2)
+    (free robot2 rgripper2)
+    (at-robby robot3 room4)
+    (free robot3 lgripper3)
+    (free robot3 rgripper3)
+    (at-robby robot4 room2)
+    (free robot4 lgripper4)
+    (free robot4 rgripper4)
+    (at ball1 room3)
+    (at ball2 room2)
+    (at ball3 room3)
+    (at ball4 room2)
+    (at ball5 room1)
+    (at ball6 room2)
+    (at ball7 room3)
+    (at ball8 room3)
+  )
+  (:goal (and
+    (at ball1 room1)
+    (at ball2 room3)
+    (at ball3 room2)
+    (at ball4 room4)
+    (at ball5 room4)
+    (at ball6 room1)
+    (at ball7 room2)
+    (at ball8 room4)
+  ))
+)
