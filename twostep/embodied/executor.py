@@ -27,6 +27,7 @@ executing the plan, and each body starts from a copy of that agent's initial fac
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from random import Random
@@ -42,14 +43,42 @@ LOCATION_TYPE = "location"
 
 PRIMITIVES = ("move", "interact", "wait", "backoff")
 
-SUCCESS = "success"
-DEADLOCK = "deadlock"  # nobody can ever make progress: a precondition no one will make true
-BOXED_IN = "boxed_in"  # an agent's way is blocked and no agent can make way
-UNREACHABLE = "unreachable"  # walls and furniture cut a location off
-NO_CELL = "no_cell"  # a location the floor plan does not place
-BUDGET_EXCEEDED = "budget_exceeded"
-INVALID_PLAN = "invalid_plan"  # an action the task does not know
-GOAL_NOT_REACHED = "goal_not_reached"
+
+class EmbodiedStatus(enum.StrEnum):
+    """How an embodied execution ended; every status but ``success`` is a failed run.
+
+    The values are the strings result.json, trace.json and MLflow hold.
+    """
+
+    SUCCESS = "success"
+    DEADLOCK = "deadlock"  # nobody can ever make progress: a precondition no one makes true
+    BOXED_IN = "boxed_in"  # agents cannot all stand, or a way is blocked and nobody can make way
+    UNREACHABLE = "unreachable"  # walls and furniture cut a location off
+    NO_CELL = "no_cell"  # a location the floor plan does not place
+    BUDGET_EXCEEDED = "budget_exceeded"
+    INVALID_PLAN = "invalid_plan"  # an action the task does not know
+    GOAL_NOT_REACHED = "goal_not_reached"
+    NOT_RUN = "not_run"  # no plan to execute (planning failed)
+
+
+SUCCESS = EmbodiedStatus.SUCCESS
+DEADLOCK = EmbodiedStatus.DEADLOCK
+BOXED_IN = EmbodiedStatus.BOXED_IN
+UNREACHABLE = EmbodiedStatus.UNREACHABLE
+NO_CELL = EmbodiedStatus.NO_CELL
+BUDGET_EXCEEDED = EmbodiedStatus.BUDGET_EXCEEDED
+INVALID_PLAN = EmbodiedStatus.INVALID_PLAN
+GOAL_NOT_REACHED = EmbodiedStatus.GOAL_NOT_REACHED
+
+
+def failure_line(status: str, step: int | None, agent: str | None) -> str | None:
+    """The one-line verdict of a failed execution (``embodied_failed: boxed_in at step 12,
+    agent1``), or None for a success."""
+    if status == EmbodiedStatus.SUCCESS:
+        return None
+    where = "" if step is None else f" at step {step}"
+    who = "" if agent is None else f", {agent}"
+    return f"embodied_failed: {status}{where}{who}"
 
 
 class EmbodiedError(Exception):
@@ -62,7 +91,11 @@ class ExecutorSettings:
 
     seed: int = 0
     max_steps: int | None = None  # None: 200 + 50 steps per plan action
-    random_start: bool = True  # False: each body starts on its PDDL start location's cell
+    # Several bodies start on seeded random free cells (False: on their PDDL start
+    # location's cell, or the nearest free one). A single body (SA, or a TwoStep run
+    # without helpers) always starts on its start location's cell: the paper's SA has no
+    # variance.
+    random_start: bool = True
     stall_limit: int = 4  # blocked this many steps in a row -> back off even if others move
     backoff_radius: int = 4  # backoff destinations are at most this many moves away
     location_type: str = LOCATION_TYPE
@@ -123,6 +156,11 @@ class EmbodiedResult:
     @property
     def success(self) -> bool:
         return self.status == SUCCESS
+
+    @property
+    def failure(self) -> str | None:
+        """None for a success, else the one-line verdict (:func:`failure_line`)."""
+        return failure_line(self.status, self.step, self.agent)
 
     @property
     def message(self) -> str:
@@ -282,6 +320,7 @@ class _Body:
     backoff: list[Cell] = field(default_factory=list)
     blocked_for: int = 0
     holding: tuple[str, ...] = ()
+    walking_to: Cell | None = None  # the cell of the current walk (a navigation, a way back)
 
     @property
     def done(self) -> bool:
@@ -356,9 +395,13 @@ class _Execution:
         free = self.floor_plan.free_cells()
         if len(free) < len(self.bodies):
             raise _Failure(
-                BOXED_IN, None, 0, f"{len(self.bodies)} agents but {len(free)} free cells"
+                BOXED_IN,
+                self.bodies[len(free)].name,
+                0,
+                f"{len(self.bodies)} agents but {len(free)} free cells on "
+                f"{self.floor_plan.name}: {self.bodies[len(free)].name} has nowhere to stand",
             )
-        if self.settings.random_start:
+        if self.settings.random_start and len(self.bodies) > 1:
             for body, cell in zip(
                 self.bodies, self.rng.sample(free, len(self.bodies)), strict=True
             ):
@@ -420,7 +463,7 @@ class _Execution:
         body.path = []
 
     def _act(self, body: _Body) -> str:
-        """One command of ``body``; returns 'progress', 'blocked' or 'waiting'."""
+        """One command of ``body``; returns 'progress', 'blocked', 'waiting' or 'idle'."""
         if body.backoff:
             nxt = body.backoff[0]
             if nxt in self._occupied(body):
@@ -434,44 +477,81 @@ class _Execution:
             return "idle"
         action = body.plan[body.index]
         source = body.source[body.index]
+        target = body.targets[body.index]
+        if target is None:
+            # An interaction is made from the cell of the location the body is at; a body
+            # moved off it (a backoff, a random start) walks back first (queued navigation).
+            home = self._home(body, source)
+            if body.position != home:
+                return self._walk(body, home, source, arrival=False)
         missing = action.failing_precondition(self.state)
         if missing is not None:
             self.waits += 1
             self._record(body, "wait", action=source, reason=f"precondition {missing}")
             return "waiting"
-        target = body.targets[body.index]
         if target is None:
             self._apply(body, action)
             self._record(body, "interact", action=source, applied=str(action))
             return "progress"
         if body.position != target:
-            occupied = self._occupied(body)
-            if not body.path or body.path[-1] != target or body.path[0] in occupied:
-                path = shortest_path(self.floor_plan, body.position, target, occupied)
-                if path is None:
-                    if not self._connected(body.position, target):
-                        raise _Failure(
-                            UNREACHABLE,
-                            body.name,
-                            self.step,
-                            f"{source}: cell {target} cannot be reached from {body.position} "
-                            "(walls or furniture cut it off)",
-                        )
-                    self.waits += 1
-                    blockers = self._blockers(body, target)
-                    self._record(
-                        body,
-                        "wait",
-                        action=source,
-                        reason=f"way to {target} blocked by {', '.join(blockers) or 'agents'}",
+            outcome = self._walk(body, target, source, arrival=True)
+            if body.position != target:
+                return outcome
+        self._apply(body, action)
+        self._record(body, "move", action=source, applied=str(action))
+        return "progress"
+
+    def _home(self, body: _Body, source: str) -> Cell:
+        """The cell of the location ``body`` is at by the PDDL state."""
+        location = self._location_of(body.name)
+        cell = None if location is None else self.floor_plan.cell_of(location)
+        if cell is None:
+            raise _Failure(
+                NO_CELL,
+                body.name,
+                self.step,
+                f"{source}: {body.name} is at "
+                f"{location or 'no location'}, which has no cell in floor plan "
+                f"{self.floor_plan.name}",
+            )
+        return cell
+
+    def _location_of(self, body: str) -> str | None:
+        return next(
+            (t for f in sorted(self.state) if body in f[1:] for t in f[1:] if t in self.locations),
+            None,
+        )
+
+    def _walk(self, body: _Body, target: Cell, source: str, arrival: bool) -> str:
+        """One move of ``body`` along a shortest free path to ``target`` (re-planned when
+        someone steps into it): 'progress', or 'blocked' (a wait) when agents bar the way.
+        ``arrival``: the caller records the move that reaches ``target`` (it applies the
+        navigation action there)."""
+        body.walking_to = target
+        occupied = self._occupied(body)
+        if not body.path or body.path[-1] != target or body.path[0] in occupied:
+            path = shortest_path(self.floor_plan, body.position, target, occupied)
+            if path is None:
+                if not self._connected(body.position, target):
+                    raise _Failure(
+                        UNREACHABLE,
+                        body.name,
+                        self.step,
+                        f"{source}: cell {target} cannot be reached from {body.position} "
+                        "(walls or furniture cut it off)",
                     )
-                    return "blocked"
-                body.path = path
-            body.position = body.path.pop(0)
-        if body.position == target:
-            self._apply(body, action)
-            self._record(body, "move", action=source, applied=str(action))
-        else:
+                self.waits += 1
+                blockers = self._blockers(body, target)
+                self._record(
+                    body,
+                    "wait",
+                    action=source,
+                    reason=f"way to {target} blocked by {', '.join(blockers) or 'agents'}",
+                )
+                return "blocked"
+            body.path = path
+        body.position = body.path.pop(0)
+        if body.position != target or not arrival:
             self._record(body, "move", action=source)
         return "progress"
 
@@ -483,10 +563,10 @@ class _Execution:
         return self._connections[key]
 
     def _free_path(self, body: _Body) -> list[Cell]:
-        target = body.targets[body.index] if not body.done else None
-        if target is None:
+        """The way ``body`` walks (agents aside); none once it is done."""
+        if body.done or body.walking_to is None:
             return []
-        return shortest_path(self.floor_plan, body.position, target) or []
+        return shortest_path(self.floor_plan, body.position, body.walking_to) or []
 
     def _blockers(self, body: _Body, target: Cell) -> list[str]:
         cells = set(self._free_path(body)) | {target}
@@ -522,7 +602,7 @@ class _Execution:
             first.name,
             self.step,
             f"{first.source[first.index]}: the way is blocked by "
-            f"{', '.join(self._blockers(first, first.targets[first.index] or first.position))}"
+            f"{', '.join(self._blockers(first, first.walking_to or first.position))}"
             " and no agent can make way",
         )
 
