@@ -154,9 +154,12 @@ def _read_task(domain_text: str, problem_text: str) -> _Task:
     return _Task(domain, problem, types, objects, parameters)
 
 
-def _body_problem(task: _Task, bodies: Mapping[str, str], agent_type: str) -> str:
+def _body_problem(
+    task: _Task, bodies: Mapping[str, str], agent_type: str, constants: Mapping[str, str]
+) -> str:
     """The problem with the task's agents replaced by bodies, each a copy of the agent it
-    plays (``bodies``: body -> task agent); a goal about an agent holds for its bodies."""
+    plays (``bodies``: body -> task agent); a goal about an agent holds for its bodies.
+    ``constants`` are declared by the domain now, not by the problem."""
     agents = set(task.of_type(agent_type))
     out: list[SExpr] = []
     for part in task.problem:
@@ -164,7 +167,9 @@ def _body_problem(task: _Task, bodies: Mapping[str, str], agent_type: str) -> st
             out.append(part)
             continue
         if part[0] == ":objects":
-            kept = [(o, t) for o, t in _typed_names(part[1:]) if o not in agents]
+            kept = [
+                (o, t) for o, t in _typed_names(part[1:]) if o not in agents and o not in constants
+            ]
             kept += [(body, agent_type) for body in bodies]
             items: list[SExpr] = [":objects"]
             for name, kind in kept:
@@ -215,15 +220,62 @@ def _atoms_per_body(atom: list[SExpr], bodies: Mapping[str, str], agents: set[st
     return [[atom[0], *[b if t == named else t for t in atom[1:]]] for b in playing]
 
 
-def _trimmed_domain(task: _Task, keep: set[str]) -> str:
+def _tokens(expr: SExpr) -> set[str]:
+    if isinstance(expr, str):
+        return {expr}
+    return set().union(*(_tokens(e) for e in expr)) if expr else set()
+
+
+def _domain_constants(task: _Task, actions: Sequence[SExpr]) -> dict[str, str]:
+    """Objects the actions name although only the problem declares them (AlfWorld's
+    ``SinkBasinType``): they become domain constants."""
+    named = set().union(*(_tokens(a) for a in actions)) if actions else set()
+    problem_objects = _section(task.problem, ":objects") or [":objects"]
+    declared = dict(_typed_names(problem_objects[1:]))
+    return {o: declared[o] for o in sorted(named & set(declared))}
+
+
+def _used_functions(functions: list[SExpr], actions: Sequence[SExpr]) -> list[SExpr]:
+    """``:functions`` without those no kept action uses (alfred.pddl's ``distance`` has
+    no value in a problem that never sets it, which the simulator refuses)."""
+    used = set().union(*(_tokens(a) for a in actions)) if actions else set()
+    out: list[SExpr] = [":functions"]
+    items = functions[1:]
+    for index, item in enumerate(items):
+        if isinstance(item, list):
+            keep = bool(item) and item[0] in used
+            typed = index + 2 < len(items) + 1 and items[index + 1 : index + 2] == ["-"]
+            if keep:
+                out.append(item)
+                if typed:
+                    out += items[index + 1 : index + 3]
+    return out
+
+
+def _trimmed_domain(task: _Task, keep: set[str]) -> tuple[str, dict[str, str]]:
     """The domain with only the actions the trace uses (AlfWorld's alfred.pddl has
-    actions that do not type-check, e.g. ``(checked ?l)`` for a location)."""
-    parts = [
-        p
-        for p in task.domain
-        if not (isinstance(p, list) and p and p[0] == ":action" and p[1] not in keep)
-    ]
-    return write_sexpr(parts)
+    actions that do not type-check, e.g. ``(checked ?l)`` for a location), and the
+    problem objects it names as constants (declared in the domain here)."""
+    actions = [p for p in task.domain if isinstance(p, list) and p and p[0] == ":action"]
+    kept_actions = [a for a in actions if a[1] in keep]
+    constants = _domain_constants(task, kept_actions)
+    parts: list[SExpr] = []
+    for part in task.domain:
+        if isinstance(part, list) and part and part[0] == ":action" and part[1] not in keep:
+            continue
+        if isinstance(part, list) and part and part[0] == ":functions":
+            part = _used_functions(part, kept_actions)
+        if isinstance(part, list) and part and part[0] == ":predicates" and constants:
+            items: list[SExpr] = [":constants"]
+            for name, kind in constants.items():
+                items += [name, "-", kind]
+            existing = _section(task.domain, ":constants")
+            if existing is None:
+                parts.append(items)
+            else:
+                existing.extend(items[1:])
+        parts.append(part)
+    return write_sexpr(parts), constants
 
 
 @lru_cache(maxsize=32)
@@ -383,7 +435,8 @@ def check_trace(
 
     playing = {body: plays(body) for body in bodies}
     used = {_parse_step(s)[0] for plan in plans.values() for s in plan}
-    up = _up_problem(_trimmed_domain(task, used), _body_problem(task, playing, agent_type))
+    domain, constants = _trimmed_domain(task, used)
+    up = _up_problem(domain, _body_problem(task, playing, agent_type, constants))
     where = {p.name for p in up.fluents if len(p.signature) == 2}
     at_fluents = [
         up.fluent(name)

@@ -28,7 +28,7 @@ executing the plan, and each body starts from a copy of that agent's initial fac
 from __future__ import annotations
 
 import enum
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from random import Random
 from typing import Any
@@ -312,7 +312,7 @@ def embody(
 class _Body:
     name: str
     plan: list[GroundAction]
-    source: tuple[str, ...]
+    source: tuple[str | None, ...]  # each step in the task's own terms; None: bookkeeping
     targets: list[Cell | None]  # the cell a navigation action walks to, None otherwise
     position: Cell
     index: int = 0
@@ -349,8 +349,10 @@ class _Execution:
         embodiment: Embodiment,
         floor_plan: FloorPlan,
         settings: ExecutorSettings,
+        task_action: Callable[[str], str | None] | None = None,
     ):
         self.floor_plan = floor_plan
+        self.task_action = task_action or (lambda action: action)
         self.settings = settings
         self.rng = Random(settings.seed)
         self.problem = embodiment.problem
@@ -383,11 +385,13 @@ class _Execution:
                         f"{floor_plan.name}",
                     )
                 targets.append(cell)
-            self.bodies.append(_Body(body, grounded, source, targets, (-1, -1)))
+            named = tuple(self.task_action(step) for step in source)
+            self.bodies.append(_Body(body, grounded, named, targets, (-1, -1)))
         self._place_bodies()
         self.start_cells = [b.position for b in self.bodies]
         for placed in self.bodies:
             placed.holding = self._held(placed.name)
+        self._settle()
 
     # ---------------------------------------------------------------- set-up
 
@@ -478,6 +482,11 @@ class _Execution:
         action = body.plan[body.index]
         source = body.source[body.index]
         target = body.targets[body.index]
+        if source is None:  # bookkeeping that cannot apply yet (_settle applies it)
+            missing = action.failing_precondition(self.state)
+            self.waits += 1
+            self._record(body, "wait", reason=f"precondition {missing} of the goal")
+            return "waiting"
         if target is None:
             # An interaction is made from the cell of the location the body is at; a body
             # moved off it (a backoff, a random start) walks back first (queued navigation).
@@ -491,15 +500,32 @@ class _Execution:
             return "waiting"
         if target is None:
             self._apply(body, action)
-            self._record(body, "interact", action=source, applied=str(action))
+            self._record(body, "interact", action=source, applied=self.task_action(str(action)))
+            self._settle()
             return "progress"
         if body.position != target:
             outcome = self._walk(body, target, source, arrival=True)
             if body.position != target:
                 return outcome
         self._apply(body, action)
-        self._record(body, "move", action=source, applied=str(action))
+        self._record(body, "move", action=source, applied=self.task_action(str(action)))
+        self._settle()
         return "progress"
+
+    def _settle(self) -> None:
+        """Apply every body's next steps that are bookkeeping of a compilation (its goal
+        action: no step in the task's own terms) as soon as they are applicable: they take
+        no environment step."""
+        changed = True
+        while changed:
+            changed = False
+            for body in self.bodies:
+                while not body.done and body.source[body.index] is None:
+                    action = body.plan[body.index]
+                    if action.failing_precondition(self.state) is not None:
+                        break
+                    self._apply(body, action)
+                    changed = True
 
     def _home(self, body: _Body, source: str) -> Cell:
         """The cell of the location ``body`` is at by the PDDL state."""
@@ -660,11 +686,15 @@ def execute(
     floor_plan: FloorPlan,
     names: Sequence[str] | None = None,
     settings: ExecutorSettings | None = None,
+    task_action: Callable[[str], str | None] | None = None,
 ) -> EmbodiedResult:
     """Execute per-agent plans (hand-off order) on ``floor_plan``; never raises on bad plans.
 
     ``names`` labels the agents (default ``agent0..``); failures come back as a status
-    with the agent, the step and the reason.
+    with the agent, the step and the reason. ``task_action`` names a plan step (or a
+    ground action) in the task's own terms for the trace, None for a compilation's
+    bookkeeping step (its goal action), which then takes no environment step (default:
+    plans are in the task's own terms already).
     """
     settings = settings or ExecutorSettings()
     names = list(names) if names is not None else [f"agent{i}" for i in range(len(plans))]
@@ -675,7 +705,7 @@ def execute(
     execution: _Execution | None = None
     failure: _Failure | None = None
     try:
-        execution = _Execution(embodiment, floor_plan, settings)
+        execution = _Execution(embodiment, floor_plan, settings, task_action)
         execution.run(budget)
     except _Failure as error:
         failure = error
@@ -723,8 +753,10 @@ def execute_plans(
     agent_order: Sequence[str],
     floor_plan: FloorPlan,
     settings: ExecutorSettings | None = None,
+    task_action: Callable[[str], str | None] | None = None,
 ) -> EmbodiedResult:
-    """Execute a run's plans as result.json holds them (``plans`` by agent, ``agent_order``;
-    agents without a plan are left out); a failure is the result's status, never raised."""
+    """Execute a run's plans (``plans`` by agent, in the terms of ``problem``, with
+    ``agent_order``; agents without a plan are left out; ``task_action``: see
+    :func:`execute`); a failure is the result's status, never raised."""
     order = [agent for agent in agent_order if agent in plans]
-    return execute(problem, [plans[a] for a in order], floor_plan, order, settings)
+    return execute(problem, [plans[a] for a in order], floor_plan, order, settings, task_action)
