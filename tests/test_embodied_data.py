@@ -3,6 +3,7 @@ together (floor plan, tasks, example plan, expert subgoals)."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from random import Random
 
@@ -33,6 +34,25 @@ def test_every_location_of_every_task_has_a_free_cell() -> None:
         problem = load_task("alfworld", index, DATA).problem
         locations = [o for o, t in problem.objects.items() if t == "location"]
         assert locations and all(floor.free(floor.cell_of(loc) or (-1, -1)) for loc in locations)
+
+
+def test_every_drawn_receptacle_is_next_to_the_cell_it_is_reached_from() -> None:
+    """Read apart from the loaders: kitchen.yaml's rectangles and p01's reached-from facts.
+    An agent on a location's cell touches (4-neighbour) every piece of furniture reached
+    from there (loc-door and the garbage can were 2 cells apart)."""
+    plan = yaml.safe_load((FOLDER / "kitchen.yaml").read_text())
+    facts = re.findall(r"\(reached-from (\S+) (\S+)\)", (FOLDER / "p01.pddl").read_text())
+    assert len(facts) == 15
+    checked = 0
+    for receptacle, location in facts:
+        if receptacle not in plan["furniture"]:
+            continue  # a cabinet or drawer inside a counter's footprint
+        x, y, w, h = plan["furniture"][receptacle]
+        lx, ly = plan["locations"][location]
+        gap = max(x - lx, lx - (x + w - 1), 0) + max(y - ly, ly - (y + h - 1), 0)
+        assert gap == 1, (receptacle, location, gap)
+        checked += 1
+    assert checked == 10
 
 
 def test_objects_start_inside_closed_containers_where_the_paper_says() -> None:
