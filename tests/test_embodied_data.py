@@ -10,7 +10,7 @@ from random import Random
 import pytest
 import yaml
 
-from twostep.benchmark import load_task
+from twostep.benchmark import load_task, task_titles
 from twostep.decomposers.expert import load_expert_subgoals
 from twostep.embodied import ExecutorSettings, execute, floor_plan_from_dict, load_floor_plan
 from twostep.generators.alfworld import PAPER_TASKS, data_files, scaled_task
@@ -34,6 +34,21 @@ def test_every_location_of_every_task_has_a_free_cell() -> None:
         problem = load_task("alfworld", index, DATA).problem
         locations = [o for o, t in problem.objects.items() if t == "location"]
         assert locations and all(floor.free(floor.cell_of(loc) or (-1, -1)) for loc in locations)
+
+
+def test_task_titles_name_what_each_goal_asks() -> None:
+    """Table II's task descriptions: each title names the goal's objects (read from the
+    goal section of each task file, apart from the loaders)."""
+    titles = task_titles("alfworld", DATA)
+    assert sorted(titles) == [1, 2, 3, 4]
+    for index, title in titles.items():
+        text = (FOLDER / f"p{index:02d}.pddl").read_text()
+        goal = text[text.index("(:goal") :]
+        objects = set(re.findall(r"\b([a-z]+)\d\b", goal)) - {"diningtable", "sinkbasin"}
+        objects -= {"fridge"} if index == 3 else set()
+        words = title.lower().replace("wine bottle", "winebottle")
+        assert objects and all(o in words for o in objects), (index, objects, title)
+    assert task_titles("blocksworld", DATA) == {}
 
 
 def test_every_drawn_receptacle_is_next_to_the_cell_it_is_reached_from() -> None:

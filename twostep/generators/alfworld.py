@@ -396,6 +396,9 @@ def data_files(
         spec = build_task(f"alfworld-p{index:02d}", kitchen, task)
         files[f"p{index:02d}.pddl"] = spec.to_pddl()
         files[f"p{index:02d}.nl"] = describe_task(spec, kitchen)
+    files["titles.yaml"] = "# One line per task (Table II lists them)\n" + "".join(
+        f'p{index:02d}: "{task.title}"\n' for index, task in enumerate(tasks, start=1)
+    )
     return files
 
 
