@@ -26,7 +26,7 @@ from twostep.embodied import (
     floor_plan_for_task,
     task_floor_plan,
 )
-from twostep.embodied.layouts import layouts_folder, object_point
+from twostep.embodied.layouts import display_names, layouts_folder, object_point
 from twostep.embodied.run import TRACE_KEY, embodied_fields
 from twostep.pddl.origins import original_action
 from twostep.pipeline import RunResult, run_multi_agent, run_single_agent, run_twostep
@@ -79,9 +79,19 @@ def test_the_problem_sits_on_floorplan14(task: BenchmarkTask) -> None:
     # the kitchen island (point (3, 5)) is not reachable; the fridge is drawn at its
     # own position (-0.53 m, -1.55 m) -> point (-2, -6), out of the walkable area
     assert not floor.free((3 - x0, z0 - 5))
-    assert floor.fixtures["fridge1"] == (-2 - x0, z0 + 6)
+    fridge = "fridge_bar__minus_00_dot_53_bar__plus_00_dot_00_bar__minus_01_dot_55"
+    assert floor.fixtures[fridge] == (-2 - x0, z0 + 6)
     assert object_point("Fridge|-00.53|+00.00|-01.55") == (-2, -6)
     assert len(floor.fixtures) == 9
+    names = display_names(floor.fixtures)
+    assert names[fridge] == "fridge1"
+    assert sorted(n for n in names.values() if n.startswith("cabinet")) == [
+        "cabinet1", "cabinet2", "cabinet3", "cabinet4",
+    ]  # fmt: skip
+    assert (
+        names["sink_bar__plus_01_dot_10_bar__plus_00_dot_91_bar__minus_01_dot_60_bar_sinkbasin"]
+        == "sinkbasin1"
+    )
 
 
 def test_the_scene_is_found_four_ways(task: BenchmarkTask, tmp_path: Path) -> None:
@@ -148,3 +158,28 @@ def test_sa_ma_and_twostep_run_on_the_real_layout(task: BenchmarkTask) -> None:
             )
             lengths.setdefault(name, []).append(result.embodied_length or 0)
     assert len(set(lengths["sa"])) == 1  # one body starts where the problem says
+
+
+def test_a_real_run_is_drawn_with_its_furniture(task: BenchmarkTask, tmp_path: Path) -> None:
+    """The picture of a run on FloorPlan14: the island is drawn as unreachable space, the
+    nine receptacles are labelled (without overlaps) at their own positions."""
+    from PIL import Image
+
+    from twostep.embodied.render import DPI, UNREACHABLE_COLOR, _KitchenFigure, save_frame
+
+    floor = task_floor_plan(task.problem, task.problem_path.parent)
+    run = run_single_agent(task, FAST)
+    result = execute_plans(task.problem, run.plans, run.agent_order, floor,
+                           task_action=lambda a: original_action(run.origins, a))  # fmt: skip
+    figure = _KitchenFigure(result, floor, DPI)
+    labels = sorted(text for text, _ in figure.labels)
+    assert labels == sorted(display_names(floor.fixtures).values()) and len(labels) == 9
+    boxes = [box for _, box in figure.labels]
+    assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1 :])
+    png = save_frame(result, floor, tmp_path / "frame.png", 0, dpi=DPI)
+    assert floor.origin is not None
+    x0, z0 = floor.origin
+    x, y = figure.ax.transData.transform((3 - x0, z0 - 5))  # the island's point (3, 5)
+    with Image.open(png) as image:
+        pixel = image.convert("RGB").getpixel((round(x), round(figure.fig.bbox.height - y)))
+    assert pixel == tuple(int(UNREACHABLE_COLOR[i : i + 2], 16) for i in (1, 3, 5))

@@ -35,6 +35,7 @@ from typing import Any
 
 from twostep.embodied.floorplan import Cell, FloorPlan
 from twostep.embodied.navigation import reachable_cells, shortest_path
+from twostep.embodied.scene import Scene, scene_of
 from twostep.pddl import Fact, Goal, Problem
 from twostep.strips import GroundAction, Grounder, PlanError, parse_action
 
@@ -114,6 +115,7 @@ class TraceStep:
     applied: str | None = None  # the ground action applied now, in execution terms
     holding: tuple[str, ...] = ()
     reason: str | None = None  # why the agent waited
+    scene: Scene | None = None  # the scene after this step, when the step changed it
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -130,6 +132,8 @@ class TraceStep:
             out["holding"] = list(self.holding)
         if self.reason is not None:
             out["reason"] = self.reason
+        if self.scene is not None:
+            out["scene"] = self.scene.to_dict()
         return out
 
 
@@ -152,6 +156,7 @@ class EmbodiedResult:
     reason: str = ""
     unmet_goal: list[str] = field(default_factory=list)
     problem: Problem | None = field(default=None, repr=False)  # the task with one agent per body
+    scene: Scene = field(default_factory=Scene)  # at the start (steps record its changes)
 
     @property
     def success(self) -> bool:
@@ -392,6 +397,7 @@ class _Execution:
         for placed in self.bodies:
             placed.holding = self._held(placed.name)
         self._settle()
+        self.scene = self.start_scene = scene_of(self.state)
 
     # ---------------------------------------------------------------- set-up
 
@@ -500,8 +506,16 @@ class _Execution:
             return "waiting"
         if target is None:
             self._apply(body, action)
-            self._record(body, "interact", action=source, applied=self.task_action(str(action)))
             self._settle()
+            scene = scene_of(self.state)
+            changed, self.scene = scene != self.scene, scene
+            self._record(
+                body,
+                "interact",
+                action=source,
+                applied=self.task_action(str(action)),
+                scene=scene if changed else None,
+            )
             return "progress"
         if body.position != target:
             outcome = self._walk(body, target, source, arrival=True)
@@ -725,6 +739,7 @@ def execute(
     )
     if execution is not None:
         result.start_positions = dict(zip(bodies, execution.start_cells, strict=True))
+        result.scene = execution.start_scene
     if failure is not None:
         result.status, result.agent, result.step, result.reason = (
             failure.status,

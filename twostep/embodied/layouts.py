@@ -24,7 +24,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from functools import cache
 from pathlib import Path
 
@@ -101,7 +101,7 @@ def object_point(name: str) -> Cell | None:
     """The grid point of an AI2-THOR object id (``Fridge|-00.53|+00.00|-01.55``, or its
     PDDL spelling): its x and z in metres on the 0.25 m grid."""
     match = _OBJECT_ID.match(unmangle(name.lower()))
-    if match is None:
+    if match is None or match.group(1) == "loc":  # a location: loc|x|z|rotation|horizon
         return None
     return round(float(match.group(2)) / GRID_M), round(float(match.group(4)) / GRID_M)
 
@@ -150,12 +150,16 @@ def find_scene(
     )
 
 
-def _label(names: Sequence[str]) -> dict[str, str]:
-    """Short labels: the object's kind and a number per kind (``cabinet2``), as AlfWorld's
-    text games name them."""
+def display_names(names: Iterable[str]) -> dict[str, str]:
+    """Short names for pictures: an AI2-THOR object id becomes its kind and a number per
+    kind (``cabinet2``, as AlfWorld's text games say); other names stay as they are."""
     counts: dict[str, int] = {}
     out = {}
-    for name in sorted(names, key=lambda n: (object_point(n) or (0, 0), n)):
+    for name in sorted(set(names), key=lambda n: (object_point(n) or (0, 0), n)):
+        if object_point(name) is None:
+            point = alfworld_position(name)
+            out[name] = name if point is None else f"loc({point[0]},{point[1]})"
+            continue
         kind = _object_id(name).split("|")[0]
         if kind == "sink" and _object_id(name).endswith("|sinkbasin"):
             kind = "sinkbasin"
@@ -168,7 +172,7 @@ def scene_floor_plan(
     scene: str, locations: Iterable[str], receptacles: Iterable[str] = ()
 ) -> FloorPlan:
     """The floor plan of ``scene`` with the problem's locations on their grid points and
-    its receptacles drawn at their positions (labelled by kind: ``fridge1``).
+    its receptacles drawn at their positions (:func:`display_names` labels them).
 
     Raises :class:`FloorPlanError` for a location that is not a reachable point."""
     reachable = reachable_points(scene)
@@ -196,14 +200,13 @@ def scene_floor_plan(
 
     free = {cell(p) for p in reachable}
     blocked = {(x, y) for x in range(width) for y in range(height)} - free
-    labels = _label(list(drawn))
     return build_floor_plan(
         scene,
         width,
         height,
         {name: cell(point) for name, point in located.items() if point is not None},
         blocked_cells=blocked,
-        fixtures={labels[name]: cell(point) for name, point in drawn.items()},
+        fixtures={name: cell(point) for name, point in drawn.items()},
         origin=(x0, z0),
     )
 

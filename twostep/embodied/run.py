@@ -21,6 +21,7 @@ from twostep.embodied.executor import (
 )
 from twostep.embodied.floorplan import FloorPlan, floor_plan_from_dict, floor_plan_to_dict
 from twostep.embodied.layouts import floor_plan_for_task
+from twostep.embodied.scene import Scene
 from twostep.pddl import Problem
 
 RECEPTACLE_TYPE = "receptacle"
@@ -55,6 +56,7 @@ def embodied_fields(result: EmbodiedResult, floor_plan: FloorPlan) -> dict[str, 
             "status": result.status,
             "embodied_length": result.embodied_length,
             "start_positions": {a: list(c) for a, c in result.start_positions.items()},
+            "scene": result.scene.to_dict(),
             "floor_plan": floor_plan_to_dict(floor_plan),
             "trace": [step.to_dict() for step in result.trace],
         },
@@ -75,6 +77,7 @@ def result_from_fields(fields: Mapping[str, Any]) -> tuple[EmbodiedResult, Floor
             applied=t.get("applied"),
             holding=tuple(t.get("holding") or ()),
             reason=t.get("reason"),
+            scene=Scene.from_dict(t["scene"]) if t.get("scene") else None,
         )
         for t in recorded["trace"]
     ]
@@ -93,6 +96,7 @@ def result_from_fields(fields: Mapping[str, Any]) -> tuple[EmbodiedResult, Floor
         step=summary.get("step"),
         reason=str(summary.get("reason") or ""),
         unmet_goal=list(summary.get("unmet_goal") or []),
+        scene=Scene.from_dict(recorded.get("scene") or {}),
     )
     return result, floor_plan_from_dict(recorded["floor_plan"], "recorded floor plan")
 
