@@ -183,3 +183,33 @@ def test_a_real_run_is_drawn_with_its_furniture(task: BenchmarkTask, tmp_path: P
     with Image.open(png) as image:
         pixel = image.convert("RGB").getpixel((round(x), round(figure.fig.bbox.height - y)))
     assert pixel == tuple(int(UNREACHABLE_COLOR[i : i + 2], 16) for i in (1, 3, 5))
+
+
+@pytest.mark.slow  # AlfWorld's engine (make alfworld-engine) in a subprocess per replay: ~1 min
+def test_alfworlds_own_engine_accepts_the_plans_and_traces(task: BenchmarkTask) -> None:
+    """The SA plan and every trace's actions in step order are played in AlfWorld's own
+    game (TextWorld's PDDL engine with alfred.pddl and alfred.twl2): every step applicable,
+    the goal won; a plan with two steps swapped is refused."""
+    from twostep.alfworld_engine import engine_python, replay, replay_trace
+    from twostep.trace_check import who_plays
+
+    if engine_python() is None:
+        pytest.skip("AlfWorld's engine is not installed (make alfworld-engine)")
+    problem = task.problem_path.read_text()
+    runs = _runs(task)
+    (sa_plan,) = runs["sa"].task_plans().values()
+    assert replay(problem, sa_plan).ok
+    swapped = list(sa_plan)
+    swapped[2], swapped[3] = swapped[3], swapped[2]
+    refused = replay(problem, swapped)
+    assert not refused.ok and refused.applied < len(swapped) and "not applicable" in refused.failure
+    floor = task_floor_plan(task.problem, task.problem_path.parent)
+    for name, run in runs.items():
+        plays = who_plays(task.domain_path.read_text(), problem, run.task_plans())
+        for seed in (0, 1):
+            result = execute_plans(task.problem, run.plans, run.agent_order, floor,
+                                   ExecutorSettings(seed=seed),
+                                   lambda action, run=run: original_action(run.origins, action))  # fmt: skip
+            record = embodied_fields(result, floor)[TRACE_KEY]
+            judged = replay_trace(record, problem, plays)
+            assert judged.ok, (name, seed, judged)

@@ -190,6 +190,37 @@ def _body_problem(
     return write_sexpr(out)
 
 
+def body_problem(
+    domain_text: str, problem_text: str, plays: Mapping[str, str], agent_type: str = "agent"
+) -> str:
+    """The problem's PDDL text with one agent object per body (``plays``: body -> the
+    task agent whose facts it copies), for a judge that reads PDDL itself."""
+    return _body_problem(_read_task(domain_text, problem_text), plays, agent_type, {})
+
+
+def who_plays(
+    domain_text: str,
+    problem_text: str,
+    plans: Mapping[str, Sequence[str]],
+    agent_type: str = "agent",
+) -> dict[str, str]:
+    """Which task agent each body plays: the first agent its plan names, when the task
+    has it; else the task's first agent (an MA plan's added agent, an empty plan)."""
+    task = _read_task(domain_text, problem_text)
+    agents = task.of_type(agent_type)
+    out = {}
+    for body, plan in plans.items():
+        out[body] = agents[0]
+        for step in plan:
+            name, args = _parse_step(step)
+            kinds = [k for _, k in task.parameters.get(name, [])]
+            named = [a for k, a in zip(kinds, args, strict=False) if task.is_a(k, agent_type)]
+            if named:
+                out[body] = named[0] if named[0] in agents else agents[0]
+                break
+    return out
+
+
 _CONNECTIVES = {"and", "or", "imply"}
 _QUANTIFIERS = {"exists", "forall"}
 
@@ -416,7 +447,6 @@ def check_trace(
     from unified_planning.shortcuts import SequentialSimulator
 
     task = _read_task(domain_text, problem_text)
-    agents = task.of_type(agent_type)
     locations = set(task.of_type(location_type))
     if floor is None:
         plan_record = record["floor_plan"]
@@ -425,15 +455,9 @@ def check_trace(
     starts = {str(b): (int(c[0]), int(c[1])) for b, c in record["start_positions"].items()}
     bodies = list(starts)
 
-    def plays(body: str) -> str:
-        for step in plans.get(body, ()):
-            name, args = _parse_step(step)
-            for (_, kind), arg in zip(task.parameters.get(name, []), args, strict=False):
-                if task.is_a(kind, agent_type):
-                    return arg if arg in agents else agents[0]
-        return agents[0]
-
-    playing = {body: plays(body) for body in bodies}
+    playing = who_plays(
+        domain_text, problem_text, {b: plans.get(b, ()) for b in bodies}, agent_type
+    )
     used = {_parse_step(s)[0] for plan in plans.values() for s in plan}
     domain, constants = _trimmed_domain(task, used)
     up = _up_problem(domain, _body_problem(task, playing, agent_type, constants))
