@@ -4,9 +4,9 @@ The GIF shows the floor plan (walls, furniture, a real scene's unreachable space
 receptacles, the locations' cells), labels placed where they do not overlap, every agent
 as a numbered disc with the grid path it is about to walk, doors coloured open or closed,
 and a side panel with what each agent holds and does and what lies in which receptacle.
-Text is at least ``TEXT_PX`` pixels high. Frames are drawn by blitting over one drawing
-of the floor (a run of about 100 steps draws in about a second); :func:`save_frame`
-writes one frame as a PNG at print resolution. The timeline is a Gantt-style
+Text is at least ``TEXT_PX`` pixels high. matplotlib draws the floor once; each frame's
+agents, routes, doors and text are drawn over a copy of it with PIL (matplotlib's text
+is slow); :func:`save_frame` writes one frame as a PNG at print resolution. The timeline is a Gantt-style
 chart, agents by environment steps, coloured by primitive (navigate, interact, wait,
 backoff); :func:`schedule_timeline` draws the same chart for a symbolic joint schedule.
 
@@ -228,6 +228,7 @@ class _KitchenFigure:
         names |= {h for t in result.trace for h in t.holding} | set(floor_plan.locations)
         self.names = display_names(names)
         self.colors = {a: AGENT_COLORS[i % len(AGENT_COLORS)] for i, a in enumerate(result.agents)}
+        self._tiles: dict[tuple[str, int, str, str], tuple[Any, int, int]] = {}
         self._draw_floor()
         self._make_artists()
 
@@ -277,27 +278,60 @@ class _KitchenFigure:
     # ------------------------------------------------------------ what moves
 
     def _make_artists(self) -> None:
-        ax = self.ax
-        self.dots, self.routes = {}, {}
-        for agent in self.result.agents:
-            color = self.colors[agent]
-            self.routes[agent] = ax.plot([], [], "-", color=color, lw=2.2, alpha=0.55,
-                                         solid_capstyle="round", zorder=3, animated=True)[0]  # fmt: skip
-            self.dots[agent] = ax.plot([], [], "o", color=color, markersize=CELL_IN * 72 * 0.8,
-                                       markeredgecolor="white", zorder=4, animated=True)[0]  # fmt: skip
-        for door in self.doors.values():
-            door.set_animated(True)
-
-    def draw(self, frame: _Frame) -> None:
-        """The frame's shapes (its text is written by :meth:`write`)."""
-        for agent in self.result.agents:
-            route = [frame.cells[agent], *frame.routes[agent]]
-            self.routes[agent].set_data([c[0] for c in route], [c[1] for c in route])
-            self.dots[agent].set_data([frame.cells[agent][0]], [frame.cells[agent][1]])
+        # Doors are drawn per frame (open or closed) in pixel boxes; the static drawing
+        # shows them as plain furniture.
+        height = self.fig.bbox.height
+        self.door_boxes = {}
         for name, patch in self.doors.items():
-            patch.set_facecolor(OPEN_COLOR if frame.scene.is_open(name) else CLOSED_COLOR)
-        for artist in [*self.doors.values(), *self.routes.values(), *self.dots.values()]:
-            self.fig.draw_artist(artist)
+            box = patch.get_window_extent()
+            self.door_boxes[name] = (box.x0, height - box.y1, box.x1, height - box.y0)
+
+    def _pixel(self, cell: Cell) -> tuple[float, float]:
+        x, y = self.ax.transData.transform(cell)
+        return x, self.fig.bbox.height - y
+
+    def draw(self, image: Any, frame: _Frame) -> None:
+        """The frame's shapes on the image: doors, routes, agents (PIL: fast)."""
+        from PIL import ImageDraw
+
+        draw = ImageDraw.Draw(image)
+        for name, box in self.door_boxes.items():
+            color = OPEN_COLOR if frame.scene.is_open(name) else CLOSED_COLOR
+            draw.rectangle(box, fill=color, outline="#595959")
+        cell_px = self._pixel((1, 0))[0] - self._pixel((0, 0))[0]
+        for agent in self.result.agents:
+            route = [self._pixel(c) for c in (frame.cells[agent], *frame.routes[agent])]
+            if len(route) > 1:
+                draw.line(route, fill=_lighter(self.colors[agent]), width=max(2, round(cell_px / 12)),
+                          joint="curve")  # fmt: skip
+        for agent in self.result.agents:
+            x, y = self._pixel(frame.cells[agent])
+            r = 0.4 * cell_px
+            draw.ellipse(
+                (x - r, y - r, x + r, y + r), fill=self.colors[agent], outline="white", width=2
+            )
+
+    def _text(
+        self,
+        image: Any,
+        xy: tuple[float, float],
+        text: str,
+        font: Any,
+        fill: str,
+        anchor: str = "la",
+    ) -> None:
+        """``text`` stamped on ``image``: each distinct text is rasterised once per figure
+        (most of a frame's text is the same as the last frame's)."""
+        from PIL import Image, ImageDraw
+
+        key = (text, id(font), fill, anchor)
+        if key not in self._tiles:
+            left, top, right, bottom = font.getbbox(text, anchor=anchor)
+            tile = Image.new("RGBA", (max(1, right - left), max(1, bottom - top)), (0, 0, 0, 0))
+            ImageDraw.Draw(tile).text((-left, -top), text, font=font, fill=fill, anchor=anchor)
+            self._tiles[key] = (tile, left, top)
+        tile, left, top = self._tiles[key]
+        image.paste(tile, (round(xy[0] + left), round(xy[1] + top)), tile)
 
     def write(self, image: Any, frame: _Frame, final: bool) -> None:
         """The frame's text, drawn on the image with PIL (matplotlib's text is slow)."""
@@ -310,25 +344,25 @@ class _KitchenFigure:
         for text, box in self.labels:
             top = height - box.y1
             draw.rectangle((box.x0, top, box.x1, height - box.y0), fill="#fbfaf6")
-            draw.text(((box.x0 + box.x1) / 2, (top + height - box.y0) / 2), text, fill="black",
-                      font=font, anchor="mm")  # fmt: skip
+            self._text(image, ((box.x0 + box.x1) / 2, (top + height - box.y0) / 2), text, font,
+                       "black", "mm")  # fmt: skip
         for index, agent in enumerate(self.result.agents):
             x, y = self.ax.transData.transform(frame.cells[agent])
-            draw.text((x, height - y), str(index), fill="white", font=bold, anchor="mm")
+            self._text(image, (x, height - y), str(index), bold, "white", "mm")
         status = f"  ({self.result.status})" if final else ""
         map_box = self.ax.get_window_extent()
-        draw.text(((map_box.x0 + map_box.x1) / 2, 4), f"step {frame.step}/{self.result.steps}{status}",
-                  fill="black", font=big, anchor="ma")  # fmt: skip
+        self._text(image, ((map_box.x0 + map_box.x1) / 2, 4),
+                   f"step {frame.step}/{self.result.steps}{status}", big, "black", "ma")  # fmt: skip
         panel = self.panel.get_window_extent()
         x, y = panel.x0, height - panel.y1
         line = font.size * 1.3
         for index, agent in enumerate(self.result.agents):
             held = ", ".join(self.names.get(h, h) for h in frame.holding[agent]) or "nothing"
             doing = textwrap.wrap(_short(frame.doing[agent], self.names) or "-", 40)[:3]
-            draw.text((x, y), f"{index}  {agent}", fill=self.colors[agent], font=bold)
-            draw.text((x + font.size, y + line), f"holds {held}", fill="black", font=font)
+            self._text(image, (x, y), f"{index}  {agent}", bold, self.colors[agent])
+            self._text(image, (x + font.size, y + line), f"holds {held}", font, "black")
             for row, text in enumerate(doing, start=2):
-                draw.text((x + font.size, y + row * line), text, fill="#4d4d4d", font=font)
+                self._text(image, (x + font.size, y + row * line), text, font, "#4d4d4d")
             y += (len(doing) + 2.4) * line
         rows = []
         for receptacle, items in sorted(frame.scene.contents.items()):
@@ -339,18 +373,25 @@ class _KitchenFigure:
                 textwrap.shorten(f"{self.names.get(receptacle, receptacle)}{door}: {listed}", 44)
             )
         if rows:
-            draw.text((x, y), "in the receptacles", fill="black", font=bold)
+            self._text(image, (x, y), "in the receptacles", bold, "black")
             for text in rows:
                 y += line
-                draw.text((x + font.size, y), text, fill="black", font=font)
+                self._text(image, (x + font.size, y), text, font, "black")
             y += 1.6 * line
         if self.doors:
             for color, word in ((OPEN_COLOR, "open"), (CLOSED_COLOR, "closed")):
                 draw.rectangle(
                     (x, y + 2, x + font.size, y + font.size + 2), fill=color, outline="#595959"
                 )
-                draw.text((x + 1.5 * font.size, y), word, fill="black", font=font)
+                self._text(image, (x + 1.5 * font.size, y), word, font, "black")
                 x += 5 * font.size
+
+
+def _lighter(color: str, amount: float = 0.45) -> tuple[int, int, int]:
+    """``color`` mixed with white (a route under the agents' discs)."""
+    rgb = [int(color[i : i + 2], 16) for i in (1, 3, 5)]
+    r, g, b = (round(c + (255 - c) * amount) for c in rgb)
+    return r, g, b
 
 
 @lru_cache(maxsize=16)
@@ -393,21 +434,21 @@ def _place_labels(
 def _render(
     result: EmbodiedResult, floor_plan: FloorPlan, steps: Sequence[int], dpi: float
 ) -> list[Any]:
-    """The RGB images (PIL) of the given steps, drawn by blitting over one background."""
+    """The RGB images (PIL) of the given steps: the floor drawn once by matplotlib, each
+    frame's shapes and text drawn over a copy of it."""
     from PIL import Image
 
     figure = _KitchenFigure(result, floor_plan, dpi)
     frames = _frames(result)
-    canvas: Any = figure.canvas  # FigureCanvasAgg (its blitting methods are untyped)
+    canvas: Any = figure.canvas
     canvas.draw()
-    background = canvas.copy_from_bbox(figure.fig.bbox)
-    images = []
     width, height = canvas.get_width_height()
+    rgba = bytes(canvas.buffer_rgba())
+    floor = Image.frombuffer("RGBA", (width, height), rgba, "raw", "RGBA", 0, 1).convert("RGB")
+    images = []
     for step in steps:
-        canvas.restore_region(background)
-        figure.draw(frames[step])
-        rgba = bytes(canvas.buffer_rgba())
-        image = Image.frombuffer("RGBA", (width, height), rgba, "raw", "RGBA", 0, 1).convert("RGB")
+        image = floor.copy()
+        figure.draw(image, frames[step])
         figure.write(image, frames[step], final=step == result.steps)
         images.append(image)
     return images
