@@ -160,6 +160,31 @@ def test_head_on_in_a_one_lane_corridor_needs_one_backoff() -> None:
     assert chosen == {"a", "b"}  # the seed decides who makes way
 
 
+def test_an_idle_agent_in_the_way_steps_aside() -> None:
+    """A 3-cell corridor with a bay at (1,1). a has nothing to do and stands at (1,0); b
+    walks (0,0) -> (2,0).
+
+    Step 1: a is done; b's way is cut at (1,0): b waits. a is idle in b's way, so it steps
+    aside to the nearest cell off the way: the bay (1,1) (its other neighbour, (2,0), is
+    b's goal). Step 2: a moves into the bay (a backoff), b to (1,0). Step 3: b arrives.
+    Length 3, 1 wait, 1 backoff, no random choice (every seed gives the same run).
+    """
+    problem = kitchen(
+        "a b - agent sa sb lb - location",
+        "(at a sa) (at b sb) (handempty a) (handempty b)",
+        "(at b lb)",
+    )
+    floor = corridor(3, 2, {"sb": (0, 0), "sa": (1, 0), "lb": (2, 0)},
+                     walls=[(0, 1, 1, 1), (2, 1, 1, 1)])  # fmt: skip
+    for seed in range(3):
+        settings = ExecutorSettings(seed=seed, random_start=False)
+        result = execute(problem, [[], ["(goto b sb lb)"]], floor, ["a", "b"], settings)
+        assert result.status == "success", result.message
+        assert (result.embodied_length, result.waits, result.backoffs) == (3, 1, 1)
+        a_steps = [(t.step, t.primitive, t.position) for t in result.trace if t.agent == "a"]
+        assert a_steps == [(2, "backoff", (1, 1))]
+
+
 def _cabinet_problem() -> tuple[Problem, FloorPlan]:
     problem = kitchen(
         "a b - agent sa la lb - location cabinet1 - receptacle mug1 - item",

@@ -10,6 +10,8 @@ binary that cannot run here):
   ``goto``) takes as many moves as the shortest path around walls, furniture and the
   other agents' current cells; the agent's later actions queue behind it;
 - an action whose preconditions do not hold yet makes the agent wait;
+- an agent that is done and stands in a blocked agent's way steps aside at once (to the
+  nearest cell off every working agent's way);
 - when nobody can make progress while someone's way is blocked (or an agent has been
   blocked for ``stall_limit`` steps), one of the agents involved, chosen at random, backs
   off to a random reachable cell nearby, and then everyone retries;
@@ -369,6 +371,7 @@ class _Execution:
         self.step = 0
         self.bodies: list[_Body] = []
         self._connections: dict[tuple[Cell, Cell], bool] = {}
+        self._where: dict[str, str | None] = {}  # body -> its location (see _location_of)
         grounder = Grounder(self.problem)
         for body, plan, source in zip(
             embodiment.bodies, embodiment.plans, embodiment.sources, strict=True
@@ -469,6 +472,7 @@ class _Execution:
         self.state |= action.add
         if any(body.name in f[1:] for f in action.add | action.delete):
             body.holding = self._held(body.name)
+            self._where.pop(body.name, None)
         body.index += 1
         body.path = []
 
@@ -557,10 +561,14 @@ class _Execution:
         return cell
 
     def _location_of(self, body: str) -> str | None:
-        return next(
-            (t for f in sorted(self.state) if body in f[1:] for t in f[1:] if t in self.locations),
-            None,
-        )
+        """The location ``body`` is at by the state (the first, should it be at several);
+        kept until an action about the body applies."""
+        if body not in self._where:
+            at = sorted(
+                t for f in self.state if body in f[1:] for t in f[1:] if t in self.locations
+            )
+            self._where[body] = at[0] if at else None
+        return self._where[body]
 
     def _walk(self, body: _Body, target: Cell, source: str, arrival: bool) -> str:
         """One move of ``body`` along a shortest free path to ``target`` (re-planned when
@@ -611,6 +619,37 @@ class _Execution:
     def _blockers(self, body: _Body, target: Cell) -> list[str]:
         cells = set(self._free_path(body)) | {target}
         return [b.name for b in self.bodies if b is not body and b.position in cells]
+
+    def _make_way(self, blocked: list[_Body]) -> bool:
+        """Bodies that are done and stand in a blocked body's way step aside at once, to
+        the nearest cell off every working body's way (a backoff of an idle body: it has
+        nothing left to do, so no random choice is needed). False if there is none."""
+        ways: set[Cell] = set()
+        for body in blocked:
+            ways |= set(self._free_path(body))
+            if body.walking_to is not None:
+                ways.add(body.walking_to)
+        idle = [b for b in self.bodies if b.done and not b.backoff and b.position in ways]
+        if not idle:
+            return False
+        busy: set[Cell] = set()
+        for body in self.bodies:
+            if not body.done:
+                busy |= set(self._free_path(body))
+        moved = False
+        for body in idle:
+            distances = reachable_cells(self.floor_plan, body.position, self._occupied(body))
+            aside = [c for c in distances if c not in ways | busy]
+            if not aside:
+                continue
+            destination = min(aside, key=lambda c: (distances[c], c))
+            body.backoff = (
+                shortest_path(self.floor_plan, body.position, destination, self._occupied(body))
+                or []
+            )
+            self.backoffs += 1
+            moved = True
+        return moved
 
     def _back_off(self, blocked: list[_Body]) -> None:
         """One agent involved in the jam moves to a random reachable cell nearby."""
@@ -671,7 +710,9 @@ class _Execution:
                     blocked.append(body)
                 elif outcome == "waiting":
                     waiting.append(body)
-            if (blocked and not progressed) or any(
+            if blocked and self._make_way(blocked):
+                progressed = True
+            elif (blocked and not progressed) or any(
                 b.blocked_for >= self.settings.stall_limit for b in blocked
             ):
                 self._back_off(blocked)
