@@ -25,6 +25,8 @@ from twostep.embodied import (
     FloorPlanError,
     alfworld_position,
     build_floor_plan,
+    embodied_failure,
+    embodied_fields,
     embody,
     execute_plans,
     floor_plan_for_task,
@@ -307,6 +309,12 @@ def test_a_kitchen_with_one_free_cell_boxes_two_agents_in() -> None:
     assert "2 agents but 1 free cells" in both.reason
     assert both.failure == "embodied_failed: boxed_in at step 0, b"
     assert both.to_dict()["status"] == "boxed_in"  # the string result.json holds
+    # the verdict from the fields a result dict holds (what a stored run is judged by)
+    assert embodied_failure(embodied_fields(both, floor)) == both.failure
+    assert embodied_failure(embodied_fields(alone, floor)) == (
+        "embodied_failed: goal_not_reached at step 1"
+    )
+    assert embodied_failure({"executor": "symbolic"}) is None
 
 
 def test_an_agent_boxed_in_for_good() -> None:

@@ -18,6 +18,7 @@ from twostep.embodied.executor import (
     LOCATION_TYPE,
     EmbodiedResult,
     TraceStep,
+    failure_line,
 )
 from twostep.embodied.floorplan import FloorPlan, floor_plan_from_dict, floor_plan_to_dict
 from twostep.embodied.layouts import floor_plan_for_task
@@ -61,6 +62,16 @@ def embodied_fields(result: EmbodiedResult, floor_plan: FloorPlan) -> dict[str, 
             "trace": [step.to_dict() for step in result.trace],
         },
     }
+
+
+def embodied_failure(fields: Mapping[str, Any]) -> str | None:
+    """None when a result's embodied execution succeeded (or there was none), else its
+    one-line verdict (``embodied_failed: boxed_in at step 12, agent1``): what a run's
+    success, exit code and stored status follow."""
+    summary = fields.get("embodied")
+    if fields.get("executor") != "embodied" or not isinstance(summary, Mapping):
+        return None
+    return failure_line(str(summary.get("status")), summary.get("step"), summary.get("agent"))
 
 
 def result_from_fields(fields: Mapping[str, Any]) -> tuple[EmbodiedResult, FloorPlan]:
