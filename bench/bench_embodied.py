@@ -52,9 +52,15 @@ from twostep.embodied import (
 )
 from twostep.embodied.run import TRACE_KEY, embodied_fields
 from twostep.generators.alfworld import scaled_task
+from twostep.methods import (
+    MethodRequest,
+    RunResult,
+    run_multi_agent,
+    run_single_agent,
+    run_twostep,
+)
 from twostep.pddl import Problem, parse_problem
 from twostep.pddl.origins import original_action
-from twostep.pipeline import RunResult, run_multi_agent, run_single_agent, run_twostep
 from twostep.planner import PlannerSettings
 from twostep.trace_check import TraceReport, check_trace, read_kitchen_file, who_plays
 
@@ -91,7 +97,7 @@ def kitchen_tasks(size: int) -> list[tuple[str, Problem, FloorPlan, BenchmarkTas
 
 def twostep_plans(task: BenchmarkTask, agents: int) -> list[list[str]]:
     decomposer = GoalSplitDecomposer(AGENT_PREDICATES)
-    run = run_twostep(task, agents, decomposer, AGENT_PREDICATES, PLANNER)
+    run = run_twostep(MethodRequest(task, agents, PLANNER, AGENT_PREDICATES, decomposer))
     plans = [run.plans[a] for a in run.agent_order]
     return plans + [[] for _ in range(agents - len(plans))]
 
@@ -132,14 +138,15 @@ def method_run(
     task: BenchmarkTask, method: str, agents: int, predicates: tuple[str, ...]
 ) -> RunResult:
     if method == "sa":
-        return run_single_agent(task, PLANNER)
+        return run_single_agent(MethodRequest(task, 1, PLANNER))
     if method == "ma":
-        return run_multi_agent(task, agents, predicates, PLANNER)
+        return run_multi_agent(MethodRequest(task, agents, PLANNER, predicates))
     if method == "plan-deal":
-        from twostep.plan_deal import PlanDeal
+        from twostep.methods.plan_deal import run_plan_deal
 
-        return run_twostep(task, agents, PlanDeal(predicates, "best"), predicates, PLANNER)
-    return run_twostep(task, agents, GoalSplitDecomposer(predicates), predicates, PLANNER)
+        return run_plan_deal(MethodRequest(task, agents, PLANNER, predicates))
+    decomposer = GoalSplitDecomposer(predicates)
+    return run_twostep(MethodRequest(task, agents, PLANNER, predicates, decomposer))
 
 
 def replayed(

@@ -12,7 +12,7 @@ from twostep.benchmark import load_task
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.embodied import EmbodiedResult, ExecutorSettings, FloorPlan, execute_plans
 from twostep.embodied.run import TRACE_KEY, embodied_fields
-from twostep.pipeline import run_multi_agent, run_twostep
+from twostep.methods import MethodRequest, run_multi_agent, run_twostep
 from twostep.planner import PlannerSettings
 from twostep.trace_check import Floor, TraceReport, check_trace, read_kitchen_file
 
@@ -41,10 +41,10 @@ def method_plans(task_id: int, method: str, agents: int) -> tuple[tuple[str, tup
     hand-off order (planned once per module run)."""
     task = load_task("alfworld", task_id, DATA)
     if method == "ma":
-        run = run_multi_agent(task, agents, AGENT_PREDICATES, FAST)
+        run = run_multi_agent(MethodRequest(task, agents, FAST, AGENT_PREDICATES))
     else:
         decomposer = GoalSplitDecomposer(AGENT_PREDICATES)
-        run = run_twostep(task, agents, decomposer, AGENT_PREDICATES, FAST)
+        run = run_twostep(MethodRequest(task, agents, FAST, AGENT_PREDICATES, decomposer))
     return tuple((a, tuple(run.plans[a])) for a in run.agent_order if a in run.plans)
 
 

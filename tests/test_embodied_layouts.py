@@ -28,9 +28,15 @@ from twostep.embodied import (
 )
 from twostep.embodied.layouts import display_names, layouts_folder, object_point
 from twostep.embodied.run import TRACE_KEY, embodied_fields
+from twostep.methods import (
+    MethodRequest,
+    RunResult,
+    run_multi_agent,
+    run_single_agent,
+    run_twostep,
+)
+from twostep.methods.plan_deal import run_plan_deal
 from twostep.pddl.origins import original_action
-from twostep.pipeline import RunResult, run_multi_agent, run_single_agent, run_twostep
-from twostep.plan_deal import PlanDeal
 from twostep.planner import PlannerSettings
 from twostep.trace_check import alfworld_layouts_folder, check_trace
 
@@ -117,16 +123,15 @@ def test_the_scene_is_found_four_ways(task: BenchmarkTask, tmp_path: Path) -> No
 
 
 def _runs(task: BenchmarkTask) -> dict[str, RunResult]:
-    runs = {"sa": run_single_agent(task, FAST)}
+    runs = {"sa": run_single_agent(MethodRequest(task, 1, FAST))}
     for n in (2, 3):
-        runs[f"ma{n}"] = run_multi_agent(task, n, AGENT_PREDICATES, FAST)
-        runs[f"twostep{n}"] = run_twostep(
-            task, n, PlanDeal(AGENT_PREDICATES, "best"), AGENT_PREDICATES, FAST
+        request = MethodRequest(task, n, FAST, AGENT_PREDICATES)
+        runs[f"ma{n}"] = run_multi_agent(request)
+        runs[f"twostep{n}"] = run_plan_deal(request)
+        goal_split = GoalSplitDecomposer(AGENT_PREDICATES)
+        runs[f"goal-split{n}"] = run_twostep(
+            MethodRequest(task, n, FAST, AGENT_PREDICATES, goal_split)
         )
-        goal_split = run_twostep(
-            task, n, GoalSplitDecomposer(AGENT_PREDICATES), AGENT_PREDICATES, FAST
-        )
-        runs[f"goal-split{n}"] = goal_split
     return runs
 
 
@@ -168,7 +173,7 @@ def test_a_real_run_is_drawn_with_its_furniture(task: BenchmarkTask, tmp_path: P
     from twostep.embodied.render import DPI, UNREACHABLE_COLOR, _KitchenFigure, save_frame
 
     floor = task_floor_plan(task.problem, task.problem_path.parent)
-    run = run_single_agent(task, FAST)
+    run = run_single_agent(MethodRequest(task, 1, FAST))
     result = execute_plans(task.problem, run.plans, run.agent_order, floor,
                            task_action=lambda a: original_action(run.origins, a))  # fmt: skip
     figure = _KitchenFigure(result, floor, DPI)

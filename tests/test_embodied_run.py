@@ -103,7 +103,7 @@ def test_domain_alfred_runs_a_real_problem_on_its_scene(tmp_path: Path) -> None:
     assert list(cfg.domain.agent_predicates) == [
         "atlocation", "holds", "holdsany", "holdsanyreceptacleobject",
     ]  # fmt: skip
-    result = run_job(typed(cfg)).to_dict()
+    result = run_config(typed(cfg)).to_dict()
     assert result["success"] and result["agents"] == 3
     assert result["embodied_status"] == "success", result["embodied"]
     assert result["embodied"]["floor_plan"] == "FloorPlan14"
