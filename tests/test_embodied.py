@@ -4,7 +4,9 @@ Each scenario's expected numbers are worked out step by step in its docstring fr
 rules (agents act one after another in every step; breadth-first paths around furniture
 and the other agents' current cells; a wait when a precondition does not hold or the way
 is blocked). The four kitchen tasks run end to end, and a trace is replayed independently
-through unified-planning's sequential simulator.
+through unified-planning's sequential simulator. Every execution here is also replayed by
+the independent trace checker (:mod:`twostep.trace_check`), from the test's own floor
+plan literals and PDDL text.
 """
 
 from __future__ import annotations
@@ -14,24 +16,29 @@ from pathlib import Path
 
 import pytest
 
-from twostep.benchmark import load_task
+from tests.embodied_checks import replay
+from twostep.benchmark import BenchmarkTask, load_task
 from twostep.embodied import (
+    EmbodiedResult,
     ExecutorSettings,
     FloorPlan,
     FloorPlanError,
     alfworld_position,
     build_floor_plan,
+    embodied_failure,
+    embodied_fields,
     embody,
-    execute,
     execute_plans,
     floor_plan_for_task,
     floor_plan_from_dict,
     floor_plan_from_locations,
     load_floor_plan,
 )
+from twostep.embodied import execute as execute_unchecked
 from twostep.embodied.navigation import reachable_cells, shortest_path
 from twostep.pddl import Problem, parse_problem
 from twostep.planner import PlannerSettings, plan
+from twostep.trace_check import Floor, read_kitchen, read_kitchen_file
 from twostep.validation import validate_plan
 
 DATA = Path(__file__).resolve().parent.parent / "data"
@@ -39,12 +46,20 @@ DOMAIN = (DATA / "alfworld" / "domain.pddl").read_text()
 FIXED = ExecutorSettings(random_start=False)
 
 
+# What the checker reads instead of our objects: each problem's PDDL text, each floor
+# plan's literals (by object identity, for the test's lifetime).
+PROBLEM_TEXT: dict[int, str] = {}
+CHECKER_FLOOR: dict[int, Floor] = {}
+
+
 def kitchen(objects: str, init: str, goal: str = "(and)") -> Problem:
     text = f"""(define (problem test) (:domain alfworld)
       (:objects {objects})
       (:init {init})
       (:goal {goal}))"""
-    return parse_problem(DOMAIN, text)
+    problem = parse_problem(DOMAIN, text)
+    PROBLEM_TEXT[id(problem)] = text
+    return problem
 
 
 def corridor(
@@ -53,7 +68,29 @@ def corridor(
     locations: dict[str, tuple[int, int]],
     walls: Sequence[tuple[int, int, int, int]] = (),
 ) -> FloorPlan:
-    return build_floor_plan("test", width, height, locations, walls)
+    floor = build_floor_plan("test", width, height, locations, walls)
+    CHECKER_FLOOR[id(floor)] = read_kitchen(
+        {"width": width, "height": height, "walls": walls, "locations": locations}
+    )
+    return floor
+
+
+def execute(
+    problem: Problem,
+    plans: Sequence[Sequence[str]],
+    floor: FloorPlan,
+    names: Sequence[str] | None = None,
+    settings: ExecutorSettings | None = None,
+) -> EmbodiedResult:
+    """The executor, with its trace replayed by the independent checker."""
+    result = execute_unchecked(problem, plans, floor, names, settings)
+    if result.start_positions:  # it started: bodies stood on the floor
+        by_body = {body: list(p) for body, p in zip(result.agents, plans, strict=True)}
+        report = replay(
+            result, floor, by_body, DOMAIN, PROBLEM_TEXT[id(problem)], CHECKER_FLOOR[id(floor)]
+        )
+        assert report.ok, report.violations
+    return result
 
 
 # ------------------------------------------------------------------ navigation
@@ -125,6 +162,31 @@ def test_head_on_in_a_one_lane_corridor_needs_one_backoff() -> None:
     assert chosen == {"a", "b"}  # the seed decides who makes way
 
 
+def test_an_idle_agent_in_the_way_steps_aside() -> None:
+    """A 3-cell corridor with a bay at (1,1). a has nothing to do and stands at (1,0); b
+    walks (0,0) -> (2,0).
+
+    Step 1: a is done; b's way is cut at (1,0): b waits. a is idle in b's way, so it steps
+    aside to the nearest cell off the way: the bay (1,1) (its other neighbour, (2,0), is
+    b's goal). Step 2: a moves into the bay (a backoff), b to (1,0). Step 3: b arrives.
+    Length 3, 1 wait, 1 backoff, no random choice (every seed gives the same run).
+    """
+    problem = kitchen(
+        "a b - agent sa sb lb - location",
+        "(at a sa) (at b sb) (handempty a) (handempty b)",
+        "(at b lb)",
+    )
+    floor = corridor(3, 2, {"sb": (0, 0), "sa": (1, 0), "lb": (2, 0)},
+                     walls=[(0, 1, 1, 1), (2, 1, 1, 1)])  # fmt: skip
+    for seed in range(3):
+        settings = ExecutorSettings(seed=seed, random_start=False)
+        result = execute(problem, [[], ["(goto b sb lb)"]], floor, ["a", "b"], settings)
+        assert result.status == "success", result.message
+        assert (result.embodied_length, result.waits, result.backoffs) == (3, 1, 1)
+        a_steps = [(t.step, t.primitive, t.position) for t in result.trace if t.agent == "a"]
+        assert a_steps == [(2, "backoff", (1, 1))]
+
+
 def _cabinet_problem() -> tuple[Problem, FloorPlan]:
     problem = kitchen(
         "a b - agent sa la lb - location cabinet1 - receptacle mug1 - item",
@@ -170,6 +232,49 @@ def test_single_agent_plans_get_one_body_each() -> None:
     assert ("holding", "x", "mug1") in embodiment.problem.goal.positive  # every body
 
 
+def test_a_body_off_its_location_walks_back_before_it_interacts() -> None:
+    """Both bodies play alice, who stands at la (0,0) of a 3 x 2 room; a is placed on
+    (0,0), b on the nearest free cell, (0,1) (distance 1, the smaller cell of the tie
+    with (1,0)). a walks to lc (2,1); b opens the cabinet reached from la.
+
+    Step 1: a moves to (1,0) (its first way east); b is not on la's cell: it walks to
+    (0,0), now free (a move that applies nothing). Step 2: a moves on, b opens the
+    cabinet from (0,0). Step 3: a reaches (2,1). Length 3, no wait. (Before the fix b
+    opened the cabinet at step 1 from (0,1), out of reach.)
+    """
+    problem = kitchen(
+        "alice - agent la lc - location cabinet1 - receptacle",
+        "(at alice la) (handempty alice) (openable cabinet1) (reached-from cabinet1 la)",
+        "(accessible cabinet1)",
+    )
+    floor = corridor(3, 2, {"la": (0, 0), "lc": (2, 1)})
+    plans = [["(goto alice la lc)"], ["(open alice cabinet1 la)"]]
+    result = execute(problem, plans, floor, ["a", "b"], FIXED)
+    assert result.status == "success", result.message
+    assert (result.embodied_length, result.waits) == (3, 0)
+    assert result.start_positions == {"a": (0, 0), "b": (0, 1)}
+    b_steps = [(t.step, t.primitive, t.position, t.applied) for t in result.trace if t.agent == "b"]
+    assert b_steps == [
+        (1, "move", (0, 0), None),
+        (2, "interact", (0, 0), "(open b cabinet1 la)"),
+    ]
+
+
+def test_a_single_body_starts_on_its_start_location() -> None:
+    """random_start spreads several bodies; one body (SA) starts where the task says:
+    every seed gives the same execution."""
+    _, floor = _cabinet_problem()
+    problem = kitchen(
+        "a - agent sa la - location cabinet1 - receptacle",
+        "(at a sa) (handempty a) (openable cabinet1) (reached-from cabinet1 la)",
+        "(accessible cabinet1)",
+    )
+    plan = [["(goto a sa la)", "(open a cabinet1 la)"]]
+    runs = [execute(problem, plan, floor, ["a"], ExecutorSettings(seed=s)) for s in range(4)]
+    assert {r.start_positions["a"] for r in runs} == {(2, 0)}  # sa's cell
+    assert {r.embodied_length for r in runs} == {3}
+
+
 # ------------------------------------------------------------------ bad input
 
 
@@ -187,6 +292,29 @@ def test_an_unreachable_location() -> None:
     result = execute(problem, [["(goto a sa la)"]], floor, ["a"], FIXED)
     assert (result.status, result.agent, result.step) == ("unreachable", "a", 1)
     assert "(goto a sa la)" in result.reason
+    assert not result.success
+    assert result.failure == "embodied_failed: unreachable at step 1, a"
+
+
+def test_a_kitchen_with_one_free_cell_boxes_two_agents_in() -> None:
+    """Every location on the one free cell of a 3 x 1 room: one body fits, two do not."""
+    problem, _ = _cabinet_problem()
+    floor = corridor(3, 1, {"la": (1, 0), "sa": (1, 0), "lb": (1, 0)},
+                     walls=[(0, 0, 1, 1), (2, 0, 1, 1)])  # fmt: skip
+    alone = execute(problem, [["(goto a sa la)"]], floor, ["a"], FIXED)
+    assert alone.status == "goal_not_reached"  # it stands and walks; the mug is not taken
+    both = execute(problem, [["(goto a sa la)"], []], floor, ["a", "b"], FIXED)
+    assert (both.status, both.agent, both.step) == ("boxed_in", "b", 0)
+    assert not both.success and both.embodied_length is None
+    assert "2 agents but 1 free cells" in both.reason
+    assert both.failure == "embodied_failed: boxed_in at step 0, b"
+    assert both.to_dict()["status"] == "boxed_in"  # the string result.json holds
+    # the verdict from the fields a result dict holds (what a stored run is judged by)
+    assert embodied_failure(embodied_fields(both, floor)) == both.failure
+    assert embodied_failure(embodied_fields(alone, floor)) == (
+        "embodied_failed: goal_not_reached at step 1"
+    )
+    assert embodied_failure({"executor": "symbolic"}) is None
 
 
 def test_an_agent_boxed_in_for_good() -> None:
@@ -261,14 +389,23 @@ FAST = PlannerSettings(alias="lama-first", search_time_limit_s=60)
 
 @pytest.fixture(scope="module")
 def kitchen_plan() -> FloorPlan:
-    return load_floor_plan(DATA / "alfworld" / "kitchen.yaml")
+    path = DATA / "alfworld" / "kitchen.yaml"
+    floor = load_floor_plan(path)
+    CHECKER_FLOOR[id(floor)] = read_kitchen_file(path)
+    return floor
+
+
+def kitchen_task(task_id: int) -> BenchmarkTask:
+    task = load_task("alfworld", task_id, DATA)
+    PROBLEM_TEXT[id(task.problem)] = task.problem_path.read_text()
+    return task
 
 
 @pytest.mark.parametrize("task_id", [1, 2, 3, 4])
 def test_single_agent_plans_of_the_four_tasks_execute(
     task_id: int, kitchen_plan: FloorPlan
 ) -> None:
-    task = load_task("alfworld", task_id, DATA)
+    task = kitchen_task(task_id)
     result = plan(task.problem, FAST)
     assert result.plan is not None
     run = execute(task.problem, [result.plan], kitchen_plan, ["agent0"])
@@ -283,7 +420,7 @@ def _expert_twostep_plans(task_id: int) -> tuple[Problem, list[list[str]]]:
     from twostep.decomposers.expert import ExpertDecomposer
     from twostep.methods import MethodRequest, run_twostep
 
-    task = load_task("alfworld", task_id, DATA)
+    task = kitchen_task(task_id)
     run = run_twostep(
         MethodRequest(task, 2, FAST, ["at", "handempty", "holding"], ExpertDecomposer())
     )
@@ -316,8 +453,9 @@ def test_same_seed_same_trace_and_the_trace_replays_in_unified_planning(
     assert not validate_plan(first.problem, broken).valid
 
 
-def test_a_task_with_alfworld_location_names_runs_without_a_floor_plan(tmp_path: Path) -> None:
-    """Locations named as AlfWorld names them: (0,0) start, fridge at x=3 z=-2."""
+def test_made_up_alfworld_locations_on_an_open_grid(tmp_path: Path) -> None:
+    """Locations named as AlfWorld names them: (0,0) start, fridge at x=3 z=-2, on an open
+    grid (layout 'open': no scene)."""
     start, fridge = "loc_bar_0_bar_0_bar_1_bar_45", "loc_bar_3_bar__minus_2_bar_2_bar_30"
     problem = kitchen(
         f"alice - agent {start} {fridge} - location fridge1 - receptacle egg1 - item",
@@ -325,7 +463,11 @@ def test_a_task_with_alfworld_location_names_runs_without_a_floor_plan(tmp_path:
         "(openable fridge1) (in egg1 fridge1)",
         "(holding alice egg1)",
     )
-    floor = floor_plan_for_task([start, fridge], tmp_path)  # no kitchen.yaml there
+    floor = floor_plan_for_task([start, fridge], tmp_path, layout="open")
+    # the open grid by hand: x -1..4, z -3..1 (a margin of one); y = z + 3
+    CHECKER_FLOOR[id(floor)] = read_kitchen(
+        {"width": 6, "height": 5, "locations": {start: (1, 3), fridge: (4, 1)}}
+    )
     steps = [
         f"(goto alice {start} {fridge})",
         f"(open alice fridge1 {fridge})",
@@ -338,7 +480,7 @@ def test_a_task_with_alfworld_location_names_runs_without_a_floor_plan(tmp_path:
 
 def test_a_multi_agent_plan_gets_one_body_per_planning_agent(kitchen_plan: FloorPlan) -> None:
     """Task 1 planned for alice and an added agent bob, split per agent: both walk."""
-    task = load_task("alfworld", 1, DATA)
+    task = kitchen_task(1)
     problem = task.problem
     copies = {tuple("bob" if t == "alice" else t for t in f) for f in problem.init if "alice" in f}
     two = Problem(

@@ -3,13 +3,14 @@ together (floor plan, tasks, example plan, expert subgoals)."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from random import Random
 
 import pytest
 import yaml
 
-from twostep.benchmark import load_task
+from twostep.benchmark import load_task, task_titles
 from twostep.decomposers.expert import load_expert_subgoals
 from twostep.embodied import ExecutorSettings, execute, floor_plan_from_dict, load_floor_plan
 from twostep.generators.alfworld import PAPER_TASKS, data_files, scaled_task
@@ -33,6 +34,40 @@ def test_every_location_of_every_task_has_a_free_cell() -> None:
         problem = load_task("alfworld", index, DATA).problem
         locations = [o for o, t in problem.objects.items() if t == "location"]
         assert locations and all(floor.free(floor.cell_of(loc) or (-1, -1)) for loc in locations)
+
+
+def test_task_titles_name_what_each_goal_asks() -> None:
+    """Table II's task descriptions: each title names the goal's objects (read from the
+    goal section of each task file, apart from the loaders)."""
+    titles = task_titles("alfworld", DATA)
+    assert sorted(titles) == [1, 2, 3, 4]
+    for index, title in titles.items():
+        text = (FOLDER / f"p{index:02d}.pddl").read_text()
+        goal = text[text.index("(:goal") :]
+        objects = set(re.findall(r"\b([a-z]+)\d\b", goal)) - {"diningtable", "sinkbasin"}
+        objects -= {"fridge"} if index == 3 else set()
+        words = title.lower().replace("wine bottle", "winebottle")
+        assert objects and all(o in words for o in objects), (index, objects, title)
+    assert task_titles("blocksworld", DATA) == {}
+
+
+def test_every_drawn_receptacle_is_next_to_the_cell_it_is_reached_from() -> None:
+    """Read apart from the loaders: kitchen.yaml's rectangles and p01's reached-from facts.
+    An agent on a location's cell touches (4-neighbour) every piece of furniture reached
+    from there (loc-door and the garbage can were 2 cells apart)."""
+    plan = yaml.safe_load((FOLDER / "kitchen.yaml").read_text())
+    facts = re.findall(r"\(reached-from (\S+) (\S+)\)", (FOLDER / "p01.pddl").read_text())
+    assert len(facts) == 15
+    checked = 0
+    for receptacle, location in facts:
+        if receptacle not in plan["furniture"]:
+            continue  # a cabinet or drawer inside a counter's footprint
+        x, y, w, h = plan["furniture"][receptacle]
+        lx, ly = plan["locations"][location]
+        gap = max(x - lx, lx - (x + w - 1), 0) + max(y - ly, ly - (y + h - 1), 0)
+        assert gap == 1, (receptacle, location, gap)
+        checked += 1
+    assert checked == 10
 
 
 def test_objects_start_inside_closed_containers_where_the_paper_says() -> None:

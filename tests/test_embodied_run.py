@@ -89,6 +89,27 @@ def test_executor_config_alfworld_embodied_by_default() -> None:
     assert make().method.fallback_if_longer is True
 
 
+def test_domain_alfred_runs_a_real_problem_on_its_scene(tmp_path: Path) -> None:
+    """``domain=alfred``: the wheel's alfred.pddl beside our FloorPlan14 problem, MA with
+    three agents, executed on the scene's layout (no domain.* overrides needed)."""
+    from tests.test_embodied_layouts import alfred_root
+    from twostep.trace_check import alfworld_layouts_folder
+
+    if alfworld_layouts_folder() is None:
+        pytest.skip("the alfworld wheel (extra 'embodied') is missing")
+    root = alfred_root(tmp_path)
+    cfg = make(f"data.root={root}", "domain=alfred", "task=1", "method=ma", "agents=3",
+               "executor.render=false")  # fmt: skip
+    assert list(cfg.domain.agent_predicates) == [
+        "atlocation", "holds", "holdsany", "holdsanyreceptacleobject",
+    ]  # fmt: skip
+    result = run_config(typed(cfg)).to_dict()
+    assert result["success"] and result["agents"] == 3
+    assert result["embodied_status"] == "success", result["embodied"]
+    assert result["embodied"]["floor_plan"] == "FloorPlan14"
+    assert result["embodied_trace"]["floor_plan"]["layout"] == "FloorPlan14"
+
+
 def test_alfworld_symbolic_executor_has_no_embodied_fields() -> None:
     cfg = typed(make("domain=alfworld", "task=1", "method=sa", "executor=symbolic"))
     result = run_config(cfg).to_dict()

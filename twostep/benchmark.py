@@ -6,6 +6,7 @@ A data root holds one folder per domain::
     <root>/<domain>/p01.pddl .. p20.pddl   p01.nl .. p20.nl
     <root>/<domain>/p_example.pddl  p_example.nl  p_example.sol
     <root>/<domain>/expert.yaml      (optional: hand-written helper subgoals)
+    <root>/<domain>/titles.yaml      (optional: a one-line title per task, p01: "...")
 
 :func:`load_task` reads one task (PDDL, its English description and the domain's example)
 into a :class:`BenchmarkTask`. Any directory in this layout works, e.g. a checkout of the
@@ -74,6 +75,29 @@ def domain_dir(domain: str, root: Path = DEFAULT_DATA_ROOT) -> Path:
         known = ", ".join(list_domains(Path(root))) or "none"
         raise BenchmarkError(f"unknown domain '{domain}' in {root}; domains: {known}")
     return folder
+
+
+TITLES_FILE = "titles.yaml"
+
+
+def task_titles(domain: str, root: Path = DEFAULT_DATA_ROOT) -> dict[int, str]:
+    """The domain's one-line task titles (``titles.yaml``: ``p01: "..."``), by task id;
+    empty when the folder has none."""
+    import yaml
+
+    path = domain_dir(domain, root) / TITLES_FILE
+    if not path.is_file():
+        return {}
+    data = yaml.safe_load(path.read_text()) or {}
+    if not isinstance(data, dict):
+        raise BenchmarkError(f"{path}: expected p01: title lines")
+    titles = {}
+    for key, title in data.items():
+        match = re.fullmatch(r"p(\d+)", str(key))
+        if match is None:
+            raise BenchmarkError(f"{path}: '{key}' is not a task name (p01, p02, ...)")
+        titles[int(match.group(1))] = str(title)
+    return titles
 
 
 def task_path(domain: str, task: int, root: Path = DEFAULT_DATA_ROOT) -> Path:

@@ -10,6 +10,8 @@ binary that cannot run here):
   ``goto``) takes as many moves as the shortest path around walls, furniture and the
   other agents' current cells; the agent's later actions queue behind it;
 - an action whose preconditions do not hold yet makes the agent wait;
+- an agent that is done and stands in a blocked agent's way steps aside at once (to the
+  nearest cell off every working agent's way);
 - when nobody can make progress while someone's way is blocked (or an agent has been
   blocked for ``stall_limit`` steps), one of the agents involved, chosen at random, backs
   off to a random reachable cell nearby, and then everyone retries;
@@ -27,13 +29,15 @@ executing the plan, and each body starts from a copy of that agent's initial fac
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+import enum
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from random import Random
 from typing import Any
 
 from twostep.embodied.floorplan import Cell, FloorPlan
 from twostep.embodied.navigation import reachable_cells, shortest_path
+from twostep.embodied.scene import Scene, scene_of
 from twostep.pddl import Fact, Goal, Problem
 from twostep.strips import GroundAction, Grounder, PlanError, parse_action
 
@@ -42,14 +46,42 @@ LOCATION_TYPE = "location"
 
 PRIMITIVES = ("move", "interact", "wait", "backoff")
 
-SUCCESS = "success"
-DEADLOCK = "deadlock"  # nobody can ever make progress: a precondition no one will make true
-BOXED_IN = "boxed_in"  # an agent's way is blocked and no agent can make way
-UNREACHABLE = "unreachable"  # walls and furniture cut a location off
-NO_CELL = "no_cell"  # a location the floor plan does not place
-BUDGET_EXCEEDED = "budget_exceeded"
-INVALID_PLAN = "invalid_plan"  # an action the task does not know
-GOAL_NOT_REACHED = "goal_not_reached"
+
+class EmbodiedStatus(enum.StrEnum):
+    """How an embodied execution ended; every status but ``success`` is a failed run.
+
+    The values are the strings result.json, trace.json and MLflow hold.
+    """
+
+    SUCCESS = "success"
+    DEADLOCK = "deadlock"  # nobody can ever make progress: a precondition no one makes true
+    BOXED_IN = "boxed_in"  # agents cannot all stand, or a way is blocked and nobody can make way
+    UNREACHABLE = "unreachable"  # walls and furniture cut a location off
+    NO_CELL = "no_cell"  # a location the floor plan does not place
+    BUDGET_EXCEEDED = "budget_exceeded"
+    INVALID_PLAN = "invalid_plan"  # an action the task does not know
+    GOAL_NOT_REACHED = "goal_not_reached"
+    NOT_RUN = "not_run"  # no plan to execute (planning failed)
+
+
+SUCCESS = EmbodiedStatus.SUCCESS
+DEADLOCK = EmbodiedStatus.DEADLOCK
+BOXED_IN = EmbodiedStatus.BOXED_IN
+UNREACHABLE = EmbodiedStatus.UNREACHABLE
+NO_CELL = EmbodiedStatus.NO_CELL
+BUDGET_EXCEEDED = EmbodiedStatus.BUDGET_EXCEEDED
+INVALID_PLAN = EmbodiedStatus.INVALID_PLAN
+GOAL_NOT_REACHED = EmbodiedStatus.GOAL_NOT_REACHED
+
+
+def failure_line(status: str, step: int | None, agent: str | None) -> str | None:
+    """The one-line verdict of a failed execution (``embodied_failed: boxed_in at step 12,
+    agent1``), or None for a success."""
+    if status == EmbodiedStatus.SUCCESS:
+        return None
+    where = "" if step is None else f" at step {step}"
+    who = "" if agent is None else f", {agent}"
+    return f"embodied_failed: {status}{where}{who}"
 
 
 class EmbodiedError(Exception):
@@ -62,7 +94,11 @@ class ExecutorSettings:
 
     seed: int = 0
     max_steps: int | None = None  # None: 200 + 50 steps per plan action
-    random_start: bool = True  # False: each body starts on its PDDL start location's cell
+    # Several bodies start on seeded random free cells (False: on their PDDL start
+    # location's cell, or the nearest free one). A single body (SA, or a TwoStep run
+    # without helpers) always starts on its start location's cell: the paper's SA has no
+    # variance.
+    random_start: bool = True
     stall_limit: int = 4  # blocked this many steps in a row -> back off even if others move
     backoff_radius: int = 4  # backoff destinations are at most this many moves away
     location_type: str = LOCATION_TYPE
@@ -81,6 +117,7 @@ class TraceStep:
     applied: str | None = None  # the ground action applied now, in execution terms
     holding: tuple[str, ...] = ()
     reason: str | None = None  # why the agent waited
+    scene: Scene | None = None  # the scene after this step, when the step changed it
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -97,6 +134,8 @@ class TraceStep:
             out["holding"] = list(self.holding)
         if self.reason is not None:
             out["reason"] = self.reason
+        if self.scene is not None:
+            out["scene"] = self.scene.to_dict()
         return out
 
 
@@ -119,10 +158,16 @@ class EmbodiedResult:
     reason: str = ""
     unmet_goal: list[str] = field(default_factory=list)
     problem: Problem | None = field(default=None, repr=False)  # the task with one agent per body
+    scene: Scene = field(default_factory=Scene)  # at the start (steps record its changes)
 
     @property
     def success(self) -> bool:
         return self.status == SUCCESS
+
+    @property
+    def failure(self) -> str | None:
+        """None for a success, else the one-line verdict (:func:`failure_line`)."""
+        return failure_line(self.status, self.step, self.agent)
 
     @property
     def message(self) -> str:
@@ -274,7 +319,7 @@ def embody(
 class _Body:
     name: str
     plan: list[GroundAction]
-    source: tuple[str, ...]
+    source: tuple[str | None, ...]  # each step in the task's own terms; None: bookkeeping
     targets: list[Cell | None]  # the cell a navigation action walks to, None otherwise
     position: Cell
     index: int = 0
@@ -282,6 +327,7 @@ class _Body:
     backoff: list[Cell] = field(default_factory=list)
     blocked_for: int = 0
     holding: tuple[str, ...] = ()
+    walking_to: Cell | None = None  # the cell of the current walk (a navigation, a way back)
 
     @property
     def done(self) -> bool:
@@ -310,8 +356,10 @@ class _Execution:
         embodiment: Embodiment,
         floor_plan: FloorPlan,
         settings: ExecutorSettings,
+        task_action: Callable[[str], str | None] | None = None,
     ):
         self.floor_plan = floor_plan
+        self.task_action = task_action or (lambda action: action)
         self.settings = settings
         self.rng = Random(settings.seed)
         self.problem = embodiment.problem
@@ -323,6 +371,7 @@ class _Execution:
         self.step = 0
         self.bodies: list[_Body] = []
         self._connections: dict[tuple[Cell, Cell], bool] = {}
+        self._where: dict[str, str | None] = {}  # body -> its location (see _location_of)
         grounder = Grounder(self.problem)
         for body, plan, source in zip(
             embodiment.bodies, embodiment.plans, embodiment.sources, strict=True
@@ -344,11 +393,14 @@ class _Execution:
                         f"{floor_plan.name}",
                     )
                 targets.append(cell)
-            self.bodies.append(_Body(body, grounded, source, targets, (-1, -1)))
+            named = tuple(self.task_action(step) for step in source)
+            self.bodies.append(_Body(body, grounded, named, targets, (-1, -1)))
         self._place_bodies()
         self.start_cells = [b.position for b in self.bodies]
         for placed in self.bodies:
             placed.holding = self._held(placed.name)
+        self._settle()
+        self.scene = self.start_scene = scene_of(self.state)
 
     # ---------------------------------------------------------------- set-up
 
@@ -356,9 +408,13 @@ class _Execution:
         free = self.floor_plan.free_cells()
         if len(free) < len(self.bodies):
             raise _Failure(
-                BOXED_IN, None, 0, f"{len(self.bodies)} agents but {len(free)} free cells"
+                BOXED_IN,
+                self.bodies[len(free)].name,
+                0,
+                f"{len(self.bodies)} agents but {len(free)} free cells on "
+                f"{self.floor_plan.name}: {self.bodies[len(free)].name} has nowhere to stand",
             )
-        if self.settings.random_start:
+        if self.settings.random_start and len(self.bodies) > 1:
             for body, cell in zip(
                 self.bodies, self.rng.sample(free, len(self.bodies)), strict=True
             ):
@@ -416,11 +472,12 @@ class _Execution:
         self.state |= action.add
         if any(body.name in f[1:] for f in action.add | action.delete):
             body.holding = self._held(body.name)
+            self._where.pop(body.name, None)
         body.index += 1
         body.path = []
 
     def _act(self, body: _Body) -> str:
-        """One command of ``body``; returns 'progress', 'blocked' or 'waiting'."""
+        """One command of ``body``; returns 'progress', 'blocked', 'waiting' or 'idle'."""
         if body.backoff:
             nxt = body.backoff[0]
             if nxt in self._occupied(body):
@@ -434,44 +491,115 @@ class _Execution:
             return "idle"
         action = body.plan[body.index]
         source = body.source[body.index]
+        target = body.targets[body.index]
+        if source is None:  # bookkeeping that cannot apply yet (_settle applies it)
+            missing = action.failing_precondition(self.state)
+            self.waits += 1
+            self._record(body, "wait", reason=f"precondition {missing} of the goal")
+            return "waiting"
+        if target is None:
+            # An interaction is made from the cell of the location the body is at; a body
+            # moved off it (a backoff, a random start) walks back first (queued navigation).
+            home = self._home(body, source)
+            if body.position != home:
+                return self._walk(body, home, source, arrival=False)
         missing = action.failing_precondition(self.state)
         if missing is not None:
             self.waits += 1
             self._record(body, "wait", action=source, reason=f"precondition {missing}")
             return "waiting"
-        target = body.targets[body.index]
         if target is None:
             self._apply(body, action)
-            self._record(body, "interact", action=source, applied=str(action))
+            self._settle()
+            scene = scene_of(self.state)
+            changed, self.scene = scene != self.scene, scene
+            self._record(
+                body,
+                "interact",
+                action=source,
+                applied=self.task_action(str(action)),
+                scene=scene if changed else None,
+            )
             return "progress"
         if body.position != target:
-            occupied = self._occupied(body)
-            if not body.path or body.path[-1] != target or body.path[0] in occupied:
-                path = shortest_path(self.floor_plan, body.position, target, occupied)
-                if path is None:
-                    if not self._connected(body.position, target):
-                        raise _Failure(
-                            UNREACHABLE,
-                            body.name,
-                            self.step,
-                            f"{source}: cell {target} cannot be reached from {body.position} "
-                            "(walls or furniture cut it off)",
-                        )
-                    self.waits += 1
-                    blockers = self._blockers(body, target)
-                    self._record(
-                        body,
-                        "wait",
-                        action=source,
-                        reason=f"way to {target} blocked by {', '.join(blockers) or 'agents'}",
+            outcome = self._walk(body, target, source, arrival=True)
+            if body.position != target:
+                return outcome
+        self._apply(body, action)
+        self._record(body, "move", action=source, applied=self.task_action(str(action)))
+        self._settle()
+        return "progress"
+
+    def _settle(self) -> None:
+        """Apply every body's next steps that are bookkeeping of a compilation (its goal
+        action: no step in the task's own terms) as soon as they are applicable: they take
+        no environment step."""
+        changed = True
+        while changed:
+            changed = False
+            for body in self.bodies:
+                while not body.done and body.source[body.index] is None:
+                    action = body.plan[body.index]
+                    if action.failing_precondition(self.state) is not None:
+                        break
+                    self._apply(body, action)
+                    changed = True
+
+    def _home(self, body: _Body, source: str) -> Cell:
+        """The cell of the location ``body`` is at by the PDDL state."""
+        location = self._location_of(body.name)
+        cell = None if location is None else self.floor_plan.cell_of(location)
+        if cell is None:
+            raise _Failure(
+                NO_CELL,
+                body.name,
+                self.step,
+                f"{source}: {body.name} is at "
+                f"{location or 'no location'}, which has no cell in floor plan "
+                f"{self.floor_plan.name}",
+            )
+        return cell
+
+    def _location_of(self, body: str) -> str | None:
+        """The location ``body`` is at by the state (the first, should it be at several);
+        kept until an action about the body applies."""
+        if body not in self._where:
+            at = sorted(
+                t for f in self.state if body in f[1:] for t in f[1:] if t in self.locations
+            )
+            self._where[body] = at[0] if at else None
+        return self._where[body]
+
+    def _walk(self, body: _Body, target: Cell, source: str, arrival: bool) -> str:
+        """One move of ``body`` along a shortest free path to ``target`` (re-planned when
+        someone steps into it): 'progress', or 'blocked' (a wait) when agents bar the way.
+        ``arrival``: the caller records the move that reaches ``target`` (it applies the
+        navigation action there)."""
+        body.walking_to = target
+        occupied = self._occupied(body)
+        if not body.path or body.path[-1] != target or body.path[0] in occupied:
+            path = shortest_path(self.floor_plan, body.position, target, occupied)
+            if path is None:
+                if not self._connected(body.position, target):
+                    raise _Failure(
+                        UNREACHABLE,
+                        body.name,
+                        self.step,
+                        f"{source}: cell {target} cannot be reached from {body.position} "
+                        "(walls or furniture cut it off)",
                     )
-                    return "blocked"
-                body.path = path
-            body.position = body.path.pop(0)
-        if body.position == target:
-            self._apply(body, action)
-            self._record(body, "move", action=source, applied=str(action))
-        else:
+                self.waits += 1
+                blockers = self._blockers(body, target)
+                self._record(
+                    body,
+                    "wait",
+                    action=source,
+                    reason=f"way to {target} blocked by {', '.join(blockers) or 'agents'}",
+                )
+                return "blocked"
+            body.path = path
+        body.position = body.path.pop(0)
+        if body.position != target or not arrival:
             self._record(body, "move", action=source)
         return "progress"
 
@@ -483,14 +611,45 @@ class _Execution:
         return self._connections[key]
 
     def _free_path(self, body: _Body) -> list[Cell]:
-        target = body.targets[body.index] if not body.done else None
-        if target is None:
+        """The way ``body`` walks (agents aside); none once it is done."""
+        if body.done or body.walking_to is None:
             return []
-        return shortest_path(self.floor_plan, body.position, target) or []
+        return shortest_path(self.floor_plan, body.position, body.walking_to) or []
 
     def _blockers(self, body: _Body, target: Cell) -> list[str]:
         cells = set(self._free_path(body)) | {target}
         return [b.name for b in self.bodies if b is not body and b.position in cells]
+
+    def _make_way(self, blocked: list[_Body]) -> bool:
+        """Bodies that are done and stand in a blocked body's way step aside at once, to
+        the nearest cell off every working body's way (a backoff of an idle body: it has
+        nothing left to do, so no random choice is needed). False if there is none."""
+        ways: set[Cell] = set()
+        for body in blocked:
+            ways |= set(self._free_path(body))
+            if body.walking_to is not None:
+                ways.add(body.walking_to)
+        idle = [b for b in self.bodies if b.done and not b.backoff and b.position in ways]
+        if not idle:
+            return False
+        busy: set[Cell] = set()
+        for body in self.bodies:
+            if not body.done:
+                busy |= set(self._free_path(body))
+        moved = False
+        for body in idle:
+            distances = reachable_cells(self.floor_plan, body.position, self._occupied(body))
+            aside = [c for c in distances if c not in ways | busy]
+            if not aside:
+                continue
+            destination = min(aside, key=lambda c: (distances[c], c))
+            body.backoff = (
+                shortest_path(self.floor_plan, body.position, destination, self._occupied(body))
+                or []
+            )
+            self.backoffs += 1
+            moved = True
+        return moved
 
     def _back_off(self, blocked: list[_Body]) -> None:
         """One agent involved in the jam moves to a random reachable cell nearby."""
@@ -522,7 +681,7 @@ class _Execution:
             first.name,
             self.step,
             f"{first.source[first.index]}: the way is blocked by "
-            f"{', '.join(self._blockers(first, first.targets[first.index] or first.position))}"
+            f"{', '.join(self._blockers(first, first.walking_to or first.position))}"
             " and no agent can make way",
         )
 
@@ -551,7 +710,9 @@ class _Execution:
                     blocked.append(body)
                 elif outcome == "waiting":
                     waiting.append(body)
-            if (blocked and not progressed) or any(
+            if blocked and self._make_way(blocked):
+                progressed = True
+            elif (blocked and not progressed) or any(
                 b.blocked_for >= self.settings.stall_limit for b in blocked
             ):
                 self._back_off(blocked)
@@ -580,11 +741,15 @@ def execute(
     floor_plan: FloorPlan,
     names: Sequence[str] | None = None,
     settings: ExecutorSettings | None = None,
+    task_action: Callable[[str], str | None] | None = None,
 ) -> EmbodiedResult:
     """Execute per-agent plans (hand-off order) on ``floor_plan``; never raises on bad plans.
 
     ``names`` labels the agents (default ``agent0..``); failures come back as a status
-    with the agent, the step and the reason.
+    with the agent, the step and the reason. ``task_action`` names a plan step (or a
+    ground action) in the task's own terms for the trace, None for a compilation's
+    bookkeeping step (its goal action), which then takes no environment step (default:
+    plans are in the task's own terms already).
     """
     settings = settings or ExecutorSettings()
     names = list(names) if names is not None else [f"agent{i}" for i in range(len(plans))]
@@ -595,7 +760,7 @@ def execute(
     execution: _Execution | None = None
     failure: _Failure | None = None
     try:
-        execution = _Execution(embodiment, floor_plan, settings)
+        execution = _Execution(embodiment, floor_plan, settings, task_action)
         execution.run(budget)
     except _Failure as error:
         failure = error
@@ -615,6 +780,7 @@ def execute(
     )
     if execution is not None:
         result.start_positions = dict(zip(bodies, execution.start_cells, strict=True))
+        result.scene = execution.start_scene
     if failure is not None:
         result.status, result.agent, result.step, result.reason = (
             failure.status,
@@ -643,8 +809,10 @@ def execute_plans(
     agent_order: Sequence[str],
     floor_plan: FloorPlan,
     settings: ExecutorSettings | None = None,
+    task_action: Callable[[str], str | None] | None = None,
 ) -> EmbodiedResult:
-    """Execute a run's plans as result.json holds them (``plans`` by agent, ``agent_order``;
-    agents without a plan are left out); a failure is the result's status, never raised."""
+    """Execute a run's plans (``plans`` by agent, in the terms of ``problem``, with
+    ``agent_order``; agents without a plan are left out; ``task_action``: see
+    :func:`execute`); a failure is the result's status, never raised."""
     order = [agent for agent in agent_order if agent in plans]
-    return execute(problem, [plans[a] for a in order], floor_plan, order, settings)
+    return execute(problem, [plans[a] for a in order], floor_plan, order, settings, task_action)

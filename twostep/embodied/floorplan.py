@@ -12,8 +12,10 @@ there. Plans are read from a YAML file (``data/alfworld/kitchen.yaml``)::
     locations: {loc-fridge1: [1, 2]}
 
 Real AlfWorld problems need no file: their location objects carry their own position
-(``loc|x|z|rotation|horizon``, mangled in PDDL as ``loc_bar_4_bar__minus_3_bar_1_bar_45``),
-and :func:`floor_plan_from_locations` places them on an open grid by x and z.
+(``loc|x|z|rotation|horizon``, mangled in PDDL as ``loc_bar_4_bar__minus_3_bar_1_bar_45``)
+and go on their AI2-THOR scene's layout (:mod:`twostep.embodied.layouts`);
+:func:`floor_plan_from_locations` places them on an open grid by x and z instead (for
+made-up coordinates).
 """
 
 from __future__ import annotations
@@ -45,6 +47,11 @@ class FloorPlan:
     locations: Mapping[str, Cell]
     furniture: Mapping[str, Rect] = field(default_factory=dict)
     walls: tuple[Rect, ...] = ()
+    # Real scenes: receptacles drawn at their own cell without blocking (what blocks is
+    # the scene's unreachable space), and the AI2-THOR grid point of cell (0, 0): cell
+    # (x, y) is point (origin_x + x, origin_z - y).
+    fixtures: Mapping[str, Cell] = field(default_factory=dict)
+    origin: Cell | None = None
 
     def inside(self, cell: Cell) -> bool:
         return 0 <= cell[0] < self.width and 0 <= cell[1] < self.height
@@ -86,12 +93,18 @@ def build_floor_plan(
     locations: Mapping[str, Cell],
     walls: Iterable[Rect] = (),
     furniture: Mapping[str, Rect] | None = None,
+    blocked_cells: Iterable[Cell] = (),
+    fixtures: Mapping[str, Cell] | None = None,
+    origin: Cell | None = None,
 ) -> FloorPlan:
-    """A checked floor plan; walls and furniture rectangles block their cells."""
+    """A checked floor plan; walls, furniture rectangles and ``blocked_cells`` block."""
     walls = tuple(walls)
     furniture = dict(furniture or {})
-    blocked = frozenset(_cells(walls) | _cells(furniture.values()))
-    plan = FloorPlan(name, width, height, blocked, dict(locations), furniture, walls)
+    blocked = frozenset(_cells(walls) | _cells(furniture.values()) | set(blocked_cells))
+    plan = FloorPlan(
+        name, width, height, blocked, dict(locations), furniture, walls, dict(fixtures or {}),
+        origin,
+    )  # fmt: skip
     plan.check()
     return plan
 
@@ -124,12 +137,39 @@ def floor_plan_from_dict(data: Mapping[str, Any], source: str = "floor plan") ->
         str(k).lower(): _rect(v, f"{source}: furniture {k}")
         for k, v in (data.get("furniture") or {}).items()
     }
+    blocked = [_pair(v, f"{source}: blocked cell") for v in data.get("blocked") or []]
+    fixtures = {
+        str(k).lower(): _pair(v, f"{source}: fixture {k}")
+        for k, v in (data.get("fixtures") or {}).items()
+    }
+    origin = data.get("origin")
     try:
         return build_floor_plan(
-            str(data.get("name", source)), width, height, locations, walls, furniture
-        )
+            str(data.get("name", source)), width, height, locations, walls, furniture,
+            blocked, fixtures, None if origin is None else _pair(origin, f"{source}: origin"),
+        )  # fmt: skip
     except FloorPlanError as error:
         raise FloorPlanError(f"{source}: {error}") from None
+
+
+def floor_plan_to_dict(floor_plan: FloorPlan) -> dict[str, Any]:
+    """The inverse of :func:`floor_plan_from_dict` (a real scene's blocked cells, its
+    receptacles and its origin included)."""
+    out: dict[str, Any] = {
+        "name": floor_plan.name,
+        "width": floor_plan.width,
+        "height": floor_plan.height,
+        "walls": [list(rect) for rect in floor_plan.walls],
+        "furniture": {name: list(rect) for name, rect in floor_plan.furniture.items()},
+        "locations": {name: list(cell) for name, cell in floor_plan.locations.items()},
+    }
+    if floor_plan.origin is not None:
+        drawn = set(_cells(floor_plan.walls) | _cells(floor_plan.furniture.values()))
+        out["layout"] = floor_plan.name
+        out["origin"] = list(floor_plan.origin)
+        out["blocked"] = [list(c) for c in sorted(floor_plan.blocked - drawn)]
+        out["fixtures"] = {name: list(cell) for name, cell in floor_plan.fixtures.items()}
+    return out
 
 
 def load_floor_plan(path: str | Path) -> FloorPlan:
@@ -196,11 +236,3 @@ def floor_plan_from_locations(locations: Iterable[str], margin: int = 1) -> Floo
 
 
 FLOOR_PLAN_FILE = "kitchen.yaml"
-
-
-def floor_plan_for_task(location_names: Iterable[str], folder: str | Path | None) -> FloorPlan:
-    """The floor plan of a task: ``<folder>/kitchen.yaml`` if there is one, else the
-    task's own AlfWorld location names placed by their x and z."""
-    if folder is not None and (Path(folder) / FLOOR_PLAN_FILE).is_file():
-        return load_floor_plan(Path(folder) / FLOOR_PLAN_FILE)
-    return floor_plan_from_locations(location_names)

@@ -18,33 +18,30 @@ from twostep.embodied.executor import (
     LOCATION_TYPE,
     EmbodiedResult,
     TraceStep,
+    failure_line,
 )
-from twostep.embodied.floorplan import FloorPlan, floor_plan_for_task, floor_plan_from_dict
+from twostep.embodied.floorplan import FloorPlan, floor_plan_from_dict, floor_plan_to_dict
+from twostep.embodied.layouts import floor_plan_for_task
+from twostep.embodied.scene import Scene
 from twostep.pddl import Problem
 
+RECEPTACLE_TYPE = "receptacle"
 TRACE_KEY = "embodied_trace"  # result dict key of the trace + floor plan (not in result.json)
 
 
-def task_floor_plan(problem: Problem, folder: str | Path | None) -> FloorPlan:
-    """The floor plan of ``problem`` whose files live in ``folder``."""
-    locations = [
-        name
-        for name, kind in problem.all_objects.items()
-        if problem.domain.is_subtype(kind, LOCATION_TYPE)
-    ]
-    return floor_plan_for_task(locations, folder)
+def task_floor_plan(
+    problem: Problem, folder: str | Path | None, layout: str | None = None
+) -> FloorPlan:
+    """The floor plan of ``problem`` whose files live in ``folder`` (``layout``: see
+    :func:`~twostep.embodied.layouts.floor_plan_for_task`)."""
 
+    def of_type(kind: str) -> list[str]:
+        objects = problem.all_objects.items()
+        return [name for name, t in objects if problem.domain.is_subtype(t, kind)]
 
-def floor_plan_to_dict(floor_plan: FloorPlan) -> dict[str, Any]:
-    """The inverse of :func:`~twostep.embodied.floorplan.floor_plan_from_dict`."""
-    return {
-        "name": floor_plan.name,
-        "width": floor_plan.width,
-        "height": floor_plan.height,
-        "walls": [list(rect) for rect in floor_plan.walls],
-        "furniture": {name: list(rect) for name, rect in floor_plan.furniture.items()},
-        "locations": {name: list(cell) for name, cell in floor_plan.locations.items()},
-    }
+    return floor_plan_for_task(
+        of_type(LOCATION_TYPE), folder, layout, of_type(RECEPTACLE_TYPE), problem.name
+    )
 
 
 def embodied_fields(result: EmbodiedResult, floor_plan: FloorPlan) -> dict[str, Any]:
@@ -57,10 +54,24 @@ def embodied_fields(result: EmbodiedResult, floor_plan: FloorPlan) -> dict[str, 
         "backoffs": result.backoffs,
         "embodied": result.to_dict(),  # status, agent/step/reason of a failure, starts
         TRACE_KEY: {
+            "status": result.status,
+            "embodied_length": result.embodied_length,
+            "start_positions": {a: list(c) for a, c in result.start_positions.items()},
+            "scene": result.scene.to_dict(),
             "floor_plan": floor_plan_to_dict(floor_plan),
             "trace": [step.to_dict() for step in result.trace],
         },
     }
+
+
+def embodied_failure(fields: Mapping[str, Any]) -> str | None:
+    """None when a result's embodied execution succeeded (or there was none), else its
+    one-line verdict (``embodied_failed: boxed_in at step 12, agent1``): what a run's
+    success, exit code and stored status follow."""
+    summary = fields.get("embodied")
+    if fields.get("executor") != "embodied" or not isinstance(summary, Mapping):
+        return None
+    return failure_line(str(summary.get("status")), summary.get("step"), summary.get("agent"))
 
 
 def result_from_fields(fields: Mapping[str, Any]) -> tuple[EmbodiedResult, FloorPlan]:
@@ -77,6 +88,7 @@ def result_from_fields(fields: Mapping[str, Any]) -> tuple[EmbodiedResult, Floor
             applied=t.get("applied"),
             holding=tuple(t.get("holding") or ()),
             reason=t.get("reason"),
+            scene=Scene.from_dict(t["scene"]) if t.get("scene") else None,
         )
         for t in recorded["trace"]
     ]
@@ -95,6 +107,7 @@ def result_from_fields(fields: Mapping[str, Any]) -> tuple[EmbodiedResult, Floor
         step=summary.get("step"),
         reason=str(summary.get("reason") or ""),
         unmet_goal=list(summary.get("unmet_goal") or []),
+        scene=Scene.from_dict(recorded.get("scene") or {}),
     )
     return result, floor_plan_from_dict(recorded["floor_plan"], "recorded floor plan")
 

@@ -140,7 +140,7 @@ def _paper_kitchen() -> Kitchen:
         Receptacle("drawer3", "drawer", "loc-counter3"),
         Receptacle("cabinet4", "cabinet", "loc-cabinet4", (11, 5, 1, 3)),
         Receptacle("diningtable1", "diningtable", "loc-diningtable1", (5, 5, 3, 2)),
-        Receptacle("garbagecan1", "garbagecan", "loc-door", (8, 9, 1, 1)),
+        Receptacle("garbagecan1", "garbagecan", "loc-door", (7, 9, 1, 1)),  # beside the door
     ]
     walls = ((0, 0, 13, 1), (0, 10, 13, 1), (0, 1, 1, 9), (12, 1, 1, 9))
     return Kitchen("paper-kitchen", 13, 11, tuple(receptacles), locations, walls)
@@ -396,6 +396,9 @@ def data_files(
         spec = build_task(f"alfworld-p{index:02d}", kitchen, task)
         files[f"p{index:02d}.pddl"] = spec.to_pddl()
         files[f"p{index:02d}.nl"] = describe_task(spec, kitchen)
+    files["titles.yaml"] = "# One line per task (Table II lists them)\n" + "".join(
+        f'p{index:02d}: "{task.title}"\n' for index, task in enumerate(tasks, start=1)
+    )
     return files
 
 
