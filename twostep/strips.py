@@ -1,64 +1,36 @@
-"""Grounded STRIPS actions and states: the one state representation of the project.
+"""Plans over the grounded model: parsing plan text, looking actions up, simulating.
 
-A state is a ``frozenset`` of :data:`~twostep.pddl.Fact`. Plans are sequences of action
-strings in Fast Downward's format, ``(pickup b1)``; :class:`Grounder` turns them into
-:class:`GroundAction` objects (precondition, add and delete sets) once, with a cache, so
+A state is a closed ``frozenset`` of :data:`~twostep.pddl.Fact` and a ground action a
+:class:`~twostep.pddl.grounded.GroundAction` (preconditions, effects with conditions,
+cost): the grounded model of :mod:`twostep.pddl.grounded`, which is Fast Downward's own
+grounding of the task. Plans are sequences of action strings in Fast Downward's format,
+``(pickup b1)``; :class:`Grounder` looks them up in a problem's grounded task, so
 simulation and scoring are set operations in memory.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
 
-from twostep.pddl import Fact, Problem, fact_to_pddl
+from twostep.pddl import Fact, Problem
+from twostep.pddl.grounded import (
+    ConditionalEffect,
+    GroundAction,
+    PlanError,
+    interference,
+    parse_action,
+)
 
-
-class PlanError(Exception):
-    """A plan that names an unknown action or object, or cannot be applied."""
-
-
-@dataclass(frozen=True)
-class GroundAction:
-    """One ground action: its name and arguments, preconditions and effects."""
-
-    name: str
-    args: tuple[str, ...]
-    pre_positive: frozenset[Fact]
-    pre_negative: frozenset[Fact]
-    add: frozenset[Fact]
-    delete: frozenset[Fact]
-
-    def __str__(self) -> str:
-        return "(" + " ".join((self.name, *self.args)) + ")"
-
-    @property
-    def facts(self) -> frozenset[Fact]:
-        """Every fact the action reads or writes."""
-        return self.pre_positive | self.pre_negative | self.add | self.delete
-
-    def applicable(self, state: frozenset[Fact] | set[Fact]) -> bool:
-        return self.pre_positive <= state and not (self.pre_negative & state)
-
-    def failing_precondition(self, state: frozenset[Fact] | set[Fact]) -> str | None:
-        """The first precondition that does not hold in ``state``, as PDDL, or None."""
-        for fact in sorted(self.pre_positive - state):
-            return fact_to_pddl(fact)
-        for fact in sorted(self.pre_negative & state):
-            return f"(not {fact_to_pddl(fact)})"
-        return None
-
-    def apply(self, state: frozenset[Fact]) -> frozenset[Fact]:
-        """The successor state (delete before add, as in PDDL)."""
-        return (state - self.delete) | self.add
-
-
-def parse_action(text: str) -> tuple[str, tuple[str, ...]]:
-    """Split ``"(stack b1 b2)"`` (or ``"stack b1 b2"``) into name and arguments."""
-    words = text.strip().strip("()").lower().split()
-    if not words:
-        raise PlanError(f"empty action {text!r}")
-    return words[0], tuple(words[1:])
+__all__ = [
+    "ConditionalEffect",
+    "GroundAction",
+    "Grounder",
+    "PlanError",
+    "interference",
+    "parse_action",
+    "read_plan",
+    "simulate",
+]
 
 
 def read_plan(text: str) -> list[str]:
@@ -73,18 +45,20 @@ def read_plan(text: str) -> list[str]:
 
 
 class Grounder:
-    """Grounds action strings against one problem's domain and objects, with a cache."""
+    """Plan text to the problem's ground actions; unknown ones explained (lifted checks)."""
 
     def __init__(self, problem: Problem):
         self.problem = problem
-        self._objects = problem.all_objects
-        self._cache: dict[str, GroundAction] = {}
+        self._task = problem.grounded
 
     def ground(self, action: str) -> GroundAction:
-        cached = self._cache.get(action)
-        if cached is not None:
-            return cached
+        found = self._task.actions.get(action)
+        if found is not None:
+            return found
         name, args = parse_action(action)
+        found = self._task.actions.get("(" + " ".join((name, *args)) + ")")
+        if found is not None:
+            return found
         schema = self.problem.domain.actions.get(name)
         if schema is None:
             raise PlanError(f"unknown action '{name}' in {action}")
@@ -92,26 +66,14 @@ class Grounder:
             raise PlanError(
                 f"{action}: '{name}' takes {len(schema.parameters)} argument(s), got {len(args)}"
             )
+        objects = self.problem.all_objects
         for arg in args:
-            if arg not in self._objects:
+            if arg not in objects:
                 raise PlanError(f"{action}: unknown object '{arg}'")
-        binding = {var: arg for (var, _), arg in zip(schema.parameters, args, strict=True)}
-        for x, y in schema.equal:
-            if binding.get(x, x) != binding.get(y, y):
-                raise PlanError(f"{action}: requires {x} = {y}")
-        for x, y in schema.not_equal:
-            if binding.get(x, x) == binding.get(y, y):
-                raise PlanError(f"{action}: requires {x} != {y}")
-        ground = GroundAction(
-            name,
-            args,
-            frozenset(a.ground(binding) for a in schema.pre_positive),
-            frozenset(a.ground(binding) for a in schema.pre_negative),
-            frozenset(a.ground(binding) for a in schema.add),
-            frozenset(a.ground(binding) for a in schema.delete),
+        raise PlanError(
+            f"{action}: never applicable in this task (Fast Downward grounds no such action: "
+            "a static precondition, a type or an equality rules it out)"
         )
-        self._cache[action] = ground
-        return ground
 
     def ground_plan(self, plan: Iterable[str]) -> list[GroundAction]:
         return [self.ground(a) for a in plan]
@@ -120,8 +82,8 @@ class Grounder:
 def simulate(state: frozenset[Fact], plan: Sequence[GroundAction]) -> frozenset[Fact]:
     """Apply ``plan`` from ``state``; raise :class:`PlanError` at the first inapplicable step."""
     for step, action in enumerate(plan, start=1):
-        missing = action.failing_precondition(state)
-        if missing is not None:
+        if not action.applicable(state):
+            missing = action.failing_precondition(state)
             raise PlanError(f"step {step} {action}: precondition {missing} does not hold")
         state = action.apply(state)
     return state

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from twostep.pddl import Problem, domain_to_pddl, problem_to_pddl
+from twostep.pddl import Problem, planner_input
 from twostep.strips import parse_action
 
 
@@ -29,12 +29,9 @@ def to_up_problem(problem: Problem) -> Any:
     from twostep.pddl.environment import up_environment
 
     up_environment()
-    extra = (":negative-preconditions",) if problem.goal.negative else ()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
-        return PDDLReader().parse_problem_string(
-            domain_to_pddl(problem.domain, extra), problem_to_pddl(problem)
-        )
+        return PDDLReader().parse_problem_string(*planner_input(problem))
 
 
 def validate_plan(problem: Problem, plan: Sequence[str], up_problem: Any = None) -> Validation:

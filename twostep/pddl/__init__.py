@@ -1,32 +1,33 @@
-"""PDDL domains and problems: reading, the in-memory model, and writing.
+"""PDDL domains and problems: reading, the lifted model, its grounding, and writing.
 
-Files are parsed by unified-planning's ``PDDLReader``; the result is turned into the small,
-immutable model (ground facts are tuples of lowercase names), which every other module
-uses. Real-world files are read as they are: before unified-planning sees them, a light
-s-expression pass reports unbalanced parentheses with file and line, and repairs the two
-quirks of the LLM+P benchmark files (action names reused as predicate names, and domain
-actions that mention objects only the problem declares).
+Files are read as Fast Downward reads them. Our own reader (:mod:`twostep.pddl.lifted`,
+on :mod:`twostep.pddl.sexp`) gives the lifted model: what the files say, checked with
+file and line. Fast Downward's translator, run as a program, grounds the task
+(:mod:`twostep.pddl.translator`), and its output is read into the grounded model
+(:mod:`twostep.pddl.grounded`): the states, actions with conditional effects, costs and
+axioms every other module simulates. Real-world quirks are repaired on s-expressions
+first (:mod:`twostep.pddl.repairs`).
 
 One job per module:
 
-- :mod:`twostep.pddl.model`    the model (facts, atoms, action schemas, domain, goal, problem)
-- :mod:`twostep.pddl.errors`   :class:`PDDLError`, with file and line
-- :mod:`twostep.pddl.sexp`     the s-expression reader and writer
-- :mod:`twostep.pddl.repairs`  repairs of real-world quirks on s-expressions
-- :mod:`twostep.pddl.adl`      ADL, action costs and ``either`` types compiled into the model
-- :mod:`twostep.pddl.origins`  compiled plans in the task's own terms, and back
-- :mod:`twostep.pddl.unified`  conversion from unified-planning's problem into the model
-- :mod:`twostep.pddl.reader`   ``parse_problem``, ``load_problem``, ``parse_goal``
-- :mod:`twostep.pddl.writer`   ``domain_to_pddl``, ``problem_to_pddl``
-
-The model is STRIPS with typing, constants, negative preconditions and equality; ADL
-(``exists``, ``forall``, ``or``, ``imply``, ``when``), ``:action-costs`` and ``either`` types, as
-AlfWorld's ``alfred.pddl`` uses them, are compiled into it by :mod:`twostep.pddl.adl`.
+- :mod:`twostep.pddl.model`       the lifted model (domain, action schemas, goal, problem)
+- :mod:`twostep.pddl.grounded`    the grounded model: states, ground actions, axioms
+- :mod:`twostep.pddl.errors`      :class:`PDDLError`, with file and line
+- :mod:`twostep.pddl.sexp`        the s-expression reader and writer
+- :mod:`twostep.pddl.lifted`      s-expressions to the lifted model, checked
+- :mod:`twostep.pddl.repairs`     repairs of real-world quirks on s-expressions
+- :mod:`twostep.pddl.translator`  Fast Downward's translator, run as a subprocess
+- :mod:`twostep.pddl.sas`         its ``output.sas`` to the grounded model
+- :mod:`twostep.pddl.goals`       quantified subgoals grounded by static facts
+- :mod:`twostep.pddl.reader`      ``parse_problem``, ``load_problem`` (cached), ``parse_goal``
+- :mod:`twostep.pddl.writer`      the PDDL the planner receives
+- :mod:`twostep.pddl.origins`     plans in the task's own terms (the identity)
+- :mod:`twostep.pddl.environment` unified-planning's environment, for the plan validator
 """
 
 from twostep.pddl.errors import PDDLError
+from twostep.pddl.grounded import GroundAction, GroundTask
 from twostep.pddl.model import (
-    ActionOrigin,
     ActionSchema,
     Atom,
     Domain,
@@ -37,15 +38,16 @@ from twostep.pddl.model import (
 )
 from twostep.pddl.reader import load_problem, parse_goal, parse_problem
 from twostep.pddl.sexp import SExp, read_sexp, write_sexp
-from twostep.pddl.writer import domain_to_pddl, problem_to_pddl
+from twostep.pddl.writer import domain_to_pddl, planner_input, problem_to_pddl
 
 __all__ = [
-    "ActionOrigin",
     "ActionSchema",
     "Atom",
     "Domain",
     "Fact",
     "Goal",
+    "GroundAction",
+    "GroundTask",
     "PDDLError",
     "Problem",
     "SExp",
@@ -54,6 +56,7 @@ __all__ = [
     "load_problem",
     "parse_goal",
     "parse_problem",
+    "planner_input",
     "problem_to_pddl",
     "read_sexp",
     "write_sexp",

@@ -1,8 +1,11 @@
-"""Reading domains, problems and goals: the s-expression checks, the repairs, unified-planning.
+"""Reading tasks: files to the lifted model (our reader) and its grounding (the translator's).
 
-The model is STRIPS with typing, constants, negative preconditions and equality; tasks
-beyond it (ADL, action costs, ``either`` types: AlfWorld's ``alfred.pddl``) are compiled into
-it first by :mod:`twostep.pddl.adl`.
+:func:`parse_problem` checks the s-expressions (unbalanced parentheses: file and line),
+applies the repairs real-world files need (:mod:`twostep.pddl.repairs`), reads the lifted
+model (:mod:`twostep.pddl.lifted`) and, when the task's meaning needs it at once (derived
+facts, a goal formula), grounds it with Fast Downward's translator
+(:func:`ground_problem`); otherwise the grounding is made on first use.
+:func:`load_problem` reads files, with an optional on-disk cache that holds the grounding.
 """
 
 from __future__ import annotations
@@ -12,23 +15,25 @@ import functools
 import hashlib
 import json
 import pickle
-import re
+from dataclasses import replace
 from importlib import metadata
 from pathlib import Path
 
 from twostep.files import write_bytes_atomic
-from twostep.pddl import adl
 from twostep.pddl.errors import PDDLError
-from twostep.pddl.model import ActionOrigin, Domain, Fact, Goal, Problem
+from twostep.pddl.goals import ground_goal
+from twostep.pddl.grounded import Fact, GroundTask
+from twostep.pddl.lifted import conjunction_literals, read_domain, read_problem
+from twostep.pddl.model import Goal, Problem
 from twostep.pddl.repairs import repair_undeclared_constants
-from twostep.pddl.sexp import SExp, define_body, read_sexp, section, typed_names, write_sexp
-from twostep.pddl.unified import (
-    action_costs,
-    fact_from_up,
-    literals,
-    parse_with_up,
-    schema_from_up,
-)
+from twostep.pddl.sas import read_sas
+from twostep.pddl.sexp import define_body, read_sexp, write_sexp
+from twostep.pddl.translator import translate
+from twostep.pddl.writer import planner_input, problem_to_pddl
+
+UNREACHABLE_GOAL: Fact = ("@unreachable-goal",)
+"""The fact a goal formula stands for when the translator finds it unreachable: no state
+holds it (the name cannot be a PDDL predicate)."""
 
 
 def parse_problem(
@@ -40,166 +45,60 @@ def parse_problem(
     """Parse a domain and a problem given as PDDL text."""
     read_sexp(domain_text, domain_source, single=True)  # unbalanced parentheses: file and line
     read_sexp(problem_text, problem_source, single=True)
-    original = (domain_text, problem_text)
-    origins: dict[str, ActionOrigin] = {}
-    costs: dict[str, int] = {}
-    if adl.needs_compilation(
-        define_body(domain_text, "domain", domain_source),
-        define_body(problem_text, "problem", problem_source),
-    ):
-        compiled = adl.compile_task(domain_text, problem_text, domain_source, problem_source)
-        domain_text, problem_text = compiled.domain_text, compiled.problem_text
-        origins, costs = compiled.origins, compiled.costs
-    domain_text, problem_text = repair_undeclared_constants(
+    repaired_domain, repaired_problem = repair_undeclared_constants(
         domain_text, problem_text, domain_source, problem_source
     )
-    try:
-        up_problem = parse_with_up(domain_text, problem_text, domain_source, problem_source)
-    except PDDLError as error:
-        named = _unknown_name(*original, domain_source, problem_source)
-        if named is not None:  # clearer than unified-planning's "Not able to handle"
-            raise named from None
-        if not origins:
-            raise
-        # line numbers of the compiled text would mislead: name the files only
-        raise PDDLError(f"after compiling ADL: {error.message}", error.source) from None
-    domain_body = define_body(domain_text, "domain", domain_source)
-    domain_name_expr = domain_body[1]
-    domain_name = (
-        str(domain_name_expr[1])
-        if isinstance(domain_name_expr, list) and len(domain_name_expr) > 1
-        else "domain"
-    )
-    requirements = tuple(
-        r for r in (section(domain_body, ":requirements") or [":r"])[1:] if isinstance(r, str)
-    )
-    constant_names = {n for n, _ in typed_names((section(domain_body, ":constants") or [":c"])[1:])}
-    types: dict[str, str | None] = {}
-    for user_type in up_problem.user_types:
-        types[user_type.name] = user_type.father.name if user_type.father is not None else None
-    if not types:
-        types["object"] = None
-    all_objects = {o.name: o.type.name for o in up_problem.all_objects}
-    constants = {n: t for n, t in all_objects.items() if n in constant_names}
-    objects = {n: t for n, t in all_objects.items() if n not in constant_names}
-    predicates = {f.name: tuple(p.type.name for p in f.signature) for f in up_problem.fluents}
-    found = action_costs(up_problem)
-    if costs:  # compiled from ADL: every action has a cost, 0 where nothing is increased
-        found = {a.name: costs.get(a.name, 0) for a in up_problem.actions}
-    try:
-        actions = {a.name: schema_from_up(a, (found or {}).get(a.name)) for a in up_problem.actions}
-    except PDDLError as error:
-        raise PDDLError(error.message, error.source or domain_source, error.line) from None
-    domain = Domain(
-        domain_name, requirements, types, constants, predicates, actions, domain_source, origins
-    )
-    init = frozenset(
-        fact_from_up(k) for k, v in up_problem.explicit_initial_values.items() if v.is_true()
-    )
-    positive: set[Fact] = set()
-    negative: set[Fact] = set()
-    for goal in up_problem.goals:
-        for is_positive, pred, terms in literals(goal, "goal"):
-            if pred == "=":
-                raise PDDLError("equality in the goal is not supported", problem_source)
-            (positive if is_positive else negative).add((pred, *terms))
-    return Problem(
-        up_problem.name,
+    domain_body = define_body(repaired_domain, "domain", domain_source)
+    problem_body = define_body(repaired_problem, "problem", problem_source)
+    # line numbers come from the files as written (a repair only moves declarations)
+    domain = replace(read_domain(domain_body, domain_text, domain_source), text=repaired_domain)
+    parts = read_problem(problem_body, domain, problem_text, problem_source)
+    problem = Problem(
+        parts.name,
         domain,
-        objects,
-        init,
-        Goal(frozenset(positive), frozenset(negative)),
+        parts.objects,
+        parts.init,
+        parts.goal,
         problem_source,
+        numeric_init=parts.numeric_init,
+        body=problem_body,
+        text=repaired_problem,
     )
+    if problem.needs_axioms:
+        return _with_grounding(problem)
+    return problem
 
 
-_CONNECTIVES = frozenset(
-    {"and", "or", "not", "=", "imply", "forall", "exists", "when", "increase", "decrease"}
-)
+def _with_grounding(problem: Problem) -> Problem:
+    """``problem`` with its initial state closed and its goal formula's facts named."""
+    task = problem.grounded
+    goal = problem.goal
+    if goal.formula is not None:
+        facts = task.goal_positive or frozenset((UNREACHABLE_GOAL,))
+        goal = Goal(goal.positive, goal.negative | task.goal_negative, goal.formula, facts)
+    object.__setattr__(problem, "init", task.close(problem.init))
+    object.__setattr__(problem, "goal", goal)
+    return problem
 
 
-def _unknown_name(
-    domain_text: str,
-    problem_text: str,
-    domain_source: str | None,
-    problem_source: str | None,
-) -> PDDLError | None:
-    """The first predicate or object of the problem's ``:init`` and ``:goal`` that the
-    domain and problem do not declare, as an error with file and line (None: all known).
-    Asked only after parsing failed, to say what unified-planning's message does not."""
-    try:
-        domain = define_body(domain_text, "domain", domain_source)
-        problem = define_body(problem_text, "problem", problem_source)
-    except PDDLError:
-        return None
-    predicates = {
-        str(p[0]).lower()
-        for p in (section(domain, ":predicates") or [":p"])[1:]
-        if isinstance(p, list) and p
-    }
-    functions = {
-        str(f[0]).lower()
-        for f in (section(domain, ":functions") or [":f"])[1:]
-        if isinstance(f, list) and f
-    }
-    objects = {
-        n.lower()
-        for key, body in ((":constants", domain), (":objects", problem))
-        for n, _ in typed_names((section(body, key) or [key])[1:])
-    }
+def ground_problem(problem: Problem) -> GroundTask:
+    """The translator's grounding of ``problem`` (see :mod:`twostep.pddl.translator`).
 
-    def first(expr: SExp, bound: frozenset[str]) -> tuple[str, str] | None:
-        if not isinstance(expr, list) or not expr or not isinstance(expr[0], str):
-            return None
-        head = expr[0].lower()
-        if head in ("forall", "exists") and len(expr) > 2 and isinstance(expr[1], list):
-            names = {str(n).lower() for n, _ in typed_names(expr[1])}
-            return first(expr[2], bound | names)
-        if head in _CONNECTIVES:
-            for arg in expr[1:]:
-                found = first(arg, bound)
-                if found:
-                    return found
-            return None
-        if head in functions:
-            return None
-        if head not in predicates:
-            return "predicate", head
-        for term in expr[1:]:
-            name = term.lower() if isinstance(term, str) else "?"
-            if not name.startswith("?") and name not in objects and name not in bound:
-                return "object", name
-        return None
-
-    for key in (":init", ":goal"):
-        part = section(problem, key)
-        for expr in (part or [key])[1:]:
-            found = first(expr, frozenset())
-            if found is None:
-                continue
-            kind, name = found
-            pattern = (
-                rf"\(\s*{re.escape(name)}[\s)]"
-                if kind == "predicate"
-                else rf"\b{re.escape(name)}\b"
-            )
-            line = _line_of(problem_text, pattern, key)
-            known = sorted(predicates) if kind == "predicate" else sorted(objects)
-            listing = ", ".join(known[:12]) + (", ..." if len(known) > 12 else "")
-            return PDDLError(
-                f"unknown {kind} '{name}' in {key} (declared: {listing or 'none'})",
-                problem_source,
-                line,
-            )
-    return None
+    A goal the translator finds unreachable leaves it no actions; the task is then
+    grounded towards the empty goal (its goal facts: :data:`UNREACHABLE_GOAL`).
+    """
+    domain_text, problem_text = planner_input(problem)
+    translation = translate(domain_text, problem_text)
+    if translation.goal_unreachable:
+        open_goal = problem.with_state(goal=Goal()) if problem.goal else problem
+        translation = translate(domain_text, problem_to_pddl(open_goal))
+        task = _without_goal(read_sas(translation.sas))
+        return task.prune_axioms(problem.goal.positive | problem.goal.negative)
+    return read_sas(translation.sas).prune_axioms(problem.goal.positive | problem.goal.negative)
 
 
-def _line_of(text: str, pattern: str, after: str) -> int | None:
-    """Line of the first match of ``pattern`` after the section ``after`` begins."""
-    start = re.search(rf"\(\s*{re.escape(after)}\b", text, re.IGNORECASE)
-    offset = start.start() if start else 0
-    match = re.compile(pattern, re.IGNORECASE).search(text, offset)
-    return text.count("\n", 0, match.start()) + 1 if match else None
+def _without_goal(task: GroundTask) -> GroundTask:
+    return GroundTask(task.actions, task.axioms, frozenset(), frozenset(), task.action_costs)
 
 
 def read_pddl_file(path: Path) -> str:
@@ -216,13 +115,13 @@ def read_pddl_file(path: Path) -> str:
 def load_problem(
     domain_path: str | Path, problem_path: str | Path, cache_dir: str | Path | None = None
 ) -> Problem:
-    """Read a domain file and a problem file.
+    """Read a domain file and a problem file, grounded.
 
-    ``cache_dir``: keep the parsed problem there, so that the next process reads it back
-    in milliseconds instead of importing unified-planning and parsing (about a second).
-    An entry is keyed by both files' paths and contents and by the parser's own code
-    (:func:`_parser_version`): a change to any of them parses again. Files that do not
-    parse raise as without a cache (nothing is stored).
+    ``cache_dir``: keep the parsed and grounded problem there, so that the next process
+    reads it back in milliseconds instead of parsing and running the translator. An entry
+    is keyed by both files' paths and contents and by the reader's own code and the
+    translator's release (:func:`_parser_version`): a change to any of them parses again.
+    Files that do not parse raise as without a cache (nothing is stored).
     """
     domain_path, problem_path = Path(domain_path), Path(problem_path)
     for path in (domain_path, problem_path):
@@ -231,7 +130,9 @@ def load_problem(
     domain_text, problem_text = read_pddl_file(domain_path), read_pddl_file(problem_path)
     sources = (str(domain_path), str(problem_path))
     if cache_dir is None:
-        return parse_problem(domain_text, problem_text, *sources)
+        problem = parse_problem(domain_text, problem_text, *sources)
+        problem.grounded  # noqa: B018 -- a loaded task is a grounded one
+        return problem
     key = hashlib.sha256(
         json.dumps([_parser_version(), *sources, domain_text, problem_text]).encode()
     ).hexdigest()
@@ -243,6 +144,7 @@ def load_problem(
     if isinstance(cached, Problem):
         return cached
     problem = parse_problem(domain_text, problem_text, *sources)
+    problem.grounded  # noqa: B018 -- the entry holds the grounding too
     with contextlib.suppress(OSError):  # a read-only cache only costs the parse
         write_bytes_atomic(entry, pickle.dumps(problem, protocol=pickle.HIGHEST_PROTOCOL))
     return problem
@@ -251,12 +153,12 @@ def load_problem(
 @functools.cache
 def _parser_version() -> str:
     """Digest of what turns PDDL into a :class:`Problem`: this package's code and the
-    unified-planning release that reads the files."""
+    up-fast-downward release whose translator grounds it."""
     digest = hashlib.sha256()
     for module in sorted(Path(__file__).parent.glob("*.py")):
         digest.update(module.name.encode() + b"\0" + module.read_bytes())
     with contextlib.suppress(metadata.PackageNotFoundError):
-        digest.update(metadata.version("unified-planning").encode())
+        digest.update(metadata.version("up-fast-downward").encode())
     return digest.hexdigest()
 
 
@@ -265,7 +167,8 @@ def parse_goal(text: str, problem: Problem, source: str = "subgoal") -> Goal:
 
     Accepts ``(:goal (and ...))``, ``(and ...)``, a single literal, or several literals in a
     row. Raises :class:`PDDLError` naming the first unknown predicate, wrong arity or
-    unknown object.
+    unknown object. A goal with quantifiers or disjunctions is grounded by the task's
+    static facts (:func:`~twostep.pddl.goals.ground_goal`).
     """
     exprs = read_sexp(text, source)
     if len(exprs) == 1 and isinstance(exprs[0], list) and exprs[0][:1] == [":goal"]:
@@ -274,8 +177,8 @@ def parse_goal(text: str, problem: Problem, source: str = "subgoal") -> Goal:
         exprs = exprs[0][1:]
     if not exprs:
         raise PDDLError("the goal is empty", source)
-    if any(adl.is_compound(expr) for expr in exprs):
-        return adl.ground_goal(exprs, problem, source)
+    if any(conjunction_literals(expr) is None for expr in exprs):
+        return ground_goal(exprs, problem, source)
     objects = problem.all_objects
     positive: set[Fact] = set()
     negative: set[Fact] = set()

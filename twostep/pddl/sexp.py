@@ -14,7 +14,9 @@ from twostep.pddl.errors import PDDLError
 SExp = str | list["SExp"]
 
 
-_TOKEN = re.compile(r"\(|\)|[^\s()]+")
+# A "?" starts a variable even inside a word: Fast Downward reads "(aircraft?a)" (IPC
+# zenotravel) as "(aircraft ?a)".
+_TOKEN = re.compile(r"\(|\)|\??[^\s()?]+|\?")
 # Sections that open directly inside (define ...): seeing one deeper means a ')' is missing.
 _SECTIONS = frozenset(
     {":domain", ":requirements", ":types", ":constants", ":predicates", ":functions",

@@ -7,7 +7,6 @@ exit code into a :class:`~twostep.planner.results.Status`.
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import re
 import signal
@@ -17,7 +16,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from twostep.pddl import Problem, domain_to_pddl, problem_to_pddl
+from twostep.downward import driver_path
+from twostep.pddl import Problem, planner_input
 from twostep.planner import returncodes
 from twostep.planner.aliases import ALIASES
 from twostep.planner.plan_files import PlanFile, complete_plans, plan_files
@@ -25,19 +25,6 @@ from twostep.planner.results import PlanResult, Status
 from twostep.planner.settings import PlannerSettings
 
 _PLANNER_TIME = re.compile(r"Planner time: ([0-9.]+)s")
-
-
-def driver_path() -> Path:
-    """The ``fast-downward.py`` driver inside the installed up-fast-downward wheel.
-
-    Found without importing the package: its ``__init__`` imports unified-planning's
-    engines (ConfigSpace, scipy), seconds per process that the driver does not need.
-    """
-    spec = importlib.util.find_spec("up_fast_downward")
-    if spec is None or not spec.submodule_search_locations:
-        raise FileNotFoundError("up-fast-downward is not installed")
-    package = Path(next(iter(spec.submodule_search_locations))).resolve()
-    return package / "downward" / "fast-downward.py"
 
 
 def status_for(code: int | None, plan: PlanFile | None) -> tuple[Status, str]:
@@ -129,12 +116,6 @@ def plan_pddl(domain_pddl: str, problem_pddl: str, settings: PlannerSettings) ->
         (folder / "domain.pddl").write_text(domain_pddl)
         (folder / "problem.pddl").write_text(problem_pddl)
         return run_driver(folder / "domain.pddl", folder / "problem.pddl", settings, folder)
-
-
-def planner_input(problem: Problem) -> tuple[str, str]:
-    """The PDDL texts the planner receives for ``problem``."""
-    extra = (":negative-preconditions",) if problem.goal.negative else ()
-    return domain_to_pddl(problem.domain, extra), problem_to_pddl(problem)
 
 
 def plan(problem: Problem, settings: PlannerSettings | None = None) -> PlanResult:
