@@ -11,18 +11,30 @@ Model
     agent-specific (``arm-empty``, ``holding`` in blocksworld) are private: every agent has
     its own copy, initialised to the agent-specific facts of the initial state, and only its
     own actions read or write it.
-    All other facts form one shared environment. Because an agent's copy changes only
-    through its own actions, its content after k actions is fixed in advance; the search
-    state is therefore (plan indices, environment state).
+    All other facts form one shared environment. For STRIPS actions an agent's copy changes
+    only through its own actions in a way fixed in advance, so its content after k actions
+    is known and the search state is (plan indices, environment state). With conditional
+    effects or derived facts an agent's effect on its copy may depend on the environment:
+    the copies then join the search state (:mod:`twostep.execution.compiled`), and the
+    bounds that assume STRIPS steps (pairs, contention) and the symmetry reduction are left
+    out.
 
-Interference (Graphplan, extended to negative preconditions)
+Interference (Graphplan, extended to negative preconditions, conditional effects and axioms)
     Several agents may take their next actions in the same time step when every action's
-    preconditions hold in the current state and no action deletes a positive precondition
-    of another, adds a negative precondition of another, or adds what another deletes. Only
-    environment facts can interfere: agent copies are private. A step applies all deletes
-    and then all adds; with no interference this equals applying the actions in any order.
+    preconditions hold in the current state and no action possibly deletes a positive
+    precondition of another or what another possibly adds, possibly adds a negative
+    precondition of another or what another possibly deletes, or possibly changes a fact
+    on which another's outcome depends beyond its precondition (a condition of one of its
+    conditional effects, or a basic fact one of its derived preconditions is derived
+    from). An action's *possible* adds and deletes are those of all its effects,
+    conditional ones included, whether or not their conditions hold: a conservative rule,
+    exactly Graphplan's for STRIPS actions. Only environment facts can interfere: agent
+    copies are private. Each action's effects are evaluated in the state before the step;
+    a step applies all deletes and then all adds, and derived facts are evaluated on the
+    result; with no interference this equals applying the actions in any order.
     After the last step every goal literal must hold: environment literals on the shared
-    state, agent-specific literals in every agent's copy.
+    state, agent-specific literals in every agent's copy, derived literals (a goal formula
+    included) in every agent's view of the state.
 
 Search
     Both modes run A* over (plan indices, environment state) with unit step cost. The bound

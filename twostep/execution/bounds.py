@@ -309,6 +309,10 @@ class LowerBound:
         deadline: float | None = None,
     ):
         self.lengths = task.lengths
+        # Both reason about STRIPS steps (fixed effects, agent copies apart): a general
+        # task keeps the longest remaining plan alone, which stays admissible.
+        pairs = pairs and task.simple
+        contention = contention and task.simple
         self.contention = ContentionBound(task) if contention else None
         self.pairs = interacting_pairs(task, symmetry=symmetry, deadline=deadline) if pairs else []
         # contact_until[a]: past this index agent a touches no fact another agent touches.

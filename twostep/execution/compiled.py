@@ -1,52 +1,145 @@
-"""Plans compiled to bit sets: numbered environment facts, states as Python ints.
+"""Plans compiled to bit sets: numbered facts, states as Python ints.
 
-A joint step is then a few integer operations; agent-specific facts are left out (each
-agent's copy is checked apart, in :mod:`twostep.execution.diagnosis`).
+A joint step is then a few integer operations. Two encodings, one per kind of task:
+
+- *STRIPS* (every action a precondition, adds and deletes; no axioms): only environment
+  facts are numbered; each agent's private copy of the agent-specific facts changes only
+  through its own actions, so its content is fixed by its plan index and is checked apart
+  (:mod:`twostep.execution.diagnosis`). This is the fast path of the search.
+- *General* (conditional effects, precondition variants or derived facts): an agent's
+  effect on its own facts may depend on the shared state, so the copies are numbered too,
+  one bit per agent and agent-specific fact, and live in the state. Derived facts are
+  numbered as well (per agent when they depend on an agent-specific fact) and the state
+  is closed under the axioms after every step, by :class:`CompiledAxioms`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Collection, Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from twostep.pddl import Fact, Goal
+from twostep.pddl.grounded import Axioms
 from twostep.strips import GroundAction
 
 Node = tuple[tuple[int, ...], int]
-"""A search node: each agent's next plan index and the environment state."""
+"""A search node: each agent's next plan index and the state."""
+
+Effect = tuple[int, int, int, int]
+"""A conditional effect as bit sets: (condition true, condition false, add, delete)."""
 
 
 @dataclass(frozen=True)
 class CompiledStep:
-    """The environment part of one plan step, as bit sets over numbered facts."""
+    """One plan step as bit sets: precondition, effects, and what interference needs.
+
+    ``add``/``delete`` always happen, ``effects`` when their condition holds in the state
+    before the step; ``alternatives`` are other ways to meet a disjunctive precondition
+    (each with its own effects). ``conditions`` are the facts the outcome depends on beyond
+    the precondition (effect conditions, alternatives, the facts derived preconditions come
+    from). ``possible_add``/``possible_delete``: what it adds or deletes in some state.
+    """
 
     pre_positive: int
     pre_negative: int
     add: int
     delete: int
+    effects: tuple[Effect, ...] = ()
+    alternatives: tuple[CompiledStep, ...] = ()
+    conditions: int = 0
+    possible_add: int = field(default=-1, compare=False)
+    possible_delete: int = field(default=-1, compare=False)
+
+    def __post_init__(self) -> None:
+        add, delete = self.add, self.delete
+        for _, _, a, d in self.effects:
+            add |= a
+            delete |= d
+        conditions = self.conditions
+        for other in self.alternatives:
+            add |= other.possible_add
+            delete |= other.possible_delete
+            conditions |= other.pre_positive | other.pre_negative | other.conditions
+        object.__setattr__(self, "possible_add", add)
+        object.__setattr__(self, "possible_delete", delete)
+        object.__setattr__(self, "conditions", conditions)
+
+    @property
+    def simple(self) -> bool:
+        return not self.effects and not self.alternatives
 
     @property
     def reads(self) -> int:
-        return self.pre_positive | self.pre_negative
+        return self.pre_positive | self.pre_negative | self.conditions
 
     @property
     def writes(self) -> int:
-        return self.add | self.delete
+        return self.possible_add | self.possible_delete
 
     @property
     def touched(self) -> int:
         return self.reads | self.writes
 
     def applicable(self, state: int) -> bool:
-        return self.pre_positive & state == self.pre_positive and not self.pre_negative & state
+        if self.pre_positive & state == self.pre_positive and not self.pre_negative & state:
+            return True
+        return any(other.applicable(state) for other in self.alternatives)
+
+    def effect(self, state: int) -> tuple[int, int]:
+        """(add, delete) in ``state`` (the state before the step)."""
+        chosen = self
+        if self.alternatives and not (
+            self.pre_positive & state == self.pre_positive and not self.pre_negative & state
+        ):
+            chosen = next((o for o in self.alternatives if o.applicable(state)), self)
+        add, delete = chosen.add, chosen.delete
+        for positive, negative, a, d in chosen.effects:
+            if positive & state == positive and not negative & state:
+                add |= a
+                delete |= d
+        return add, delete
 
     def interferes(self, other: CompiledStep) -> bool:
-        return bool(
-            self.delete & (other.pre_positive | other.add)
-            | self.add & (other.pre_negative | other.delete)
-            | other.delete & self.pre_positive
-            | other.add & self.pre_negative
+        """Whether the two steps may not share a time step (see :mod:`twostep.execution`)."""
+        clash = (
+            self.possible_delete & (other.pre_positive | other.possible_add)
+            | self.possible_add & (other.pre_negative | other.possible_delete)
+            | other.possible_delete & self.pre_positive
+            | other.possible_add & self.pre_negative
         )
+        if self.conditions or other.conditions:
+            clash |= self.writes & other.conditions | other.writes & self.conditions
+        return bool(clash)
+
+
+class CompiledAxioms:
+    """The task's axioms over numbered facts: :meth:`close` evaluates them on a state.
+
+    The same stratified semantics as :class:`~twostep.pddl.grounded.Axioms` (layer by
+    layer, a least fixpoint), on bit sets.
+    """
+
+    def __init__(self, rules: Sequence[tuple[int, int, int, int]]):
+        """``rules``: (head bit, body true, body false, layer)."""
+        layers: dict[int, list[tuple[int, int, int]]] = {}
+        derived = 0
+        for head, positive, negative, layer in rules:
+            layers.setdefault(layer, []).append((head, positive, negative))
+            derived |= head
+        self.layers = [tuple(layers[k]) for k in sorted(layers)]
+        self.derived = derived
+
+    def close(self, state: int) -> int:
+        state &= ~self.derived
+        for rules in self.layers:
+            changed = True
+            while changed:
+                changed = False
+                for head, positive, negative in rules:
+                    if not state & head and positive & state == positive and not negative & state:
+                        state |= head
+                        changed = True
+        return state
 
 
 @dataclass(frozen=True)
@@ -55,12 +148,15 @@ class CompiledTask:
     reads_from: tuple[tuple[int, ...], ...]
     """reads_from[i][k]: facts that agent i's actions k.. read (0 when done)."""
     writes_from: tuple[tuple[int, ...], ...]
-    """writes_from[i][k]: facts that agent i's actions k.. add or delete (0 when done)."""
+    """writes_from[i][k]: facts that agent i's actions k.. may add or delete (0 when done)."""
     initial: int
     goal_positive: int
     goal_negative: int
     all_facts: int
     """The bit set of every numbered fact."""
+    axioms: CompiledAxioms | None = None
+    simple: bool = True
+    """The STRIPS encoding (agent copies apart, no conditional effects, no axioms)."""
 
     @property
     def lengths(self) -> tuple[int, ...]:
@@ -74,8 +170,58 @@ class CompiledTask:
             for reads, writes in zip(self.reads_from, self.writes_from, strict=True)
         )
 
+    def successor(self, state: int, steps: Iterable[CompiledStep]) -> int:
+        """The state after ``steps`` run together from ``state`` (non-interfering steps)."""
+        delete = add = 0
+        for step in steps:
+            if step.simple:
+                add |= step.add
+                delete |= step.delete
+            else:
+                a, d = step.effect(state)
+                add |= a
+                delete |= d
+        state = (state & ~delete) | add
+        if self.axioms is not None:
+            state = self.axioms.close(state)
+        return state
+
+
+def is_simple(plans: Sequence[Sequence[GroundAction]]) -> bool:
+    """Whether the STRIPS encoding fits: no conditional effects, variants or axioms."""
+    return all(a.is_strips and not a.axioms for plan in plans for a in plan)
+
+
+def task_axioms(plans: Sequence[Sequence[GroundAction]]) -> Axioms | None:
+    """The axioms of the task the plans' actions come from (None: none)."""
+    return next((a.axioms for plan in plans for a in plan if a.axioms), None)
+
 
 def compile_task(
+    plans: Sequence[Sequence[GroundAction]],
+    init: frozenset[Fact],
+    goal: Goal,
+    agent_predicates: Collection[str],
+) -> CompiledTask:
+    if is_simple(plans):
+        return _compile_strips(plans, init, goal, agent_predicates)
+    return _compile_general(plans, init, goal, agent_predicates)
+
+
+def _suffixes(steps: Sequence[tuple[CompiledStep, ...]]) -> tuple[tuple[tuple[int, ...], ...], ...]:
+    reads_from, writes_from = [], []
+    for plan_steps in steps:
+        reads = [0] * (len(plan_steps) + 1)
+        writes = [0] * (len(plan_steps) + 1)
+        for k in range(len(plan_steps) - 1, -1, -1):
+            reads[k] = reads[k + 1] | plan_steps[k].reads
+            writes[k] = writes[k + 1] | plan_steps[k].writes
+        reads_from.append(tuple(reads))
+        writes_from.append(tuple(writes))
+    return tuple(reads_from), tuple(writes_from)
+
+
+def _compile_strips(
     plans: Sequence[Sequence[GroundAction]],
     init: frozenset[Fact],
     goal: Goal,
@@ -109,24 +255,123 @@ def compile_task(
                 )
             agent_steps.append(step)
         steps.append(tuple(agent_steps))
-    goal_positive, goal_negative = mask(goal.positive), mask(goal.negative)
+    goal_positive = mask(goal.positive | goal.formula_facts)
+    goal_negative = mask(goal.negative)
     # Facts no action or goal mentions never matter; leaving them out keeps states small.
     initial = sum(bit for fact, bit in bits.items() if fact in init)
-    reads_from, writes_from = [], []
-    for plan_steps in steps:
-        reads = [0] * (len(plan_steps) + 1)
-        writes = [0] * (len(plan_steps) + 1)
-        for k in range(len(plan_steps) - 1, -1, -1):
-            reads[k] = reads[k + 1] | plan_steps[k].reads
-            writes[k] = writes[k + 1] | plan_steps[k].writes
-        reads_from.append(tuple(reads))
-        writes_from.append(tuple(writes))
+    reads_from, writes_from = _suffixes(steps)
     return CompiledTask(
         tuple(steps),
-        tuple(reads_from),
-        tuple(writes_from),
+        reads_from,
+        writes_from,
         initial,
         goal_positive,
         goal_negative,
         (1 << len(bits)) - 1,
+    )
+
+
+def _compile_general(
+    plans: Sequence[Sequence[GroundAction]],
+    init: frozenset[Fact],
+    goal: Goal,
+    agent_predicates: Collection[str],
+) -> CompiledTask:
+    axioms = task_axioms(plans)
+    derived = axioms.derived if axioms is not None else frozenset()
+
+    def agent_specific(fact: Fact) -> bool:
+        if fact in derived and axioms is not None:
+            return any(f[0] in agent_predicates for f in axioms.support(fact))
+        return fact[0] in agent_predicates
+
+    agents = max(len(plans), 1)
+    bits: dict[tuple[int, Fact], int] = {}
+
+    def bit_of(fact: Fact, agent: int) -> int:
+        key = (agent if agent_specific(fact) else -1, fact)
+        bit = bits.get(key)
+        if bit is None:
+            bit = bits[key] = 1 << len(bits)
+        return bit
+
+    def mask(facts: Iterable[Fact], agent: int) -> int:
+        value = 0
+        for fact in facts:
+            value |= bit_of(fact, agent)
+        return value
+
+    def every_agent(facts: Iterable[Fact]) -> int:
+        return sum({bit_of(f, agent) for f in facts for agent in range(agents)}, start=0)
+
+    def support(facts: Iterable[Fact]) -> frozenset[Fact]:
+        if axioms is None:
+            return frozenset()
+        return frozenset(s for f in facts if f in derived for s in axioms.support(f))
+
+    def compile_action(action: GroundAction, agent: int) -> CompiledStep:
+        effects = tuple(
+            (
+                mask(e.condition_positive, agent),
+                mask(e.condition_negative, agent),
+                mask(e.add, agent),
+                mask(e.delete, agent),
+            )
+            for e in action.effects
+        )
+        read = action.pre_positive | action.pre_negative
+        for e in action.effects:
+            read |= e.condition
+        return CompiledStep(
+            mask(action.pre_positive, agent),
+            mask(action.pre_negative, agent),
+            mask(action.add, agent),
+            mask(action.delete, agent),
+            effects,
+            tuple(compile_action(other, agent) for other in action.alternatives),
+            mask(support(read), agent) | sum((e[0] | e[1] for e in effects), start=0),
+        )
+
+    steps = []
+    for agent, plan in enumerate(plans):
+        compiled: dict[int, CompiledStep] = {}
+        agent_steps = []
+        for action in plan:
+            step = compiled.get(id(action))
+            if step is None:
+                step = compiled[id(action)] = compile_action(action, agent)
+            agent_steps.append(step)
+        steps.append(tuple(agent_steps))
+    goal_positive = every_agent(goal.positive | goal.formula_facts)
+    goal_negative = every_agent(goal.negative)
+    compiled_axioms = None
+    if axioms:
+        rules = []
+        for rule in axioms.rules:
+            owners = range(agents) if agent_specific(rule.head) else (0,)
+            for agent in owners:
+                rules.append(
+                    (
+                        bit_of(rule.head, agent),
+                        mask(rule.positive, agent),
+                        mask(rule.negative, agent),
+                        rule.layer,
+                    )
+                )
+        compiled_axioms = CompiledAxioms(rules)
+    # Facts no action, goal or rule mentions never matter; leaving them out keeps states small.
+    initial = sum(bit for (_, fact), bit in bits.items() if fact in init and fact not in derived)
+    if compiled_axioms is not None:
+        initial = compiled_axioms.close(initial)
+    reads_from, writes_from = _suffixes(steps)
+    return CompiledTask(
+        tuple(steps),
+        reads_from,
+        writes_from,
+        initial,
+        goal_positive,
+        goal_negative,
+        (1 << len(bits)) - 1,
+        compiled_axioms,
+        simple=False,
     )

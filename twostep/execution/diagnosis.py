@@ -1,4 +1,5 @@
-"""Why plans have no joint schedule: agent-copy checks up front, hand-off simulation after."""
+"""Why plans have no joint schedule: agent-copy checks up front, hand-off simulation after;
+and the one goal test at the end of a schedule."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ from collections.abc import Collection, Sequence
 
 from twostep.execution.model import ScheduleError, split_state
 from twostep.pddl import Fact, Goal, fact_to_pddl
+from twostep.pddl.grounded import Axioms
 from twostep.strips import GroundAction
 
 
@@ -64,6 +66,53 @@ def check_agent_copies(
             )
 
 
+def check_goal(
+    goal: Goal,
+    environment: frozenset[Fact],
+    copies: Sequence[frozenset[Fact]],
+    agent_predicates: Collection[str],
+    axioms: Axioms | None,
+) -> None:
+    """Raise :class:`ScheduleError` unless ``goal`` holds at the end: environment literals
+    on the environment, agent-specific literals in every agent's copy, derived literals
+    (a goal formula's included) in every agent's view (its copy and the environment,
+    closed under the axioms)."""
+    derived = axioms.derived if axioms else frozenset()
+    basic = Goal(goal.positive - derived, goal.negative - derived)
+    environment_goal = Goal(
+        split_state(basic.positive, agent_predicates)[0],
+        split_state(basic.negative, agent_predicates)[0],
+    )
+    unmet = environment_goal.unmet(environment)
+    if unmet:
+        raise ScheduleError(f"goal literal {unmet[0]} does not hold at the end", goal=unmet[0])
+    agent_goal = Goal(
+        split_state(basic.positive, agent_predicates)[1],
+        split_state(basic.negative, agent_predicates)[1],
+    )
+    for agent, copy in enumerate(copies):
+        unmet = agent_goal.unmet(copy)
+        if unmet:
+            raise ScheduleError(
+                f"goal literal {unmet[0]} does not hold for agent {agent} at the end "
+                "(agent-specific goal literals must hold for every agent)",
+                agent=agent,
+                goal=unmet[0],
+            )
+    rest = Goal(goal.positive & derived, goal.negative & derived, goal.formula, goal.formula_facts)
+    if not rest.positive and not rest.negative and not rest.formula_facts:
+        return
+    for agent, copy in enumerate(copies or [frozenset()]):
+        state = environment | copy
+        unmet = rest.unmet(axioms.close(state) if axioms else state)
+        if unmet:
+            raise ScheduleError(
+                f"goal {unmet[-1]} does not hold for agent {agent} at the end",
+                agent=agent,
+                goal=unmet[-1],
+            )
+
+
 def diagnose(
     plans: Sequence[Sequence[GroundAction]],
     init: frozenset[Fact],
@@ -75,20 +124,21 @@ def diagnose(
     Hand-off order is itself a schedule, so when the search finds none, this simulation
     must fail somewhere; its first failure is what a user can act on.
     """
+    axioms = next((a.axioms for plan in plans for a in plan if a.axioms), None)
     environment, agent_init = split_state(init, agent_predicates)
+    copies = []
     for agent, plan in enumerate(plans):
         copy = agent_init
         for step, action in enumerate(plan, start=1):
             view = environment | copy
+            view = axioms.close(view) if axioms else view
             missing = action.failing_precondition(view)
             if missing is not None:
                 return precondition_error(agent, step, str(action), missing)
             environment, copy = split_state(action.apply(view), agent_predicates)
-    environment_goal = Goal(
-        split_state(goal.positive, agent_predicates)[0],
-        split_state(goal.negative, agent_predicates)[0],
-    )
-    unmet = environment_goal.unmet(environment)
-    if unmet:
-        return ScheduleError(f"goal literal {unmet[0]} does not hold at the end", goal=unmet[0])
+        copies.append(copy)
+    try:
+        check_goal(goal, environment, copies, agent_predicates, axioms)
+    except ScheduleError as error:
+        return error
     return ScheduleError("no joint schedule of the plans reaches the goal")

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Collection, Sequence
 
 from twostep.execution.check import check_schedule
-from twostep.execution.compiled import compile_task
+from twostep.execution.compiled import compile_task, is_simple
 from twostep.execution.diagnosis import check_agent_copies, diagnose
 from twostep.execution.model import (
     DEFAULT_MAX_NODES,
@@ -30,7 +30,8 @@ def _parallel_length(
 ) -> ParallelExecution:
     if mode not in MODES:
         raise ValueError(f"unknown mode {mode!r}; expected one of {', '.join(MODES)}")
-    check_agent_copies(plans, init, goal, agent_predicates)
+    if is_simple(plans):  # agent copies fixed by the plans alone: check them up front
+        check_agent_copies(plans, init, goal, agent_predicates)
     task = compile_task(plans, init, goal, agent_predicates)
     found = search(task, mode, plain, max_nodes, time_limit_s)
     sets = found.sets

@@ -128,7 +128,7 @@ def greedy_schedule(task: CompiledTask, mode: str) -> list[tuple[int, ...]] | No
         for step in plan:
             if not step.applicable(state):
                 return None
-            state = (state & ~step.delete) | step.add
+            state = task.successor(state, (step,))
     if not goal_holds(task, state):
         return None
     return [(agent,) for agent, n in enumerate(lengths) for _ in range(n)]
@@ -170,6 +170,12 @@ def advance(
     task: CompiledTask, indices: tuple[int, ...], state: int, chosen: tuple[int, ...]
 ) -> Node:
     """The node after the agents in ``chosen`` take their next actions together."""
+    if not task.simple:
+        steps = [task.steps[agent][indices[agent]] for agent in chosen]
+        advanced = list(indices)
+        for agent in chosen:
+            advanced[agent] += 1
+        return tuple(advanced), task.successor(state, steps)
     delete = add = 0
     advanced = list(indices)
     for agent in chosen:
@@ -240,7 +246,8 @@ def search(
                 incumbent = dive
                 if cheap >= len(incumbent):
                     return SearchResult(incumbent, expanded, True, len(incumbent))
-    symmetry = None if plain else Symmetry(task)
+    # Symmetry, pair projections and the contention bound reason about STRIPS steps only.
+    symmetry = None if plain or not task.simple else Symmetry(task)
     bound = LowerBound(
         task,
         pairs=not plain,

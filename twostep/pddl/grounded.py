@@ -239,7 +239,9 @@ class GroundAction:
             return f"(not {fact_to_pddl(fact)})"
         return "(one of its precondition's alternatives)"
 
-    def effect_in(self, state: frozenset[Fact] | set[Fact]) -> tuple[frozenset[Fact], frozenset[Fact]]:
+    def effect_in(
+        self, state: frozenset[Fact] | set[Fact]
+    ) -> tuple[frozenset[Fact], frozenset[Fact]]:
         """(adds, deletes) of the action in ``state`` (the state before it)."""
         chosen = self.variant(state) or self
         if not chosen.effects:
@@ -380,7 +382,9 @@ class GroundTask:
             return self
         axioms = Axioms(kept, derived & needed)
         actions = {key: action.with_axioms(axioms) for key, action in self.actions.items()}
-        return GroundTask(actions, axioms, self.goal_positive, self.goal_negative, self.action_costs)
+        return GroundTask(
+            actions, axioms, self.goal_positive, self.goal_negative, self.action_costs
+        )
 
     def action(self, text: str) -> GroundAction:
         """The action with plan name ``text`` (``(pickup b1)`` or ``pickup b1``)."""

@@ -63,8 +63,12 @@ class _Source:
     text: str | None
     name: str | None
 
-    def error(self, message: str, pattern: str | None = None, after: str | None = None) -> PDDLError:
-        return PDDLError(message, self.name, line_of(self.text, pattern, after) if pattern else None)
+    def error(
+        self, message: str, pattern: str | None = None, after: str | None = None
+    ) -> PDDLError:
+        return PDDLError(
+            message, self.name, line_of(self.text, pattern, after) if pattern else None
+        )
 
 
 # ----------------------------------------------------------------- formulas
@@ -88,9 +92,7 @@ def condition_atoms(expr: SExp) -> Iterator[tuple[bool, list[SExp]]]:
             yield from walk(node[2], positive)
         elif head in QUANTIFIERS and len(node) == 3:
             yield from walk(node[2], positive)
-        elif head in COMPARISONS or (
-            head == "=" and any(isinstance(t, list) for t in node[1:])
-        ):
+        elif head in COMPARISONS or (head == "=" and any(isinstance(t, list) for t in node[1:])):
             return
         else:
             yield positive, node
@@ -118,9 +120,7 @@ def effect_parts(expr: SExp) -> Iterator[EffectAtom | tuple[str, list[SExp]]]:
         if head == "and":
             for part in node[1:]:
                 yield from walk(part, conditional)
-        elif head == "forall" and len(node) == 3:
-            yield from walk(node[2], True)
-        elif head == "when" and len(node) == 3:
+        elif (head == "forall" and len(node) == 3) or (head == "when" and len(node) == 3):
             yield from walk(node[2], True)
         elif head == "not" and len(node) == 2 and isinstance(node[1], list):
             yield EffectAtom(False, node[1], conditional)
@@ -148,9 +148,9 @@ def conjunction_literals(expr: SExp) -> list[tuple[bool, list[SExp]]] | None:
             found += inner
         return found
     if expr[0] == "not" and len(expr) == 2:
-        inner = expr[1]
-        if isinstance(inner, list) and inner and _is_atom(inner):
-            return [(False, inner)]
+        negated = expr[1]
+        if isinstance(negated, list) and negated and _is_atom(negated):
+            return [(False, negated)]
         return None
     if _is_atom(expr):
         return [(True, expr)]
@@ -271,7 +271,9 @@ def _read_action(
     _check_formula(precondition, predicates, where, context)
     for _, atom in (c for c in _effect_conditions(effect)):
         if atom[0] != "=" and atom[0] not in predicates:
-            raise where.error(f"{context}: unknown predicate '{atom[0]}'", _head_pattern(str(atom[0])))
+            raise where.error(
+                f"{context}: unknown predicate '{atom[0]}'", _head_pattern(str(atom[0]))
+            )
     literals = conjunction_literals(precondition)
     is_strips = literals is not None
     pre_positive: list[Atom] = []
@@ -279,7 +281,11 @@ def _read_action(
     equal: list[tuple[str, str]] = []
     not_equal: list[tuple[str, str]] = []
     if literals is None:  # the summary: the top-level conjunction's literals only
-        top = precondition[1:] if isinstance(precondition, list) and precondition[:1] == ["and"] else [precondition]
+        top = (
+            precondition[1:]
+            if isinstance(precondition, list) and precondition[:1] == ["and"]
+            else [precondition]
+        )
         literals = [lit for part in top for lit in (conjunction_literals(part) or [])]
     for positive, atom in literals:
         if atom[0] == "=" and len(atom) == 3:
@@ -389,8 +395,7 @@ def goal_from_formula(formula: SExp) -> Goal:
     (with the literals of its top-level conjunction)."""
     literals = conjunction_literals(formula)
     whole = literals is not None and all(
-        atom[0] != "=" and not any(str(t).startswith("?") for t in atom[1:])
-        for _, atom in literals
+        atom[0] != "=" and not any(str(t).startswith("?") for t in atom[1:]) for _, atom in literals
     )
     if literals is None:
         top = formula[1:] if isinstance(formula, list) and formula[:1] == ["and"] else [formula]

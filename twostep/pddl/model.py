@@ -23,6 +23,7 @@ from twostep.pddl.grounded import Fact, GroundTask, fact_to_pddl
 from twostep.pddl.sexp import SExp, write_sexp
 
 __all__ = [
+    "ActionOrigin",
     "ActionSchema",
     "Atom",
     "DerivedPredicate",
@@ -46,6 +47,14 @@ class Atom:
 
     def __str__(self) -> str:
         return "(" + " ".join((self.predicate, *self.terms)) + ")"
+
+
+@dataclass(frozen=True)
+class ActionOrigin:
+    """Kept for callers that still type a domain's (always empty) ``origins``."""
+
+    name: str | None
+    arity: int
 
 
 @dataclass(frozen=True, eq=False)
@@ -80,10 +89,15 @@ class ActionSchema:
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, ActionSchema):
             return NotImplemented
-        return self.name == other.name and self.parameters == other.parameters and (
-            write_sexp(self.precondition),
-            write_sexp(self.effect),
-        ) == (write_sexp(other.precondition), write_sexp(other.effect))
+        return (
+            self.name == other.name
+            and self.parameters == other.parameters
+            and (
+                write_sexp(self.precondition),
+                write_sexp(self.effect),
+            )
+            == (write_sexp(other.precondition), write_sexp(other.effect))
+        )
 
     def __hash__(self) -> int:
         return hash((self.name, self.parameters))
@@ -124,7 +138,7 @@ class Domain:
         return any(t != "object" for t in self.types)
 
     @property
-    def origins(self) -> dict[str, object]:
+    def origins(self) -> dict[str, ActionOrigin]:
         """Always empty: plans are in the task's own terms (no compiled variants)."""
         return {}
 
@@ -188,9 +202,7 @@ class Goal:
 
     def holds(self, state: frozenset[Fact] | set[Fact]) -> bool:
         return (
-            self.positive <= state
-            and not (self.negative & state)
-            and self.formula_facts <= state
+            self.positive <= state and not (self.negative & state) and self.formula_facts <= state
         )
 
     def unmet(self, state: frozenset[Fact] | set[Fact]) -> list[str]:

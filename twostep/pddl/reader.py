@@ -65,11 +65,11 @@ def parse_problem(
         text=repaired_problem,
     )
     if problem.needs_axioms:
-        return _with_grounding(problem)
+        return with_grounding(problem)
     return problem
 
 
-def _with_grounding(problem: Problem) -> Problem:
+def with_grounding(problem: Problem) -> Problem:
     """``problem`` with its initial state closed and its goal formula's facts named."""
     task = problem.grounded
     goal = problem.goal
@@ -92,9 +92,10 @@ def ground_problem(problem: Problem) -> GroundTask:
     if translation.goal_unreachable:
         open_goal = problem.with_state(goal=Goal()) if problem.goal else problem
         translation = translate(domain_text, problem_to_pddl(open_goal))
-        task = _without_goal(read_sas(translation.sas))
-        return task.prune_axioms(problem.goal.positive | problem.goal.negative)
-    return read_sas(translation.sas).prune_axioms(problem.goal.positive | problem.goal.negative)
+    task = read_sas(translation.sas)
+    if translation.goal_unreachable or problem.goal.formula is None:
+        task = _without_goal(task)  # a conjunction's literals are the lifted goal's own
+    return task.prune_axioms(problem.goal.positive | problem.goal.negative)
 
 
 def _without_goal(task: GroundTask) -> GroundTask:

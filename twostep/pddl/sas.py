@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterable, Sequence
-from collections.abc import Iterator
 
 from twostep.pddl.errors import PDDLError
 from twostep.pddl.grounded import (
@@ -93,7 +92,7 @@ class _Reader:
         self.at += 1
         return self.lines[self.at - 1].strip()
 
-    def int(self) -> int:
+    def number(self) -> int:
         line = self.next()
         try:
             return int(line)
@@ -133,54 +132,55 @@ def read_sas(text: str) -> GroundTask:
     """The grounded task of a translator output (see the module docstring)."""
     lines = _Reader(text)
     lines.expect("begin_version")
-    version = lines.int()
+    version = lines.number()
     if version != 3:
         raise PDDLError(f"translator output version {version}, expected 3", "output.sas")
     lines.expect("end_version")
     lines.expect("begin_metric")
-    action_costs = lines.int() == 1
+    action_costs = lines.number() == 1
     lines.expect("end_metric")
     variables: list[_Variable] = []
-    for _ in range(lines.int()):
+    for _ in range(lines.number()):
         lines.expect("begin_variable")
         lines.next()  # its name
-        layer = lines.int()
-        values = [_value_fact(lines.next()) for _ in range(lines.int())]
+        layer = lines.number()
+        values = [_value_fact(lines.next()) for _ in range(lines.number())]
         lines.expect("end_variable")
         variables.append(_Variable(layer, values))
-    for _ in range(lines.int()):  # mutex groups: not needed
+    for _ in range(lines.number()):  # mutex groups: not needed
         lines.expect("begin_mutex_group")
-        lines.block(lines.int())
+        lines.block(lines.number())
         lines.expect("end_mutex_group")
     lines.expect("begin_state")
-    initial = [lines.int() for _ in variables]
+    initial = [lines.number() for _ in variables]
     lines.expect("end_state")
     lines.expect("begin_goal")
-    goal_positive, goal_negative = _conditions(variables, lines.block(lines.int()))
+    goal_positive, goal_negative = _conditions(variables, lines.block(lines.number()))
     lines.expect("end_goal")
 
     derived: set[Fact] = set()
-    for var, value in zip(variables, initial, strict=True):
-        if var.layer < 0:
+    for variable, value in zip(variables, initial, strict=True):
+        if variable.layer < 0:
             continue
-        if var.true[value] is not None:
+        if variable.true[value] is not None:
             raise PDDLError(
-                f"derived variable with a true default value ({var.true[value]}): not supported",
+                f"derived variable with a true default value ({variable.true[value]}): "
+                "not supported",
                 "output.sas",
             )
-        derived.update(var.atoms)
+        derived.update(variable.atoms)
 
     _Operator = tuple[str, tuple[str, ...], frozenset[Fact], frozenset[Fact], frozenset[Fact],
                       frozenset[Fact], tuple[ConditionalEffect, ...], int]  # fmt: skip
     operators: dict[str, list[_Operator]] = {}
-    for _ in range(lines.int()):
+    for _ in range(lines.number()):
         lines.expect("begin_operator")
         name, *args = lines.next().split()
-        pre_pairs = lines.block(lines.int())
+        pre_pairs = lines.block(lines.number())
         add: set[Fact] = set()
         delete: set[Fact] = set()
         effects: list[ConditionalEffect] = []
-        for numbers in lines.block(lines.int()):
+        for numbers in lines.block(lines.number()):
             count = numbers[0]
             var, before, after = numbers[1 + 2 * count : 4 + 2 * count]
             known: int | None = None
@@ -206,7 +206,7 @@ def read_sas(text: str) -> GroundTask:
                 if added is not None:
                     add.add(added)
                 delete.update(deleted)
-        cost = lines.int()
+        cost = lines.number()
         lines.expect("end_operator")
         pre_positive, pre_negative = _conditions(variables, pre_pairs)
         key = "(" + " ".join((name, *args)) + ")"
@@ -216,9 +216,9 @@ def read_sas(text: str) -> GroundTask:
         )  # fmt: skip
 
     rules: list[AxiomRule] = []
-    for _ in range(lines.int()):
+    for _ in range(lines.number()):
         lines.expect("begin_rule")
-        conditions = lines.block(lines.int())
+        conditions = lines.block(lines.number())
         var, _before, after = (int(x) for x in lines.next().split())
         lines.expect("end_rule")
         head = variables[var].true[after]

@@ -58,7 +58,11 @@ def problem_to_pddl(problem: Problem) -> str:
     for key in (":objects", ":init", ":goal"):
         if key not in seen:
             index = next(
-                (i for i, item in enumerate(body) if isinstance(item, list) and item[:1] == [":metric"]),
+                (
+                    i
+                    for i, item in enumerate(body)
+                    if isinstance(item, list) and item[:1] == [":metric"]
+                ),
                 len(body),
             )
             body.insert(index, replaced[key])
@@ -106,7 +110,10 @@ def _strips_domain(domain: Domain) -> str:
         requirements.add(":negative-preconditions")
     if any(a.equal or a.not_equal for a in domain.actions.values()):
         requirements.add(":equality")
-    lines = [f"(define (domain {domain.name})", f" (:requirements {' '.join(sorted(requirements))})"]
+    lines = [
+        f"(define (domain {domain.name})",
+        f" (:requirements {' '.join(sorted(requirements))})",
+    ]
     if typed:
         entries = [f"{t} - {p or 'object'}" for t, p in domain.types.items() if t != "object"]
         lines.append(" (:types " + " ".join(entries) + ")")
@@ -134,4 +141,3 @@ def _strips_domain(domain: Domain) -> str:
         lines.append("  :effect (and " + " ".join(eff) + "))")
     lines.append(")")
     return "\n".join(lines) + "\n"
-
