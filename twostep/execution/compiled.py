@@ -302,7 +302,11 @@ def _compile_general(
         return value
 
     def every_agent(facts: Iterable[Fact]) -> int:
-        return sum({bit_of(f, agent) for f in facts for agent in range(agents)}, start=0)
+        value = 0
+        for fact in facts:
+            for agent in range(agents):
+                value |= bit_of(fact, agent)
+        return value
 
     def support(facts: Iterable[Fact]) -> frozenset[Fact]:
         if axioms is None:
@@ -320,8 +324,11 @@ def _compile_general(
             for e in action.effects
         )
         read = action.pre_positive | action.pre_negative
+        conditions = 0
         for e in action.effects:
             read |= e.condition
+        for positive, negative, _, _ in effects:
+            conditions |= positive | negative
         return CompiledStep(
             mask(action.pre_positive, agent),
             mask(action.pre_negative, agent),
@@ -329,7 +336,7 @@ def _compile_general(
             mask(action.delete, agent),
             effects,
             tuple(compile_action(other, agent) for other in action.alternatives),
-            mask(support(read), agent) | sum((e[0] | e[1] for e in effects), start=0),
+            conditions | mask(support(read), agent),
         )
 
     steps = []

@@ -9,5 +9,8 @@ ALIASES: dict[str, tuple[str, ...]] = {
     "lama-first": ("--alias", "lama-first"),  # first plan of LAMA's first iteration
     "seq-sat-lama-2011": ("--alias", "seq-sat-lama-2011"),
     "seq-opt-lmcut": ("--alias", "seq-opt-lmcut"),  # optimal; used for the example plans
+    # optimal for any task Fast Downward grounds (lmcut rejects conditional effects and
+    # axioms); blind, so for small tasks only
+    "astar-blind": ("--search", "astar(blind())"),
 }
 ANYTIME_ALIASES = frozenset({"lama", "seq-sat-lama-2011"})

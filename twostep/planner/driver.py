@@ -63,12 +63,15 @@ def run_driver(
     command = [sys.executable, str(driver_path())]
     if settings.memory_limit_mb is not None:
         command += ["--overall-memory-limit", f"{settings.memory_limit_mb}M"]
+    alias = ALIASES[settings.alias]
+    # driver options go before the input files, a search configuration after them
+    driver_options, search_options = (alias, ()) if alias[0] != "--search" else ((), alias)
     command += [
-        *ALIASES[settings.alias],
+        *driver_options,
         "--search-time-limit",
         f"{max(1, round(settings.search_time_limit_s))}s",
     ]
-    command += ["--plan-file", "plan", str(domain_file), str(problem_file)]
+    command += ["--plan-file", "plan", str(domain_file), str(problem_file), *search_options]
     start = time.perf_counter()
     process = subprocess.Popen(
         command,

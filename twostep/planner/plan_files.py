@@ -34,9 +34,9 @@ def read_plan_file(path: Path) -> PlanFile | None:
     if match is None:
         return None
     steps = (line.split(";", 1)[0].strip() for line in lines)
-    return PlanFile(
-        path, tuple(step for step in steps if step), int(match[1]), match[2] == "general cost"
-    )
+    # "(flip-all )": Fast Downward writes a space before the parenthesis of a 0-ary action
+    actions = tuple(" ".join(step.split()).replace(" )", ")") for step in steps if step)
+    return PlanFile(path, actions, int(match[1]), match[2] == "general cost")
 
 
 def plan_files(folder: Path, name: str = "plan") -> list[Path]:
