@@ -53,13 +53,16 @@ def goal_conflict(
     for the opposite of a goal literal (the main agent would have to undo the helper's
     work), or repeats the subgoal of an ``earlier`` helper (helper number -> goal).
     """
-    if goal.positive == full_goal.positive and goal.negative == full_goal.negative:
+    # A full goal with a formula (``exists``, ``forall``) may be more than its literals:
+    # then a conjunction of literals neither equals nor includes it.
+    literal_goal = full_goal.is_conjunction
+    if literal_goal and goal.positive == full_goal.positive and goal.negative == full_goal.negative:
         return "equals the full goal"
     for fact in sorted(goal.negative & full_goal.positive):
         return f"contradicts the main goal: (not {fact_to_pddl(fact)}) undoes a goal fact"
     for fact in sorted(goal.positive & full_goal.negative):
         return f"contradicts the main goal: {fact_to_pddl(fact)} is negated in the goal"
-    if full_goal.positive <= goal.positive and full_goal.negative <= goal.negative:
+    if literal_goal and full_goal.positive <= goal.positive and full_goal.negative <= goal.negative:
         return "includes the full goal: nothing would be left for the main agent"
     for helper, other in sorted((earlier or {}).items()):
         if goal.positive == other.positive and goal.negative == other.negative:

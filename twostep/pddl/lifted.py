@@ -266,6 +266,14 @@ def _read_action(
         keys[str(key)] = value
     raw_parameters = keys.get(":parameters", [])
     parameters = typed_pairs(raw_parameters if isinstance(raw_parameters, list) else [])
+    for variable, type_ in parameters:
+        if type_.startswith("(either"):
+            raise where.error(
+                f"{context}: parameter {variable} has an (either ...) type, which Fast Downward "
+                "accepts in predicate declarations but not in action parameters; declare a "
+                "common supertype",
+                rf"{re.escape(variable)}\s*-\s*\(\s*either",
+            )
     precondition = keys.get(":precondition", [])
     effect = keys.get(":effect", [])
     _check_formula(precondition, predicates, where, context)

@@ -189,16 +189,25 @@ class Domain:
 class Goal:
     """A goal: a conjunction of ground literals, or a formula.
 
-    ``positive`` and ``negative`` are the literals of the goal's top-level conjunction.
-    A goal that is more than that (quantifiers, disjunctions: AlfWorld's ``exists``)
-    keeps its ``formula``, and its truth comes from the grounded task: ``formula_facts``
-    are the facts (derived by the translator's axioms) that hold exactly when it does.
+    ``positive`` and ``negative`` are the goal's literals. A goal that is more than a
+    conjunction of literals (quantifiers, disjunctions: AlfWorld's ``exists``) keeps its
+    ``formula``, and its truth comes from the grounded task: ``formula_facts`` are the
+    facts (derived by the translator's axioms) that hold exactly when it does. Its
+    literals are then those of its top-level conjunction, or, when the task's static facts
+    leave one way to meet it (one egg, one counter), that one conjunction
+    (``literals_complete``: the literals say all the goal says).
     """
 
     positive: frozenset[Fact] = frozenset()
     negative: frozenset[Fact] = frozenset()
     formula: SExp | None = field(default=None, compare=False)
     formula_facts: frozenset[Fact] = frozenset()
+    literals_complete: bool = field(default=False, compare=False)
+
+    @property
+    def is_conjunction(self) -> bool:
+        """Whether ``positive`` and ``negative`` say everything the goal says."""
+        return self.formula is None or self.literals_complete
 
     def holds(self, state: frozenset[Fact] | set[Fact]) -> bool:
         return (

@@ -25,11 +25,11 @@ from twostep.pddl.goals import ground_goal
 from twostep.pddl.grounded import Fact, GroundTask
 from twostep.pddl.lifted import conjunction_literals, read_domain, read_problem
 from twostep.pddl.model import Goal, Problem
-from twostep.pddl.repairs import repair_undeclared_constants
+from twostep.pddl.repairs import repair_task
 from twostep.pddl.sas import read_sas
-from twostep.pddl.sexp import define_body, read_sexp, write_sexp
+from twostep.pddl.sexp import read_sexp, write_sexp
 from twostep.pddl.translator import translate
-from twostep.pddl.writer import planner_input, problem_to_pddl
+from twostep.pddl.writer import planner_input, pretty_define, problem_to_pddl
 
 UNREACHABLE_GOAL: Fact = ("@unreachable-goal",)
 """The fact a goal formula stands for when the translator finds it unreachable: no state
@@ -45,14 +45,17 @@ def parse_problem(
     """Parse a domain and a problem given as PDDL text."""
     read_sexp(domain_text, domain_source, single=True)  # unbalanced parentheses: file and line
     read_sexp(problem_text, problem_source, single=True)
-    repaired_domain, repaired_problem = repair_undeclared_constants(
+    domain_body, problem_body, repaired = repair_task(
         domain_text, problem_text, domain_source, problem_source
     )
-    domain_body = define_body(repaired_domain, "domain", domain_source)
-    problem_body = define_body(repaired_problem, "problem", problem_source)
     # line numbers come from the files as written (a repair only moves declarations)
-    domain = replace(read_domain(domain_body, domain_text, domain_source), text=repaired_domain)
+    domain = read_domain(domain_body, domain_text, domain_source)
     parts = read_problem(problem_body, domain, problem_text, problem_source)
+    if repaired:
+        domain = replace(domain, text=pretty_define(domain_body))
+        problem_text = pretty_define(problem_body)
+    else:
+        domain = replace(domain, text=domain_text)
     problem = Problem(
         parts.name,
         domain,
@@ -62,7 +65,7 @@ def parse_problem(
         problem_source,
         numeric_init=parts.numeric_init,
         body=problem_body,
-        text=repaired_problem,
+        text=problem_text,
     )
     if problem.needs_axioms:
         return with_grounding(problem)
@@ -75,7 +78,13 @@ def with_grounding(problem: Problem) -> Problem:
     goal = problem.goal
     if goal.formula is not None:
         facts = task.goal_positive or frozenset((UNREACHABLE_GOAL,))
-        goal = Goal(goal.positive, goal.negative | task.goal_negative, goal.formula, facts)
+        positive, negative, complete = goal.positive, goal.negative | task.goal_negative, False
+        try:  # the one conjunction the static facts may leave
+            literal = ground_goal([goal.formula], problem, problem.source or "goal")
+            positive, negative, complete = literal.positive, literal.negative, True
+        except PDDLError:
+            pass
+        goal = Goal(positive, negative, goal.formula, facts, complete)
     object.__setattr__(problem, "init", task.close(problem.init))
     object.__setattr__(problem, "goal", goal)
     return problem

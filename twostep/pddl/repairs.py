@@ -1,18 +1,29 @@
-"""Repairs of real-world PDDL quirks, made on s-expressions before unified-planning reads them.
+"""Repairs of real-world PDDL quirks, made on s-expressions before anything reads the task.
 
-The LLM+P tyreworld domain uses objects that only its problems declare; they become domain
-constants (the other quirk, actions named like predicates, is an environment setting in
-:mod:`twostep.pddl.unified`).
+Two quirks of files that are otherwise read as they are:
+
+- **Objects only the problem declares.** The LLM+P tyreworld domain mentions ``wrench``,
+  ``jack`` and ``pump`` in its actions, AlfWorld's ``alfred.pddl`` mentions
+  ``SinkBasinType`` and ``MicrowaveType``, while only the problems declare them; Fast
+  Downward rejects that ("Undefined object"). They become typed constants of the domain
+  (and leave the problem's objects), which keeps the meaning.
+- **Commas in variable lists.** AlfWorld writes ``(?l - location, ?r - receptacle)``;
+  Fast Downward would read ``location,`` as a type of no objects and silently make the
+  action impossible. A comma is no part of a PDDL name: it is dropped.
+
+Only a task that needs a repair is rewritten; the planner then receives the repaired text
+(:mod:`twostep.pddl.writer`), every other task its files as they are. (The other LLM+P
+quirk, actions named like predicates, needs no repair: names of actions and predicates
+live apart.)
 """
 
 from __future__ import annotations
 
-from twostep.pddl.errors import PDDLError
-from twostep.pddl.sexp import SExp, define_body, section, typed_names, write_sexp
+from twostep.pddl.sexp import SExp, define_body, section, typed_names
 
 
 def _undeclared_constants(domain_body: list[SExp]) -> set[str]:
-    """Names that domain actions use as objects without declaring them as constants."""
+    """Names that domain actions and rules use as objects without declaring them."""
     predicates = {
         p[0] for p in (section(domain_body, ":predicates") or [])[1:] if isinstance(p, list) and p
     }
@@ -35,38 +46,58 @@ def _undeclared_constants(domain_body: list[SExp]) -> set[str]:
             for key, value in zip(item[2::2], item[3::2], strict=False):
                 if key in (":precondition", ":effect"):
                     visit(value)
+        elif isinstance(item, list) and item[:1] == [":derived"] and len(item) == 3:
+            visit(item[2])
     return found
 
 
-def repair_undeclared_constants(
-    domain_text: str, problem_text: str, domain_source: str | None, problem_source: str | None
-) -> tuple[str, str]:
-    """Move objects that the domain uses but only the problem declares into domain constants.
+def _argument_types(domain_body: list[SExp], names: set[str]) -> dict[str, str]:
+    """The declared type of the predicate argument each of ``names`` first fills."""
+    declarations = {
+        str(p[0]): [t for _, t in typed_names(p[1:])]
+        for p in (section(domain_body, ":predicates") or [])[1:]
+        if isinstance(p, list) and p
+    }
+    found: dict[str, str] = {}
 
-    The LLM+P tyreworld domain mentions ``wrench``, ``jack`` and ``pump`` in its actions
-    while only its problems declare them; both unified-planning and Fast Downward reject
-    that. Declaring them as typed constants of the domain keeps the meaning.
-    """
-    domain_body = define_body(domain_text, "domain", domain_source)
+    def visit(expr: SExp) -> None:
+        if not isinstance(expr, list) or not expr:
+            return
+        head = expr[0]
+        types = declarations.get(head) if isinstance(head, str) else None
+        if types is not None:
+            for position, term in enumerate(expr[1:]):
+                if term in names and term not in found:
+                    found[str(term)] = types[position] if position < len(types) else "object"
+        for sub in expr[1:]:
+            visit(sub)
+
+    for item in domain_body:
+        if isinstance(item, list) and item[:1] in ([":action"], [":derived"]):
+            visit(item)
+    return {name: found.get(name, "object") for name in names}
+
+
+def _declare_constants(
+    domain_body: list[SExp], problem_body: list[SExp]
+) -> tuple[list[SExp], list[SExp]] | None:
+    """The bodies with undeclared objects moved into the domain's constants (None: none)."""
     missing = _undeclared_constants(domain_body)
     if not missing:
-        return domain_text, problem_text
-    problem_body = define_body(problem_text, "problem", problem_source)
+        return None
     objects_section = section(problem_body, ":objects") or [":objects"]
     declared = dict(typed_names(objects_section[1:]))
-    unknown = sorted(missing - declared.keys())
-    if unknown:
-        raise PDDLError(
-            f"the domain's actions use undeclared object(s) {', '.join(unknown)} "
-            "that neither its constants nor the problem's objects declare",
-            domain_source,
-        )
+    # a name nobody declares (AlfWorld's KnifeType in a task without knives) is typed as
+    # its predicate declares the argument: no fact names it, so it changes nothing
+    for name, type_name in _argument_types(domain_body, missing - declared.keys()).items():
+        declared[name] = type_name
+    typed = section(domain_body, ":types") is not None
     constants_section = section(domain_body, ":constants")
     new_constants: list[SExp] = [":constants"]
     if constants_section is not None:
         new_constants += constants_section[1:]
     for name in sorted(missing):
-        new_constants += [name, "-", declared[name]] if _domain_body_typed(domain_body) else [name]
+        new_constants += [name, "-", declared[name]] if typed else [name]
     rebuilt: list[SExp] = []
     inserted = False
     for item in domain_body:
@@ -83,12 +114,35 @@ def repair_undeclared_constants(
         if name not in missing:
             kept += [name, "-", type_name]
     problem_rebuilt = [kept if item is objects_section else item for item in problem_body]
-    return _pretty(rebuilt), _pretty(problem_rebuilt)
+    return rebuilt, problem_rebuilt
 
 
-def _domain_body_typed(domain_body: list[SExp]) -> bool:
-    return section(domain_body, ":types") is not None
+def _without_commas(expr: SExp) -> tuple[SExp, bool]:
+    """``expr`` with commas dropped from its tokens, and whether there were any."""
+    if isinstance(expr, str):
+        cleaned = expr.rstrip(",")
+        return cleaned, cleaned != expr
+    out: list[SExp] = []
+    changed = False
+    for part in expr:
+        cleaned, was = _without_commas(part)
+        changed |= was
+        if cleaned != "":
+            out.append(cleaned)
+    return out, changed
 
 
-def _pretty(body: list[SExp]) -> str:
-    return "(" + "\n ".join(write_sexp(item) for item in body) + ")\n"
+def repair_task(
+    domain_text: str, problem_text: str, domain_source: str | None, problem_source: str | None
+) -> tuple[list[SExp], list[SExp], bool]:
+    """The domain's and the problem's ``define`` bodies, repaired where they need it (see
+    the module docstring), and whether anything was repaired."""
+    domain_body = define_body(domain_text, "domain", domain_source)
+    problem_body = define_body(problem_text, "problem", problem_source)
+    cleaned, commas = _without_commas(domain_body)
+    assert isinstance(cleaned, list)
+    domain_body = cleaned
+    moved = _declare_constants(domain_body, problem_body)
+    if moved is not None:
+        domain_body, problem_body = moved
+    return domain_body, problem_body, commas or moved is not None
