@@ -120,8 +120,8 @@ def _declare_constants(
 def _without_commas(expr: SExp) -> tuple[SExp, bool]:
     """``expr`` with commas dropped from its tokens, and whether there were any."""
     if isinstance(expr, str):
-        cleaned = expr.rstrip(",")
-        return cleaned, cleaned != expr
+        token = expr.rstrip(",")
+        return token, token != expr
     out: list[SExp] = []
     changed = False
     for part in expr:
