@@ -160,7 +160,7 @@ def test_optimal_plan_matches_hand_and_fast_downward_on_the_original(tmp_path: P
 
 def test_a_changed_state_keeps_costs_and_the_goal_formula() -> None:
     problem = kitchen().problem
-    domain_text, problem_text = planner_input(problem)
+    domain_text, _ = planner_input(problem)
     assert "(increase (total-cost) 5)" in domain_text  # the repaired domain keeps costs
     steps = Grounder(problem).ground_plan(P01_PLAN[:6])
     moved = problem.with_state(simulate(problem.init, steps))

@@ -25,7 +25,7 @@ from flows.store import JobStore
 from flows.sweep_callback import _refuse_running_sweep
 from flows.sweep_state import SweepState
 from tests.test_flows import make_data
-from twostep.pddl import PDDLError, load_problem
+from twostep.pddl import PDDLError, load_problem, parse_goal
 
 REPO = Path(__file__).resolve().parent.parent
 TWOSTEP = Path(sys.executable).parent / "twostep"
@@ -343,13 +343,24 @@ def test_unknown_object_in_the_goal_is_named(tmp_path: Path) -> None:
     assert str(error).startswith(f"{tmp_path / 'p01.pddl'}:4: unknown object 'b3'")
 
 
-def test_derived_predicates_are_named_as_unsupported(tmp_path: Path) -> None:
+def test_derived_predicates_are_read_and_misuse_is_named(tmp_path: Path) -> None:
+    # Derived predicates are supported (issue 17): (on ?x ?y) holds whenever ?x is clear.
     domain = DOMAIN.replace(
         "(:action", "(:derived (on ?x ?y) (clear ?x))\n (:action"
     )  # line 4 of the domain
-    error = _load(tmp_path, domain, _problem("(and (clear b1))"))
-    assert error.source == str(tmp_path / "domain.pddl") and error.line == 4
-    assert "derived predicates are not supported" in error.message
+    for name, text in (("domain.pddl", domain), ("p01.pddl", _problem("(and (on b1 b2))"))):
+        (tmp_path / name).write_text(text)
+    problem = load_problem(tmp_path / "domain.pddl", tmp_path / "p01.pddl")
+    assert ("on", "b1", "b2") in problem.init and problem.goal.holds(problem.init)
+    # Fast Downward evaluates only the derived facts a goal or an action uses: a subgoal
+    # on another one is refused, not silently never true
+    with pytest.raises(PDDLError, match=r"\(on b1 b1\) is a derived fact the task never"):
+        parse_goal("(on b1 b1)", problem)
+    # an action may not change a derived predicate (Fast Downward rejects it too)
+    misuse = domain.replace(":effect (clear ?x)", ":effect (on ?x ?x)")
+    error = _load(tmp_path, misuse, _problem("(and (clear b1))"))
+    assert error.source == str(tmp_path / "domain.pddl") and error.line == 5
+    assert "changes the derived predicate 'on'" in error.message
 
 
 def test_an_error_in_a_forall_effect_names_the_file(tmp_path: Path) -> None:

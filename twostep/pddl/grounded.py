@@ -356,12 +356,14 @@ class GroundTask:
         return self.axioms.close(facts)
 
     def prune_axioms(self, goal: Iterable[Fact] = ()) -> GroundTask:
-        """This task without the axiom rules that no action, other rule, the translator's
-        goal or the facts ``goal`` need (the translator's empty-goal axiom goes, for one)."""
+        """This task without the translator's own axiom rules (``@`` in their names) that
+        no action, other rule, the translator's goal or the facts ``goal`` need (its
+        empty-goal axiom, for one). The task's derived predicates all stay: a subgoal may
+        name any of them."""
         if not self.axioms:
             return self
         derived = self.axioms.derived
-        needed: set[Fact] = set()
+        needed: set[Fact] = {f for f in derived if "@" not in f[0]}
         for action in self.actions.values():
             for variant in (action, *action.alternatives):
                 facts = set(variant.pre_positive | variant.pre_negative)

@@ -220,13 +220,21 @@ def read_domain(body: list[SExp], text: str | None, source: str | None) -> Domai
                 predicates[derived_name] = tuple(t for _, t in parameters)
             derived.append(DerivedPredicate(derived_name, parameters, item[2]))
     known = set(predicates)
+    for rule in derived:
+        _check_formula(rule.formula, known, where, f"derived predicate {rule.name}")
+    derived_names = {rule.name for rule in derived}
     actions: dict[str, ActionSchema] = {}
     for item in body[2:]:
         if isinstance(item, list) and item[:1] == [":action"]:
             action = _read_action(item, known, set(functions), where)
+            for atom in (*action.add, *action.delete):
+                if atom.predicate in derived_names:
+                    raise where.error(
+                        f"action {action.name}: its effect changes the derived predicate "
+                        f"'{atom.predicate}' (derived facts follow from the rules alone)",
+                        rf"\(:action\s+{re.escape(action.name)}\b",
+                    )
             actions[action.name] = action
-    for rule in derived:
-        _check_formula(rule.formula, known, where, f"derived predicate {rule.name}")
     return Domain(
         name,
         requirements,

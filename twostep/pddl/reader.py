@@ -22,7 +22,7 @@ from pathlib import Path
 from twostep.files import write_bytes_atomic
 from twostep.pddl.errors import PDDLError
 from twostep.pddl.goals import ground_goal
-from twostep.pddl.grounded import Fact, GroundTask
+from twostep.pddl.grounded import Fact, GroundTask, fact_to_pddl
 from twostep.pddl.lifted import conjunction_literals, read_domain, read_problem
 from twostep.pddl.model import Goal, Problem
 from twostep.pddl.repairs import repair_task
@@ -187,7 +187,7 @@ def parse_goal(text: str, problem: Problem, source: str = "subgoal") -> Goal:
         exprs = exprs[0][1:]
     if not exprs:
         raise PDDLError("the goal is empty", source)
-    if any(conjunction_literals(expr) is None for expr in exprs):
+    if any(isinstance(expr, list) and conjunction_literals(expr) is None for expr in exprs):
         return ground_goal(exprs, problem, source)
     objects = problem.all_objects
     positive: set[Fact] = set()
@@ -210,4 +210,13 @@ def parse_goal(text: str, problem: Problem, source: str = "subgoal") -> Goal:
         (positive if is_positive else negative).add((pred, *args))
     if positive & negative:
         raise PDDLError("the goal asks for a fact and its negation", source)
+    derived = problem.domain.derived_predicates
+    for fact in sorted(f for f in positive | negative if f[0] in derived):
+        if fact not in problem.grounded.axioms.derived:
+            raise PDDLError(
+                f"{fact_to_pddl(fact)} is a derived fact the task never evaluates (Fast "
+                "Downward grounds only the derived facts its actions and goal use): name "
+                "basic facts instead",
+                source,
+            )
     return Goal(frozenset(positive), frozenset(negative))
