@@ -431,17 +431,43 @@ def test_the_scorer_agrees_with_brute_force_on_conditional_effects(
     check_schedule(result.steps, plans, prob.init, goal, BOARD_AGENT)
 
 
-def test_unsupported_sections_name_the_construct_file_and_line() -> None:
+@pytest.mark.parametrize(
+    ("requirements", "body", "line", "fragment"),
+    [
+        (  # temporal planning: a section Fast Downward does not plan with
+            ":durative-actions",
+            "(:durative-action a :parameters () :duration (= ?duration 1)\n"
+            "   :condition (at start (p)) :effect (at end (p)))",
+            4,
+            "durative actions",
+        ),
+        (":strips :numeric-fluents", "(:action a :effect (p))", 2, ":numeric-fluents"),
+        (
+            ":strips",
+            "(:action a :parameters ()\n   :precondition (> (fuel) 0) :effect (p))",
+            5,
+            "numeric conditions (> ...)",
+        ),
+        (
+            ":strips",
+            "(:action a :parameters ()\n   :effect (and (p) (decrease (fuel) 1)))",
+            5,
+            "numeric effects other than (increase (total-cost) ...)",
+        ),
+    ],
+)
+def test_what_fast_downward_cannot_plan_is_named_with_file_and_line(
+    requirements: str, body: str, line: int, fragment: str
+) -> None:
     domain = (
-        "(define (domain d)\n (:requirements :durative-actions)\n (:predicates (p))\n"
-        " (:durative-action a :parameters () :duration (= ?duration 1)\n"
-        "   :condition (at start (p)) :effect (at end (p))))"
+        f"(define (domain d)\n (:requirements {requirements})\n (:predicates (p))"
+        f" (:functions (fuel))\n {body})"
     )
     task = "(define (problem x) (:domain d) (:init) (:goal (p)))"
     with pytest.raises(PDDLError) as info:
         parse_problem(domain, task, "dom.pddl", "prob.pddl")
-    assert (info.value.source, info.value.line) == ("dom.pddl", 4)
-    assert "durative actions" in str(info.value)
+    assert (info.value.source, info.value.line) == ("dom.pddl", line)
+    assert fragment in str(info.value)
 
 
 def test_the_cached_problem_holds_the_grounding(tmp_path: Path) -> None:

@@ -342,7 +342,7 @@ class _Failure(Exception):
 
 def _navigation_target(action: GroundAction, body: str, locations: set[str]) -> str | None:
     """The location a navigation action puts ``body`` at, or None for an interaction."""
-    for fact in action.add:
+    for fact in action.possible_add:
         if body in fact[1:]:
             for term in fact[1:]:
                 if term in locations:
@@ -468,9 +468,8 @@ class _Execution:
         )
 
     def _apply(self, body: _Body, action: GroundAction) -> None:
-        self.state -= action.delete
-        self.state |= action.add
-        if any(body.name in f[1:] for f in action.add | action.delete):
+        self.state = set(action.apply(frozenset(self.state)))  # conditional effects, axioms
+        if any(body.name in f[1:] for f in action.possible_add | action.possible_delete):
             body.holding = self._held(body.name)
             self._where.pop(body.name, None)
         body.index += 1

@@ -24,6 +24,14 @@ CONNECTIVES = frozenset({"and", "or", "not", "imply"})
 COMPARISONS = frozenset({"<", ">", "<=", ">="})
 NUMERIC_EFFECTS = frozenset({"increase", "decrease", "assign", "scale-up", "scale-down"})
 COST_FUNCTION = "total-cost"
+# What Fast Downward's translator accepts in :requirements (it rejects anything else).
+REQUIREMENTS = frozenset(
+    {":strips", ":adl", ":typing", ":negation", ":equality", ":negative-preconditions",
+     ":disjunctive-preconditions", ":existential-preconditions", ":universal-preconditions",
+     ":quantified-preconditions", ":conditional-effects", ":derived-predicates",
+     ":action-costs"}
+)  # fmt: skip
+NOT_CLASSICAL = "Fast Downward plans classical tasks with action costs"
 UNSUPPORTED_SECTIONS = {
     ":durative-action": "durative actions (temporal planning)",
     ":process": "processes (PDDL+)",
@@ -198,6 +206,13 @@ def read_domain(body: list[SExp], text: str | None, source: str | None) -> Domai
     requirements = tuple(
         str(r) for r in (section(body, ":requirements") or [":r"])[1:] if isinstance(r, str)
     )
+    for requirement in requirements:
+        if requirement not in REQUIREMENTS:
+            raise where.error(
+                f"requirement {requirement} is not supported ({NOT_CLASSICAL}; it accepts "
+                f"{', '.join(sorted(REQUIREMENTS))})",
+                rf"{re.escape(requirement)}(?![\w-])",
+            )
     types: dict[str, str | None] = {}
     for type_, parent in typed_list((section(body, ":types") or [":t"])[1:]):
         if type_ == "object":
@@ -251,6 +266,12 @@ def read_domain(body: list[SExp], text: str | None, source: str | None) -> Domai
 
 
 def _check_formula(expr: SExp, predicates: set[str], where: _Source, context: str) -> None:
+    comparison = _numeric_comparison(expr)
+    if comparison is not None:
+        raise where.error(
+            f"{context}: numeric conditions ({comparison} ...) are not supported ({NOT_CLASSICAL})",
+            rf"\(\s*{re.escape(comparison)}\s",
+        )
     for _, atom in condition_atoms(expr):
         head = atom[0]
         if not isinstance(head, str) or (head != "=" and head not in predicates):
@@ -259,6 +280,21 @@ def _check_formula(expr: SExp, predicates: set[str], where: _Source, context: st
                 f"{context}: unknown predicate '{shown}'",
                 _head_pattern(shown) if isinstance(head, str) else None,
             )
+
+
+def _numeric_comparison(expr: SExp) -> str | None:
+    """The first numeric comparison of a condition (``<``, ``=`` between numbers, ...)."""
+    if not isinstance(expr, list) or not expr:
+        return None
+    head = expr[0]
+    if head in COMPARISONS or (head == "=" and any(isinstance(t, list) for t in expr[1:])):
+        return str(head)
+    parts = [expr[2]] if head in QUANTIFIERS and len(expr) == 3 else expr[1:]
+    for part in parts:
+        found = _numeric_comparison(part)
+        if found is not None:
+            return found
+    return None
 
 
 def _read_action(
@@ -285,11 +321,8 @@ def _read_action(
     precondition = keys.get(":precondition", [])
     effect = keys.get(":effect", [])
     _check_formula(precondition, predicates, where, context)
-    for _, atom in (c for c in _effect_conditions(effect)):
-        if atom[0] != "=" and atom[0] not in predicates:
-            raise where.error(
-                f"{context}: unknown predicate '{atom[0]}'", _head_pattern(str(atom[0]))
-            )
+    for condition in _when_conditions(effect):
+        _check_formula(condition, predicates, where, context)
     literals = conjunction_literals(precondition)
     is_strips = literals is not None
     pre_positive: list[Atom] = []
@@ -334,6 +367,11 @@ def _read_action(
                 f"{context}: numeric effect on unknown function '{write_sexp(target or [])}'",
                 rf"\({operation}\s",
             )
+        raise where.error(
+            f"{context}: numeric effects other than (increase (total-cost) ...) are not "
+            f"supported ({NOT_CLASSICAL})",
+            rf"\({operation}\s",
+        )
     return ActionSchema(
         name,
         parameters,
@@ -350,18 +388,19 @@ def _read_action(
     )
 
 
-def _effect_conditions(expr: SExp) -> Iterator[tuple[bool, list[SExp]]]:
+def _when_conditions(expr: SExp) -> Iterator[SExp]:
+    """The conditions of an effect's ``when`` parts."""
     if not isinstance(expr, list) or not expr:
         return
     head = expr[0]
     if head == "and":
         for part in expr[1:]:
-            yield from _effect_conditions(part)
+            yield from _when_conditions(part)
     elif head == "forall" and len(expr) == 3:
-        yield from _effect_conditions(expr[2])
+        yield from _when_conditions(expr[2])
     elif head == "when" and len(expr) == 3:
-        yield from condition_atoms(expr[1])
-        yield from _effect_conditions(expr[2])
+        yield expr[1]
+        yield from _when_conditions(expr[2])
 
 
 # ----------------------------------------------------------------- the problem
