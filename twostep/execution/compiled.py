@@ -208,7 +208,16 @@ def compile_task(
     return _compile_general(plans, init, goal, agent_predicates)
 
 
-def _suffixes(steps: Sequence[tuple[CompiledStep, ...]]) -> tuple[tuple[tuple[int, ...], ...], ...]:
+def _task(
+    steps: Sequence[tuple[CompiledStep, ...]],
+    initial: int,
+    goal_positive: int,
+    goal_negative: int,
+    facts: int,
+    axioms: CompiledAxioms | None = None,
+) -> CompiledTask:
+    """The task, with the suffix unions of what each plan reads and writes; the general
+    encoding when there are axioms or any step is not STRIPS."""
     reads_from, writes_from = [], []
     for plan_steps in steps:
         reads = [0] * (len(plan_steps) + 1)
@@ -218,7 +227,18 @@ def _suffixes(steps: Sequence[tuple[CompiledStep, ...]]) -> tuple[tuple[tuple[in
             writes[k] = writes[k + 1] | plan_steps[k].writes
         reads_from.append(tuple(reads))
         writes_from.append(tuple(writes))
-    return tuple(reads_from), tuple(writes_from)
+    simple = axioms is None and all(step.simple for plan in steps for step in plan)
+    return CompiledTask(
+        tuple(steps),
+        tuple(reads_from),
+        tuple(writes_from),
+        initial,
+        goal_positive,
+        goal_negative,
+        (1 << facts) - 1,
+        axioms,
+        simple,
+    )
 
 
 def _compile_strips(
@@ -259,16 +279,7 @@ def _compile_strips(
     goal_negative = mask(goal.negative)
     # Facts no action or goal mentions never matter; leaving them out keeps states small.
     initial = sum(bit for fact, bit in bits.items() if fact in init)
-    reads_from, writes_from = _suffixes(steps)
-    return CompiledTask(
-        tuple(steps),
-        reads_from,
-        writes_from,
-        initial,
-        goal_positive,
-        goal_negative,
-        (1 << len(bits)) - 1,
-    )
+    return _task(steps, initial, goal_positive, goal_negative, len(bits))
 
 
 def _compile_general(
@@ -370,15 +381,4 @@ def _compile_general(
     initial = sum(bit for (_, fact), bit in bits.items() if fact in init and fact not in derived)
     if compiled_axioms is not None:
         initial = compiled_axioms.close(initial)
-    reads_from, writes_from = _suffixes(steps)
-    return CompiledTask(
-        tuple(steps),
-        reads_from,
-        writes_from,
-        initial,
-        goal_positive,
-        goal_negative,
-        (1 << len(bits)) - 1,
-        compiled_axioms,
-        simple=False,
-    )
+    return _task(steps, initial, goal_positive, goal_negative, len(bits), compiled_axioms)

@@ -31,6 +31,15 @@ def precondition_error(agent: int, step: int, action: str, missing: str) -> Sche
     )
 
 
+def agent_goal_error(agent: int, literal: str) -> ScheduleError:
+    return ScheduleError(
+        f"goal literal {literal} does not hold for agent {agent} at the end "
+        "(agent-specific goal literals must hold for every agent)",
+        agent=agent,
+        goal=literal,
+    )
+
+
 def check_agent_copies(
     plans: Sequence[Sequence[GroundAction]],
     init: frozenset[Fact],
@@ -58,12 +67,7 @@ def check_agent_copies(
             copy = (copy - delete) | add
         unmet = Goal(goal_positive, goal_negative).unmet(copy)
         if unmet:
-            raise ScheduleError(
-                f"goal literal {unmet[0]} does not hold for agent {agent} at the end "
-                "(agent-specific goal literals must hold for every agent)",
-                agent=agent,
-                goal=unmet[0],
-            )
+            raise agent_goal_error(agent, unmet[0])
 
 
 def check_goal(
@@ -93,12 +97,7 @@ def check_goal(
     for agent, copy in enumerate(copies):
         unmet = agent_goal.unmet(copy)
         if unmet:
-            raise ScheduleError(
-                f"goal literal {unmet[0]} does not hold for agent {agent} at the end "
-                "(agent-specific goal literals must hold for every agent)",
-                agent=agent,
-                goal=unmet[0],
-            )
+            raise agent_goal_error(agent, unmet[0])
     rest = Goal(goal.positive & derived, goal.negative & derived, goal.formula, goal.formula_facts)
     if not rest.positive and not rest.negative and not rest.formula_facts:
         return
