@@ -57,3 +57,66 @@ def test_compiled_plan_splits_into_single_agent_terms() -> None:
     for steps in per_agent:
         for step in steps:
             assert len(grounder.ground(step).args) == len(step.strip("()").split()) - 1
+
+
+# An agent-specific predicate inside a quantifier, a conditional effect and a derived
+# predicate: (busy) holds while the agent holds anything, so one hand holds one object.
+SHELF = """
+(define (domain shelf)
+ (:requirements :adl :derived-predicates)
+ (:predicates (holding ?o) (on-shelf ?o) (in-bin ?o) (busy))
+ (:derived (busy) (exists (?o) (holding ?o)))
+ (:action take :parameters (?o) :precondition (and (on-shelf ?o) (not (busy)))
+   :effect (and (holding ?o) (not (on-shelf ?o))))
+ (:action bin :parameters (?o) :precondition (holding ?o)
+   :effect (and (in-bin ?o) (not (holding ?o))))
+ (:action drop-all :parameters ()
+   :effect (forall (?o) (when (holding ?o) (and (not (holding ?o)) (on-shelf ?o))))))
+"""
+SHELF_PROBLEM = """
+(define (problem shelf-1) (:domain shelf) (:objects a b c)
+ (:init (on-shelf a) (on-shelf b) (on-shelf c))
+ (:goal (and (in-bin a) (in-bin b))))
+"""
+
+
+def test_agent_argument_reaches_quantifiers_conditions_and_derived_predicates() -> None:
+    from twostep.execution import check_schedule, parallel_length
+    from twostep.pddl import planner_input
+    from twostep.planner import plan as run_planner
+
+    p = parse_problem(SHELF, SHELF_PROBLEM)
+    ma, names = compile_multi_agent_problem(p, 2, ["holding"])
+    domain_text, _ = planner_input(ma)
+    assert "(:derived (busy ?agent - agent) (exists (?o) (holding ?agent ?o)))" in domain_text
+    assert "(not (busy ?agent))" in domain_text
+    assert "(when (holding ?agent ?o) (and (not (holding ?agent ?o)) (on-shelf ?o)))" in domain_text
+    assert ma.domain.predicates["busy"] == ("agent",)
+    # one hand each: the SA plan takes and bins one object after the other (4 steps); the
+    # two agents each take one and bin it, side by side (2 steps)
+    sa = run_planner(p, PlannerSettings("astar-blind", 20))
+    assert sa.plan is not None and len(sa.plan) == 4
+    result = run_planner(ma, PlannerSettings("astar-blind", 20))
+    assert result.plan is not None and len(result.plan) == 4
+    per_agent = split_plan(result.plan, names)
+    grounder = Grounder(p)
+    plans = [grounder.ground_plan(steps) for steps in per_agent]
+    assert sorted(len(x) for x in plans) == [2, 2]
+    execution = parallel_length(plans, p.init, p.goal, ["holding"])
+    assert execution.length == 2
+    check_schedule(execution.steps, plans, p.init, p.goal, ["holding"])
+
+
+def test_costs_from_functions_survive_the_compilation() -> None:
+    from tests.test_grounded import ROADS, ROADS_PROBLEM
+    from twostep.pddl import planner_input
+    from twostep.planner import plan as run_planner
+
+    p = parse_problem(ROADS, ROADS_PROBLEM)
+    ma, names = compile_multi_agent_problem(p, 2, ["at"])
+    _, problem_text = planner_input(ma)
+    assert "(= (road-length a b) 5)" in problem_text
+    assert {("at", n, "a") for n in names} <= ma.init
+    # both cars must reach d (agent-specific goal literals hold for every agent): 2 x 10
+    result = run_planner(ma, PlannerSettings("astar-blind", 20))
+    assert result.plan is not None and result.cost == 20 and len(result.plan) == 4
