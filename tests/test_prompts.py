@@ -189,3 +189,17 @@ def test_cli_on_generated_data(data_root: Path, capsys: pytest.CaptureFixture[st
     assert prompts_main(argv) == 0
     out = capsys.readouterr().out
     assert "Propose the subgoal of agent1 only" in out and not LEFTOVER.search(out)
+
+
+def test_derived_facts_and_goal_formulas_are_shown_as_pddl_allows() -> None:
+    from tests.test_grounded import GRAPH, GRAPH_PROBLEM
+    from twostep.llm.prompts import goal_block, problem_state_pddl
+    from twostep.pddl import Goal, parse_problem
+
+    problem = parse_problem(GRAPH, GRAPH_PROBLEM)
+    assert ("reach", "n2") in problem.init  # the state holds the derived facts ...
+    state = problem_state_pddl(problem)
+    assert "(reach" not in state and "(cut-off" not in state  # ... PDDL's :init never does
+    assert "(open n1 n2)" in state
+    formula = ["exists", ["?a"], ["visited", "?a"]]
+    assert "(exists (?a) (visited ?a))" in goal_block(Goal(formula=formula))

@@ -138,10 +138,13 @@ def describe_generic(problem: Problem) -> str:
             f"There {'is' if len(names) == 1 else 'are'} {plural(len(names), kind)}: {join(names)}."
         )
     init = ["In the initial state these facts are true (all others are false):"]
-    init += [f"{generic_fact(f)} is true." for f in sorted(problem.init, key=fact_key)]
+    basic = (f for f in problem.init if not problem.domain.is_derived(f))
+    init += [f"{generic_fact(f)} is true." for f in sorted(basic, key=fact_key)]
     goal = ["Your goal is to reach a state where:"]
     goal += [f"{generic_fact(f)} is true." for f in sorted(problem.goal.positive, key=fact_key)]
     goal += [f"{generic_fact(f)} is false." for f in sorted(problem.goal.negative, key=fact_key)]
+    if not problem.goal.is_conjunction:  # a quantified goal: said as written
+        goal.append(f"this condition holds: {problem.goal.to_pddl()}.")
     return _text(header, init, goal)
 
 

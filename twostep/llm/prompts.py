@@ -101,14 +101,18 @@ def problem_state_pddl(problem: Problem) -> str:
     lines = [f"(define (problem {problem.name})", f"  (:domain {problem.domain.name})"]
     lines.append(f"  (:objects {listing})")
     lines.append("  (:init")
-    init = sorted(problem.init, key=lambda fact: tuple(_natural(term) for term in fact))
+    basic = (f for f in problem.init if not problem.domain.is_derived(f))  # not initial facts
+    init = sorted(basic, key=lambda fact: tuple(_natural(term) for term in fact))
     lines += [f"    {fact_to_pddl(f)}" for f in init]
     lines.append("  )")
     return "\n".join(lines) + "\n)"
 
 
 def goal_block(goal: Goal) -> str:
-    """``goal`` as a ``(:goal (and ...))`` block, one literal per line."""
+    """``goal`` as a ``(:goal (and ...))`` block, one literal per line (a goal formula that
+    its literals do not spell out: as written)."""
+    if not goal.is_conjunction:
+        return f"(:goal\n  {goal.to_pddl()})"
     literals = [fact_to_pddl(f) for f in sorted(goal.positive)]
     literals += [f"(not {fact_to_pddl(f)})" for f in sorted(goal.negative)]
     body = "\n".join(f"    {lit}" for lit in literals)
