@@ -113,6 +113,39 @@ class _Reader:
         except ValueError:
             raise PDDLError("expected numbers", "output.sas", start + 1) from None
 
+    def raw(self, count: int) -> list[str]:
+        """The next ``count`` lines as they are."""
+        start = self.at
+        self.at += count
+        return self.lines[start : self.at]
+
+
+class _Literals:
+    """``var value`` lines to (positive facts, negative facts), each line read once: large
+    tasks repeat the same condition lines thousands of times."""
+
+    def __init__(self, variables: list[_Variable]):
+        self.variables = variables
+        self.known: dict[str, tuple[Fact | None, tuple[Fact, ...]]] = {}
+
+    def read(self, lines: Iterable[str]) -> tuple[frozenset[Fact], frozenset[Fact]]:
+        positive: list[Fact] = []
+        negative: list[Fact] = []
+        known = self.known
+        for line in lines:
+            entry = known.get(line)
+            if entry is None:
+                try:
+                    var, value = (int(x) for x in line.split())
+                except ValueError:
+                    raise PDDLError(f"expected a variable and a value, got {line!r}") from None
+                variable = self.variables[var]
+                entry = known[line] = (variable.true[value], variable.false[value])
+            if entry[0] is not None:
+                positive.append(entry[0])
+            negative.extend(entry[1])
+        return frozenset(positive), frozenset(negative)
+
 
 def _conditions(
     variables: list[_Variable], pairs: Iterable[Sequence[int]]
@@ -173,10 +206,12 @@ def read_sas(text: str) -> GroundTask:
     _Operator = tuple[str, tuple[str, ...], frozenset[Fact], frozenset[Fact], frozenset[Fact],
                       frozenset[Fact], tuple[ConditionalEffect, ...], int]  # fmt: skip
     operators: dict[str, list[_Operator]] = {}
+    literals = _Literals(variables)
     for _ in range(lines.number()):
         lines.expect("begin_operator")
         name, *args = lines.next().split()
-        pre_pairs = lines.block(lines.number())
+        prevail = lines.raw(lines.number())
+        pre_pairs: list[list[int]] = []
         add: set[Fact] = set()
         delete: set[Fact] = set()
         effects: list[ConditionalEffect] = []
@@ -208,7 +243,11 @@ def read_sas(text: str) -> GroundTask:
                 delete.update(deleted)
         cost = lines.number()
         lines.expect("end_operator")
-        pre_positive, pre_negative = _conditions(variables, pre_pairs)
+        pre_positive, pre_negative = literals.read(prevail)
+        if pre_pairs:
+            more_positive, more_negative = _conditions(variables, pre_pairs)
+            pre_positive |= more_positive
+            pre_negative |= more_negative
         key = "(" + " ".join((name, *args)) + ")"
         operators.setdefault(key, []).append(
             (name, tuple(args), pre_positive, pre_negative, frozenset(add),
