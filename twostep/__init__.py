@@ -3,8 +3,9 @@
 The library behind the ``twostep`` commands; importable without Prefect, MLflow or Hydra.
 One module per step of the paper's pipeline:
 
-- :mod:`twostep.pddl`         read domains and problems (unified-planning), the model, writing
-- :mod:`twostep.strips`       grounded actions and states; plan simulation
+- :mod:`twostep.pddl`         read domains and problems as Fast Downward does: the lifted
+                              model, its grounding (Fast Downward's translator), writing
+- :mod:`twostep.strips`       plans over the grounded model: lookup, simulation
 - :mod:`twostep.planner`      Fast Downward (the up-fast-downward wheel's driver): named exit
                               codes, checked plan files, costs, statuses
 - :mod:`twostep.validation`   independent plan validation (unified-planning)
