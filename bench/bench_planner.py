@@ -1,6 +1,6 @@
 """Planner benchmark: per task, parse time, plan time, and our wrapper's overhead.
 
-For every task: the time to parse it (unified-planning + our model), the time of
+For every task: the time to read it (our reader, Fast Downward's translator), the time of
 ``twostep.planner.plan`` (writes PDDL, runs the driver, reads the plan), the planner's own
 time as the driver reports it (less sensitive to a loaded machine), and the time of
 the Fast Downward driver called directly on the original files with the same alias and
