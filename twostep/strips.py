@@ -17,7 +17,6 @@ from twostep.pddl.grounded import (
     ConditionalEffect,
     GroundAction,
     PlanError,
-    interference,
     parse_action,
 )
 
@@ -26,7 +25,6 @@ __all__ = [
     "GroundAction",
     "Grounder",
     "PlanError",
-    "interference",
     "parse_action",
     "read_plan",
     "simulate",

@@ -319,23 +319,6 @@ class GroundAction:
         return self.reads | self.writes
 
 
-def interference(first: GroundAction, second: GroundAction) -> Fact | None:
-    """A fact through which two actions interfere (None: they may share a time step).
-
-    They interfere when one possibly deletes what the other needs or possibly adds, or
-    possibly adds what the other needs false, or possibly writes a fact the other's
-    outcome depends on beyond its precondition (:attr:`GroundAction.condition_facts`).
-    """
-    for a, b in ((first, second), (second, first)):
-        for fact in sorted(a.possible_delete & (b.pre_positive | b.possible_add)):
-            return fact
-        for fact in sorted(a.possible_add & (b.pre_negative | b.possible_delete)):
-            return fact
-        for fact in sorted(a.writes & b.condition_facts):
-            return fact
-    return None
-
-
 @dataclass(frozen=True, eq=False)
 class GroundTask:
     """The grounded task: actions by plan name, axioms, and the translator's goal."""
