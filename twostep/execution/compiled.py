@@ -10,12 +10,13 @@ A joint step is then a few integer operations. Two encodings, one per kind of ta
   effect on its own facts may depend on the shared state, so the copies are numbered too,
   one bit per agent and agent-specific fact, and live in the state. Derived facts are
   numbered as well (per agent when they depend on an agent-specific fact) and the state
-  is closed under the axioms after every step, by :class:`CompiledAxioms`.
+  is closed under the axioms after every step (:class:`CompiledAxioms`, which has the
+  grounded model's :class:`~twostep.pddl.grounded.Axioms` evaluate each agent's view).
 """
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterable, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from twostep.pddl import Fact, Goal
@@ -113,33 +114,38 @@ class CompiledStep:
 
 
 class CompiledAxioms:
-    """The task's axioms over numbered facts: :meth:`close` evaluates them on a state.
+    """The task's axioms on bit-set states.
 
-    The same stratified semantics as :class:`~twostep.pddl.grounded.Axioms` (layer by
-    layer, a least fixpoint), on bit sets.
+    :class:`~twostep.pddl.grounded.Axioms` stays the one evaluator: :meth:`close` decodes
+    each agent's view of a state (the shared facts and its own copy) into facts, closes it
+    there, and encodes the derived facts back (an agent-specific derived fact into that
+    agent's bit). States repeat during the search, so results are remembered.
     """
 
-    def __init__(self, rules: Sequence[tuple[int, int, int, int]]):
-        """``rules``: (head bit, body true, body false, layer)."""
-        layers: dict[int, list[tuple[int, int, int]]] = {}
-        derived = 0
-        for head, positive, negative, layer in rules:
-            layers.setdefault(layer, []).append((head, positive, negative))
-            derived |= head
-        self.layers = [tuple(layers[k]) for k in sorted(layers)]
+    def __init__(
+        self,
+        axioms: Axioms,
+        views: Sequence[tuple[Sequence[tuple[int, Fact]], Mapping[Fact, int]]],
+        derived: int,
+    ):
+        """``views``: per agent, its basic facts' (bit, fact) and its derived facts' bits."""
+        self.axioms = axioms
+        self.views = views
         self.derived = derived
+        self._closed: dict[int, int] = {}
 
     def close(self, state: int) -> int:
         state &= ~self.derived
-        for rules in self.layers:
-            changed = True
-            while changed:
-                changed = False
-                for head, positive, negative in rules:
-                    if not state & head and positive & state == positive and not negative & state:
-                        state |= head
-                        changed = True
-        return state
+        known = self._closed.get(state)
+        if known is not None:
+            return known
+        closed = state
+        for visible, encode in self.views:
+            facts = [fact for bit, fact in visible if state & bit]
+            for fact in self.axioms.close(facts):
+                closed |= encode.get(fact, 0)
+        self._closed[state] = closed
+        return closed
 
 
 @dataclass(frozen=True)
@@ -362,23 +368,25 @@ def _compile_general(
         steps.append(tuple(agent_steps))
     goal_positive = every_agent(goal.positive | goal.formula_facts)
     goal_negative = every_agent(goal.negative)
+    # Every basic fact of the initial state is numbered: a derived fact may depend on
+    # facts no action mentions (they keep their initial value).
+    for fact in init:
+        if fact not in derived:
+            for agent in range(agents):
+                bit_of(fact, agent)
+    initial = sum(bit for (_, fact), bit in bits.items() if fact in init and fact not in derived)
     compiled_axioms = None
     if axioms:
-        rules = []
-        for rule in axioms.rules:
-            owners = range(agents) if agent_specific(rule.head) else (0,)
-            for agent in owners:
-                rules.append(
-                    (
-                        bit_of(rule.head, agent),
-                        mask(rule.positive, agent),
-                        mask(rule.negative, agent),
-                        rule.layer,
-                    )
-                )
-        compiled_axioms = CompiledAxioms(rules)
-    # Facts no action, goal or rule mentions never matter; leaving them out keeps states small.
-    initial = sum(bit for (_, fact), bit in bits.items() if fact in init and fact not in derived)
-    if compiled_axioms is not None:
+        views = []
+        owners = range(agents) if any(owner >= 0 for owner, _ in bits) else range(1)
+        for agent in owners:
+            mine = [
+                (owner, fact, bit) for (owner, fact), bit in bits.items() if owner in (-1, agent)
+            ]
+            visible = [(bit, fact) for _, fact, bit in mine if fact not in derived]
+            encode = {fact: bit for _, fact, bit in mine if fact in derived}
+            views.append((visible, encode))
+        derived_bits = sum(bit for (_, fact), bit in bits.items() if fact in derived)
+        compiled_axioms = CompiledAxioms(axioms, views, derived_bits)
         initial = compiled_axioms.close(initial)
     return _task(steps, initial, goal_positive, goal_negative, len(bits), compiled_axioms)
