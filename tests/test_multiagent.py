@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
+import pytest
+
 from tests.conftest import BLOCKS_DOMAIN, blocks_problem
 from twostep.multiagent import compile_multi_agent_problem, split_plan
 from twostep.pddl import domain_to_pddl, parse_problem, problem_to_pddl
@@ -120,3 +124,27 @@ def test_costs_from_functions_survive_the_compilation() -> None:
     # both cars must reach d (agent-specific goal literals hold for every agent): 2 x 10
     result = run_planner(ma, PlannerSettings("astar-blind", 20))
     assert result.plan is not None and result.cost == 20 and len(result.plan) == 4
+
+
+@pytest.mark.parametrize("decomposer", ["plan-deal", "plan-split", "goal-split"])
+def test_offline_methods_on_axioms_and_conditional_effects(decomposer: str, tmp_path: Path) -> None:
+    from twostep.benchmark import load_task
+    from twostep.decomposers.goal_split import GoalSplitDecomposer
+    from twostep.decomposers.plan_split import PlanSplitDecomposer
+    from twostep.methods import MethodRequest, check_run, method_for
+
+    folder = tmp_path / "shelf"
+    folder.mkdir()
+    (folder / "domain.pddl").write_text(SHELF)
+    (folder / "p01.pddl").write_text(SHELF_PROBLEM)
+    task = load_task("shelf", 1, root=tmp_path)
+    facts = ("holding",)
+    sources = {"plan-split": PlanSplitDecomposer(facts), "goal-split": GoalSplitDecomposer(facts)}
+    request = MethodRequest(
+        task, 2, PlannerSettings("astar-blind", 20), facts, sources.get(decomposer)
+    )
+    run = method_for("twostep", decomposer)(request)
+    assert run.success
+    check_run(task.problem, run, facts)
+    # one object each, side by side: 2 steps (the SA plan takes 4)
+    assert run.exec_length == 2

@@ -25,6 +25,7 @@ __all__ = [
     "GroundAction",
     "Grounder",
     "PlanError",
+    "effects_along",
     "parse_action",
     "read_plan",
     "simulate",
@@ -75,6 +76,23 @@ class Grounder:
 
     def ground_plan(self, plan: Iterable[str]) -> list[GroundAction]:
         return [self.ground(a) for a in plan]
+
+
+def effects_along(
+    state: frozenset[Fact], plan: Sequence[GroundAction]
+) -> list[tuple[frozenset[Fact], frozenset[Fact]]]:
+    """Each step's (adds, deletes) as the plan runs from ``state`` (conditional effects as
+    they fire there); raise :class:`PlanError` at the first inapplicable step."""
+    if all(action.is_strips for action in plan):
+        return [(action.add, action.delete) for action in plan]
+    effects = []
+    for step, action in enumerate(plan, start=1):
+        if not action.applicable(state):
+            missing = action.failing_precondition(state)
+            raise PlanError(f"step {step} {action}: precondition {missing} does not hold")
+        effects.append(action.effect_in(state))
+        state = action.apply(state)
+    return effects
 
 
 def simulate(state: frozenset[Fact], plan: Sequence[GroundAction]) -> frozenset[Fact]:

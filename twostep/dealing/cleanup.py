@@ -22,8 +22,9 @@ JointRun = list[tuple[int, GroundAction]]  # (agent, action), in the order they 
 def joint_goal_holds(
     problem: Problem, environment: frozenset[Fact], own: Sequence[frozenset[Fact]]
 ) -> bool:
-    """The goal holds: environment literals once, agent-specific ones in every copy."""
-    return all(problem.goal.holds(environment | mine) for mine in own)
+    """The goal holds: environment literals once, agent-specific ones in every copy
+    (derived ones in every agent's view)."""
+    return all(problem.goal.holds(problem.close(environment | mine)) for mine in own)
 
 
 def eliminate_joint(
@@ -42,7 +43,7 @@ def eliminate_joint(
         own = list(own)
         kept = []
         for a, action in rest:
-            state = env | own[a]
+            state = problem.close(env | own[a])
             if action.applicable(state):
                 state = action.apply(state)
                 env = environment_part(state, agent_predicates)

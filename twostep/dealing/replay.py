@@ -29,7 +29,7 @@ def replay_piece(
 ) -> tuple[list[GroundAction], frozenset[Fact]]:
     """One agent runs one piece, walking before an action where needed: its actions and
     the state after them (raise :class:`DealError`)."""
-    state = environment | own
+    state = walker.problem.close(environment | own)
     steps: list[GroundAction] = []
     for i in piece:
         action = grounded[i]

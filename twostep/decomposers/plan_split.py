@@ -62,7 +62,7 @@ from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import positional_predicates, release_literals
 from twostep.pddl import Fact, Goal, Problem
 from twostep.progression import agent_part, environment_part
-from twostep.strips import GroundAction, Grounder, simulate
+from twostep.strips import GroundAction, Grounder, effects_along, simulate
 
 
 @dataclass(frozen=True)
@@ -80,8 +80,9 @@ def plan_order(
 ) -> tuple[set[tuple[int, int]], list[CausalLink]]:
     """Step 1: the order edges (i, j), i < j, the plan needs, and its causal links."""
     n = len(plan)
-    adds = [environment_part(a.add, agent_predicates) for a in plan]
-    dels = [environment_part(a.delete, agent_predicates) for a in plan]
+    effects = effects_along(problem.init, plan)
+    adds = [environment_part(add, agent_predicates) for add, _ in effects]
+    dels = [environment_part(delete, agent_predicates) for _, delete in effects]
     deleters: dict[Fact, list[int]] = defaultdict(list)
     writers: dict[Fact, list[int]] = defaultdict(list)
     for k in range(n):
@@ -114,7 +115,26 @@ def plan_order(
                 edges.add((k, link.producer))
             elif k > link.consumer and link.consumer < n:
                 edges.add((link.consumer, k))
+    if not all(a.is_strips and not a.axioms for a in plan):
+        edges |= _conflicts(plan, agent_predicates)
     return {(i, j) for i, j in edges if i != j}, links
+
+
+def _conflicts(
+    plan: Sequence[GroundAction], agent_predicates: Collection[str]
+) -> set[tuple[int, int]]:
+    """Order edges between every two actions that may interact: one may write a shared fact
+    the other reads or may write. With conditional effects, precondition variants or
+    derived facts, what an action does depends on the state it meets, so the plan's own
+    order of interacting actions is kept (any order the edges allow then runs as the plan
+    does)."""
+    reads = [environment_part(a.reads, agent_predicates) for a in plan]
+    writes = [environment_part(a.writes, agent_predicates) for a in plan]
+    return {
+        (i, j)
+        for i, j in itertools.combinations(range(len(plan)), 2)
+        if writes[i] & (reads[j] | writes[j]) or writes[j] & reads[i]
+    }
 
 
 def free_states(
@@ -171,14 +191,16 @@ def holding_pieces(
         return i
 
     latest: dict[Fact, int] = {}
-    for j, action in enumerate(plan):
-        for fact in action.pre_positive | action.delete:
+    for j, (action, (add, delete)) in enumerate(
+        zip(plan, effects_along(problem.init, plan), strict=True)
+    ):
+        for fact in action.pre_positive | delete:
             tying = fact[0] in agent_predicates and fact[0] not in positional
             if tying and fact not in own and fact in latest:
                 parent[find(j)] = find(latest[fact])
-        for fact in action.delete:
+        for fact in delete:
             latest.pop(fact, None)
-        for fact in action.add:
+        for fact in add:
             latest[fact] = j
     groups: dict[int, list[int]] = defaultdict(list)
     for i in range(len(plan)):
@@ -317,10 +339,7 @@ def _pieces(
     acting = [
         members
         for members in pieces
-        if any(
-            environment_part(grounded[i].add | grounded[i].delete, agent_predicates)
-            for i in members
-        )
+        if any(environment_part(grounded[i].writes, agent_predicates) for i in members)
     ]
     acting_piece = {i: members[0] for members in acting for i in members}
     for members in acting:
@@ -394,16 +413,18 @@ def _subgoals(
     release = release_literals(problem, agent_predicates)
     goal_facts = environment_part(problem.goal.positive, agent_predicates)
     env = environment_part(problem.init, agent_predicates)
+    effects = effects_along(problem.init, grounded)  # as the SA plan ran them
     subgoals: list[Goal] = []
     for k in range(helpers):
         mine = sorted(i for p, members in enumerate(pieces) if owner[p] == k for i in members)
         before = env
         added: set[Fact] = set()
         for i in mine:
-            env = (env - environment_part(grounded[i].delete, agent_predicates)) | environment_part(
-                grounded[i].add, agent_predicates
+            add, delete = effects[i]
+            env = (env - environment_part(delete, agent_predicates)) | environment_part(
+                add, agent_predicates
             )
-            added |= environment_part(grounded[i].add, agent_predicates)
+            added |= environment_part(add, agent_predicates)
         later: set[Fact] = {
             link.fact
             for link in links

@@ -12,14 +12,14 @@ each rule the methods share when they fill it in:
   :class:`RunStatus` and :class:`FallbackReason` (:class:`Fallback` is a reason and its
   details, as result.json's ``fallback`` text).
 
-Plans and schedules are kept in the compiled domain's terms here, and result.json names
-them in the task's own (:mod:`twostep.pddl.origins`); :func:`check_run` re-validates a
-run's schedule against the task.
+Plans and schedules always name the task's own actions (the grounded model is Fast
+Downward's grounding of the task's own files: nothing is compiled, nothing is added);
+:func:`check_run` re-validates a run's schedule against the task.
 """
 
 from __future__ import annotations
 
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
@@ -28,8 +28,6 @@ from twostep.decomposers.base import SubgoalProposal
 from twostep.execution import ParallelExecution, check_schedule
 from twostep.methods.request import MethodRequest
 from twostep.pddl import Problem
-from twostep.pddl.model import ActionOrigin
-from twostep.pddl.origins import original_action, original_plan
 from twostep.planner import PlanResult, Status
 from twostep.strips import Grounder
 
@@ -141,31 +139,8 @@ class RunResult:
     # The SA plan's planner time when it counts in planning_time_s (count_sa_time)
     sa_time_included_s: float | None = None
     extra: dict[str, Any] = field(default_factory=dict)
-    # The compiled domain's action origins (an ADL task): plans and schedule are in its
-    # terms here, in the task's own in result.json; empty for a STRIPS task.
-    origins: Mapping[str, ActionOrigin] = field(default_factory=dict, repr=False)
-
-    def task_plans(self) -> dict[str, list[str]]:
-        """The plans in the task's own action names (goal actions of a compilation left out)."""
-        if not self.origins:
-            return self.plans
-        return {agent: original_plan(self.origins, steps) for agent, steps in self.plans.items()}
-
-    def task_schedule(self) -> list[list[tuple[str, str]]]:
-        """The joint schedule in the task's own action names (a step keeps its place even
-        when it only held a compilation's goal action, so its length is ``exec_length``)."""
-        if not self.origins:
-            return self.schedule
-        named = []
-        for step in self.schedule:
-            pairs = [(agent, original_action(self.origins, action)) for agent, action in step]
-            named.append([(agent, action) for agent, action in pairs if action is not None])
-        return named
 
     def to_dict(self) -> dict[str, Any]:
-        compiled = (
-            {"compiled_plans": self.plans} if self.task_plans() != self.plans else {}
-        )  # kept so that a schedule can be re-validated against the compiled task
         sa_time = (
             {"sa_time_included_s": round(self.sa_time_included_s, 4)}
             if self.sa_time_included_s is not None
@@ -185,10 +160,9 @@ class RunResult:
             "sa_cost": self.sa_cost,
             "planning_time_s": round(self.planning_time_s, 4),
             "llm_time_s": round(self.llm_time_s, 4),
-            "plans": self.task_plans(),
-            **compiled,
+            "plans": self.plans,
             "agent_order": self.agent_order,
-            "schedule": [[list(pair) for pair in step] for step in self.task_schedule()],
+            "schedule": [[list(pair) for pair in step] for step in self.schedule],
             "subgoals": self.subgoals,
             "decomposer": self.decomposer,
             "status": self.status.value,
@@ -210,7 +184,6 @@ def new_run(request: MethodRequest, method: MethodName) -> RunResult:
     task = request.task
     run = RunResult(task.domain_name, task.task_id, method, agents, request.seed)
     run.sa_length = request.sa_length if method is not MethodName.SA else None
-    run.origins = task.problem.domain.origins
     return run
 
 

@@ -21,7 +21,6 @@ One job per module:
 - :mod:`twostep.pddl.goals`       quantified subgoals grounded by static facts
 - :mod:`twostep.pddl.reader`      ``parse_problem``, ``load_problem`` (cached), ``parse_goal``
 - :mod:`twostep.pddl.writer`      the PDDL the planner receives
-- :mod:`twostep.pddl.origins`     plans in the task's own terms (the identity)
 - :mod:`twostep.pddl.environment` unified-planning's environment, for the plan validator
 """
 

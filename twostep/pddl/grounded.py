@@ -335,7 +335,7 @@ class GroundTask:
     def close(self, facts: Iterable[Fact]) -> frozenset[Fact]:
         """``facts`` as a state: basic facts kept, derived facts evaluated."""
         if not self.axioms:
-            return frozenset(facts)
+            return facts if isinstance(facts, frozenset) else frozenset(facts)
         return self.axioms.close(facts)
 
     def prune_axioms(self, goal: Iterable[Fact] = ()) -> GroundTask:

@@ -23,7 +23,6 @@ from twostep.pddl.grounded import Fact, GroundTask, fact_to_pddl
 from twostep.pddl.sexp import SExp, write_sexp
 
 __all__ = [
-    "ActionOrigin",
     "ActionSchema",
     "Atom",
     "DerivedPredicate",
@@ -47,14 +46,6 @@ class Atom:
 
     def __str__(self) -> str:
         return "(" + " ".join((self.predicate, *self.terms)) + ")"
-
-
-@dataclass(frozen=True)
-class ActionOrigin:
-    """Kept for callers that still type a domain's (always empty) ``origins``."""
-
-    name: str | None
-    arity: int
 
 
 @dataclass(frozen=True, eq=False)
@@ -136,11 +127,6 @@ class Domain:
     @property
     def typed(self) -> bool:
         return any(t != "object" for t in self.types)
-
-    @property
-    def origins(self) -> dict[str, ActionOrigin]:
-        """Always empty: plans are in the task's own terms (no compiled variants)."""
-        return {}
 
     def is_subtype(self, name: str | None, of: str) -> bool:
         """Whether type ``name`` is ``of`` or descends from it (cycles end the walk);
@@ -310,7 +296,7 @@ class Problem:
         """``facts`` as a state of this task: derived facts evaluated by its axioms."""
         if self.needs_axioms or self.is_grounded:
             return self.grounded.close(facts)
-        return frozenset(facts)
+        return facts if isinstance(facts, frozenset) else frozenset(facts)
 
     def with_state(self, init: Iterable[Fact] | None = None, goal: Goal | None = None) -> Problem:
         """The same problem from another initial state and/or towards another goal.
