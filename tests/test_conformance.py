@@ -17,8 +17,9 @@ each construct fixture's ``expected.yaml``, derived by hand.
   exists: it loads the files, solves, its plan is valid on the original files, and its
   ``sa_length``/``sa_cost`` are the plan's; MA and plan-deal schedules (N = 2) re-validate.
 
-Tests marked xfail(strict=True) fail on the front end of today (the reason says why); they
-are expected to pass once twostep reads PDDL as Fast Downward does (issue 17).
+Before issue 17 (twostep reading PDDL as Fast Downward does) seven construct fixtures and
+four of the IPC domains here failed (docs/bench/conformance_before.txt says why); they pass
+now, with no test marked as expected to fail.
 """
 
 from __future__ import annotations
@@ -43,23 +44,6 @@ TIME_LIMIT_S = 30
 RUN_TIMEOUT_S = 300
 
 FIXTURES = sorted(p.name for p in CONSTRUCTS.iterdir() if (p / "expected.yaml").is_file())
-
-# What today's front end does with each fixture (issue 17 lists the causes).
-FAILING_TODAY = {
-    "conditional_effects": "today: more than 10 conditional effects are rejected (variant compilation)",
-    "costs_from_functions": "today: action costs from functions are rejected",
-    "derived_predicates": "today: derived predicates are rejected",
-    "disjunctive_preconditions": "today: more than 512 disjuncts after normalisation are rejected",
-    "exists_goal": "today: the compilation's goal action is counted in sa_length",
-    "repeated_parameter_name": "today: unified-planning's reader rejects (in ?obj ?obj)",
-    "variable_glued_to_name": "today: unified-planning's reader rejects (ferry?f)",
-}
-
-
-def fixture_param(name: str) -> Any:
-    if name in FAILING_TODAY:
-        return pytest.param(name, marks=pytest.mark.xfail(strict=True, reason=FAILING_TODAY[name]))
-    return name
 
 
 def expected(name: str) -> dict[str, Any]:
@@ -288,7 +272,7 @@ def fixture_files(name: str, problem: str = "p01") -> ProblemFiles:
     return ProblemFiles(name, folder / "domain.pddl", folder / f"{problem}.pddl", None)
 
 
-@pytest.mark.parametrize("name", [fixture_param(n) for n in FIXTURES])
+@pytest.mark.parametrize("name", FIXTURES)
 def test_twostep_single_agent_on_construct(name: str) -> None:
     wanted = expected(name)["p01"]
     result, plan = twostep_sa(fixture_files(name))
@@ -302,17 +286,7 @@ def test_twostep_single_agent_on_construct(name: str) -> None:
 
 # Fixtures with agent predicates; one in the fast suite, the rest with -m slow.
 MULTI_AGENT_FIXTURES = [
-    name
-    if name == "agent_type"
-    else pytest.param(
-        name,
-        marks=[pytest.mark.slow]
-        + (
-            [pytest.mark.xfail(strict=True, reason=FAILING_TODAY[name])]
-            if name in FAILING_TODAY and name != "exists_goal"  # its schedules count right
-            else []
-        ),
-    )
+    name if name == "agent_type" else pytest.param(name, marks=pytest.mark.slow)
     for name in FIXTURES
     if expected(name)["agent_predicates"]
 ]
@@ -339,15 +313,10 @@ needs_sample = pytest.mark.skipif(
     not SAMPLE.is_dir(), reason=f"the IPC sample is not at {SAMPLE} (external test input)"
 )
 
-# A handful covering the constructs: conditional effects, costs from functions, axioms,
-# files unified-planning rejects, and plain STRIPS with MA and plan-deal.
-SAMPLE_SUBSET = {
-    "airport-adl": "today: more than 10 conditional effects are rejected",
-    "elevators-sat08-strips": "today: action costs from functions are rejected",
-    "psr-middle": "today: derived predicates are rejected",
-    "zenotravel": "today: unified-planning's reader rejects (aircraft?a)",
-    "blocks": None,
-}
+# A handful covering the constructs: conditional effects (airport-adl), costs from
+# functions (elevators), axioms (psr), a variable glued to a name (zenotravel), and plain
+# STRIPS with MA and plan-deal (blocks).
+SAMPLE_SUBSET = ("airport-adl", "elevators-sat08-strips", "psr-middle", "zenotravel", "blocks")
 
 
 def sample_files(domain: str) -> ProblemFiles:
@@ -356,13 +325,7 @@ def sample_files(domain: str) -> ProblemFiles:
 
 
 @needs_sample
-@pytest.mark.parametrize(
-    "domain",
-    [
-        pytest.param(d, marks=pytest.mark.xfail(strict=True, reason=why)) if why else d
-        for d, why in SAMPLE_SUBSET.items()
-    ],
-)
+@pytest.mark.parametrize("domain", SAMPLE_SUBSET)
 def test_twostep_single_agent_on_ipc_sample(domain: str) -> None:
     files = sample_files(domain)
     check = IndependentValidator(files.domain, files.problem)
