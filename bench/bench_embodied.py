@@ -60,7 +60,6 @@ from twostep.methods import (
     run_twostep,
 )
 from twostep.pddl import Problem, parse_problem
-from twostep.pddl.origins import original_action
 from twostep.planner import PlannerSettings
 from twostep.trace_check import TraceReport, check_trace, read_kitchen_file, who_plays
 
@@ -153,12 +152,11 @@ def replayed(
     task: BenchmarkTask, run: RunResult, floor: FloorPlan, seed: int, own_floor: object
 ) -> tuple[object, TraceReport, dict[str, object]]:
     result = execute_plans(
-        task.problem, run.plans, run.agent_order, floor, ExecutorSettings(seed=seed),
-        lambda action: original_action(run.origins, action),
-    )  # fmt: skip
+        task.problem, run.plans, run.agent_order, floor, ExecutorSettings(seed=seed)
+    )
     record = embodied_fields(result, floor)[TRACE_KEY]
     report = check_trace(
-        record, run.task_plans(), task.domain_path.read_text(), task.problem_path.read_text(),
+        record, run.plans, task.domain_path.read_text(), task.problem_path.read_text(),
         own_floor,  # type: ignore[arg-type]
     )  # fmt: skip
     return result, report, record
@@ -239,7 +237,7 @@ def real(seeds: int) -> None:
     rows = [("sa", 1)] + [(m, n) for n in (2, 3) for m in ("ma", "plan-deal", "goal-split")]
     for method, agents in rows:
         run = method_run(task, method, agents, ALFRED_PREDICATES)
-        plays = who_plays(task.domain_path.read_text(), problem_text, run.task_plans())
+        plays = who_plays(task.domain_path.read_text(), problem_text, run.plans)
         lengths, checked, judged = [], 0, 0
         for seed in range(seeds):
             result, report, record = replayed(task, run, floor, seed, None)
@@ -247,7 +245,7 @@ def real(seeds: int) -> None:
             checked += report.ok and report.out_of_reach == 0
             if engine:
                 judged += replay_trace(record, problem_text, plays).ok
-        actions = sum(len(p) for p in run.task_plans().values())
+        actions = sum(len(p) for p in run.plans.values())
         print(f"  {method:12} {agents:>2} {actions:>7}  {lengths!s:28} "
               f"{statistics.mean(lengths):>6.1f} {checked:>3}/{seeds} "
               f"{(f'{judged}/{seeds}' if engine else '-'):>7}")  # fmt: skip

@@ -36,7 +36,6 @@ from twostep.methods import (
     run_twostep,
 )
 from twostep.methods.plan_deal import run_plan_deal
-from twostep.pddl.origins import original_action
 from twostep.planner import PlannerSettings
 from twostep.trace_check import alfworld_layouts_folder, check_trace
 
@@ -150,16 +149,15 @@ def test_sa_ma_and_twostep_run_on_the_real_layout(task: BenchmarkTask) -> None:
                 run.agent_order,
                 floor,
                 ExecutorSettings(seed=seed),
-                lambda action, run=run: original_action(run.origins, action),
             )
             assert result.success, (name, seed, result.message)
             record = embodied_fields(result, floor)[TRACE_KEY]
             assert record["floor_plan"]["layout"] == "FloorPlan14"
-            report = check_trace(record, run.task_plans(), domain, problem)
+            report = check_trace(record, run.plans, domain, problem)
             assert report.ok, (name, seed, report.violations)
             assert report.out_of_reach == 0
             assert report.interactions + report.navigations == sum(
-                len(p) for p in run.task_plans().values()
+                len(p) for p in run.plans.values()
             )
             lengths.setdefault(name, []).append(result.embodied_length or 0)
     assert len(set(lengths["sa"])) == 1  # one body starts where the problem says
@@ -174,8 +172,7 @@ def test_a_real_run_is_drawn_with_its_furniture(task: BenchmarkTask, tmp_path: P
 
     floor = task_floor_plan(task.problem, task.problem_path.parent)
     run = run_single_agent(MethodRequest(task, 1, FAST))
-    result = execute_plans(task.problem, run.plans, run.agent_order, floor,
-                           task_action=lambda a: original_action(run.origins, a))  # fmt: skip
+    result = execute_plans(task.problem, run.plans, run.agent_order, floor)
     figure = _KitchenFigure(result, floor, DPI)
     labels = sorted(text for text, _ in figure.labels)
     assert labels == sorted(display_names(floor.fixtures).values()) and len(labels) == 9
@@ -202,7 +199,7 @@ def test_alfworlds_own_engine_accepts_the_plans_and_traces(task: BenchmarkTask) 
         pytest.skip("AlfWorld's engine is not installed (make alfworld-engine)")
     problem = task.problem_path.read_text()
     runs = _runs(task)
-    (sa_plan,) = runs["sa"].task_plans().values()
+    (sa_plan,) = runs["sa"].plans.values()
     assert replay(problem, sa_plan).ok
     swapped = list(sa_plan)
     swapped[2], swapped[3] = swapped[3], swapped[2]
@@ -210,11 +207,11 @@ def test_alfworlds_own_engine_accepts_the_plans_and_traces(task: BenchmarkTask) 
     assert not refused.ok and refused.applied < len(swapped) and "not applicable" in refused.failure
     floor = task_floor_plan(task.problem, task.problem_path.parent)
     for name, run in runs.items():
-        plays = who_plays(task.domain_path.read_text(), problem, run.task_plans())
+        plays = who_plays(task.domain_path.read_text(), problem, run.plans)
         for seed in (0, 1):
-            result = execute_plans(task.problem, run.plans, run.agent_order, floor,
-                                   ExecutorSettings(seed=seed),
-                                   lambda action, run=run: original_action(run.origins, action))  # fmt: skip
+            result = execute_plans(
+                task.problem, run.plans, run.agent_order, floor, ExecutorSettings(seed=seed)
+            )
             record = embodied_fields(result, floor)[TRACE_KEY]
             judged = replay_trace(record, problem, plays)
             assert judged.ok, (name, seed, judged)
