@@ -1,14 +1,17 @@
 """The ``twostep`` command: a Hydra app that runs one job, or a sweep with ``-m``.
 
 Single run: prints a one-line summary (and the joint schedule), writes result.json in
-the Hydra run directory; bad input (unknown task, malformed PDDL) or an unusable MLflow
-store prints one line and exits 2, a job that crashed prints one line and exits 1.
+the Hydra run directory; bad input (a command line Hydra cannot compose, a value out of
+range, an unknown task, malformed PDDL) or an unusable MLflow store prints one line and
+exits 2, a job that crashed prints one line and exits 1. ``--version`` and ``--help``
+print the tool's own text.
 Sweep: one progress line per finished job; failures are recorded and the sweep goes on
 (:mod:`flows.sweep_callback` prints the summary and sets the exit code).
 """
 
 from __future__ import annotations
 
+import logging
 import sys
 import time
 from pathlib import Path
@@ -23,11 +26,15 @@ from flows.artifacts import picture_paths
 from flows.config import register
 from flows.console import format_schedule, format_summary
 from flows.environment import quiet_defaults
+from flows.sweep_callback import SweepCallback
 
 if TYPE_CHECKING:
     from flows.job import JobOutcome
 
-CONF_DIR = str(Path(__file__).resolve().parent.parent / "conf")
+# The configs are installed with the package (conf/ of the source tree, see pyproject.toml):
+# the command finds them from any directory; --config-dir adds a folder of the user's own.
+CONFIG_PACKAGE = "pkg://flows.conf"
+JOB_LOG = "twostep.run"  # the job log's own logger (the summary, not the console)
 
 quiet_defaults()
 register()
@@ -37,7 +44,7 @@ register()
 _SINGLE_RUN_DONE = False
 
 
-@hydra.main(config_path=CONF_DIR, config_name="config", version_base="1.3")
+@hydra.main(config_path=CONFIG_PACKAGE, config_name="config", version_base="1.3")
 def app(cfg: DictConfig) -> None:
     from flows.job import execute_job
     from flows.sweep_state import SweepState, record_job
@@ -65,6 +72,7 @@ def app(cfg: DictConfig) -> None:
     elif outcome.stats.plan_cache_hits:
         hits, runs = outcome.stats.plan_cache_hits, outcome.stats.plan_calls
         line += f" | planner cache: {hits} hit(s), {runs} run"
+    _job_log(outcome, line, job_dir)
     if not multirun:
         _finish_single_run(outcome, line, job_dir)
         return
@@ -74,6 +82,17 @@ def app(cfg: DictConfig) -> None:
 
         line = f"{progress_line(sweep)} {line}"
     print(line, flush=True)
+
+
+def _job_log(outcome: JobOutcome, line: str, job_dir: Path) -> None:
+    """The job's summary, schedule and files in its job log (``<job dir>/cli.log``, the
+    ``twostep.run`` logger of conf/hydra/job_logging/twostep.yaml)."""
+    lines = [f"error: {outcome.error}"] if "error" in outcome.result else [line]
+    table = format_schedule(outcome.result)
+    if table:
+        lines.append(table)
+    lines.append(f"result: {job_dir / 'result.json'}")
+    logging.getLogger(JOB_LOG).info("\n".join(lines))
 
 
 def _finish_single_run(outcome: JobOutcome, line: str, job_dir: Path) -> None:
@@ -110,12 +129,19 @@ def _sweep_record(outcome: JobOutcome) -> dict[str, Any]:
 
 
 def main() -> None:
+    if "--version" in sys.argv[1:]:  # ours, not Hydra's
+        from flows.console import version_text
+
+        print(version_text())
+        return
     try:
         app()
     except SystemExit as stop:
         code = stop.code
     else:
         code = 0
+    if code == 1 and not SweepCallback.composed:
+        code = 2  # Hydra refused the command line (its message is printed): bad input
     if _SINGLE_RUN_DONE:
         _fast_exit(code if isinstance(code, int) else 1)
     sys.exit(code)

@@ -18,6 +18,7 @@ from typing import Any, cast
 
 from hydra.core.config_store import ConfigStore
 
+from twostep.benchmark import DEFAULT_DATA_ROOT
 from twostep.embodied import ExecutorSettings
 from twostep.execution import DEFAULT_SEARCH_BUDGET
 from twostep.llm.client import LLMSettings
@@ -100,7 +101,9 @@ class PlannerConfig:
 
 @dataclass
 class DataConfig:
-    root: str = "data"
+    # The benchmark data installed with the package, wherever the command runs; any
+    # folder in the LLM+P layout instead (data.root=/path/to/llmp-benchmark).
+    root: str = str(DEFAULT_DATA_ROOT)
 
 
 @dataclass

@@ -1,14 +1,19 @@
 """What the commands print: a job's summary line and schedule table, a sweep's progress
-line, header and footer, and any error on one line."""
+line, header and footer, any error on one line, and ``twostep --version``."""
 
 from __future__ import annotations
 
+import platform
+import re
+import subprocess
 import time
 from collections.abc import Mapping
+from importlib import metadata, util
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from twostep.identity import display_name
+from twostep.redaction import redact_text
 
 if TYPE_CHECKING:
     from flows.sweep_state import SweepState
@@ -17,8 +22,9 @@ if TYPE_CHECKING:
 
 def one_line(error: BaseException, name_type: bool = True, limit: int | None = None) -> str:
     """The error's first non-empty line, after its type's name unless ``name_type`` is
-    False (errors whose message is written for the user), cut at ``limit`` characters."""
-    lines = [line for line in str(error).strip().splitlines() if line.strip()]
+    False (errors whose message is written for the user), cut at ``limit`` characters;
+    credentials inside URLs masked (:mod:`twostep.redaction`)."""
+    lines = [line for line in redact_text(str(error)).strip().splitlines() if line.strip()]
     text = lines[0] if lines else ""
     if not name_type:
         text = text or type(error).__name__
@@ -75,18 +81,27 @@ def _agent_number(agent: str) -> int:
     return int(digits) if digits.isdigit() else 0
 
 
-def format_schedule(result: RunResult | Mapping[str, Any], width: int = 34) -> str:
-    """The joint schedule as a table, one column per agent."""
+def format_schedule(result: RunResult | Mapping[str, Any]) -> str:
+    """The joint schedule as a table, one column per agent, each as wide as its longest
+    action (two spaces apart)."""
     r = result if isinstance(result, Mapping) else result.to_dict()
     agents = sorted(r.get("plans") or {}, key=_agent_number)
     schedule = r.get("schedule") or []
     if not schedule or len(agents) < 2:
         return ""
-    header = "step  " + "".join(a.ljust(width) for a in agents)
-    lines = [header, "-" * len(header)]
+    widths = {agent: len(agent) for agent in agents}
+    for step in schedule:
+        for agent, action in step:
+            widths[agent] = max(widths.get(agent, 0), len(action))
+
+    def row(first: str, cells: Mapping[str, str]) -> str:
+        columns = [cells.get(a, ".").ljust(widths[a]) for a in agents]
+        return (first + "  " + "  ".join(columns)).rstrip()
+
+    header = row("step", {a: a for a in agents})
+    lines = [header, "-" * (4 + 2 + sum(widths.values()) + 2 * (len(agents) - 1))]
     for t, step in enumerate(schedule, start=1):
-        acting = {agent: action for agent, action in step}
-        lines.append(f"{t:>4}  " + "".join(acting.get(a, ".").ljust(width) for a in agents))
+        lines.append(row(f"{t:>4}", {agent: action for agent, action in step}))
     return "\n".join(lines)
 
 
@@ -133,7 +148,7 @@ def header(state: SweepState) -> str:
         parts.append(f"mlflow experiment '{state.experiment}'")
     if state.dask_address:
         parts.append(f"dask {state.dask_address}")
-    return " | ".join(parts)
+    return redact_text(" | ".join(parts))
 
 
 def footer(state: SweepState, summary: Mapping[str, Any], failed: list[dict[str, Any]]) -> str:
@@ -152,4 +167,79 @@ def footer(state: SweepState, summary: Mapping[str, Any], failed: list[dict[str,
         lines.append(f"prefect: {summary['prefect_api_url']}: flow runs: {shown}{stopped}")
     if state.experiment:
         lines.append(f"mlflow: experiment '{state.experiment}' in {state.tracking_uri}")
+    return redact_text("\n".join(lines))
+
+
+# ----------------------------------------------------------------- versions
+
+
+def _distribution_version(name: str) -> str:
+    try:
+        return metadata.version(name)
+    except metadata.PackageNotFoundError:
+        return "not installed"
+
+
+def fast_downward_version() -> str:
+    """The release of the Fast Downward inside the up-fast-downward wheel, read from its
+    driver's version file (nothing is imported)."""
+    spec = util.find_spec("up_fast_downward")
+    folders = list(spec.submodule_search_locations or []) if spec else []
+    for folder in folders:
+        path = Path(folder) / "downward" / "driver" / "version.py"
+        found = (
+            re.search(r"__version__\s*=\s*[\"']([^\"']+)", path.read_text())
+            if path.is_file()
+            else None
+        )
+        if found:
+            return found.group(1)
+    return "unknown"
+
+
+SOURCE_ROOT = Path(__file__).resolve().parent.parent  # a checkout's top, or site-packages
+
+
+def git_commit(source: Path = SOURCE_ROOT) -> str | None:
+    """The commit of the checkout this code runs from (``+ changes`` when the tree has
+    uncommitted changes); None for an installed wheel (no checkout around the package)."""
+
+    def git(*args: str) -> str | None:
+        try:
+            done = subprocess.run(
+                ["git", "-C", str(source), *args], capture_output=True, text=True, timeout=10
+            )
+        except (OSError, subprocess.SubprocessError):
+            return None
+        return done.stdout.strip() if done.returncode == 0 else None
+
+    top = git("rev-parse", "--show-toplevel")
+    if top is None or Path(top).resolve() != source:
+        return None  # not a checkout of this project (e.g. a venv inside another repository)
+    commit = git("rev-parse", "--short=12", "HEAD")
+    if commit is None:
+        return None
+    changed = git("status", "--porcelain", "--untracked-files=no")
+    return f"{commit} + changes" if changed else commit
+
+
+def version_text() -> str:
+    """``twostep --version``: twostep's version and commit, and what it runs on (versions
+    from the installed metadata: nothing heavy is imported)."""
+    commit = git_commit()
+    lines = [
+        f"twostep {_distribution_version('twostep')}"
+        + (f" (git {commit})" if commit else " (installed package, no git checkout)"),
+        f"Python {platform.python_version()} on {platform.system()} {platform.machine()}",
+        f"Fast Downward {fast_downward_version()} "
+        f"(up-fast-downward {_distribution_version('up-fast-downward')})",
+    ]
+    for label, name in (
+        ("unified-planning", "unified-planning"),
+        ("Hydra", "hydra-core"),
+        ("Prefect", "prefect"),
+        ("MLflow", "mlflow"),
+        ("litellm", "litellm"),
+    ):
+        lines.append(f"{label} {_distribution_version(name)}")
     return "\n".join(lines)

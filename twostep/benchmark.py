@@ -17,11 +17,22 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 
 from twostep.pddl import PDDLError, Problem, load_problem
 
-DEFAULT_DATA_ROOT = Path(__file__).resolve().parent.parent / "data"
+
+def _installed_data_root() -> Path:
+    """The benchmark data installed with the package (``twostep.data``: the source tree's
+    ``data/``, see pyproject.toml), wherever the process runs."""
+    try:
+        return Path(str(resources.files("twostep.data")))
+    except ModuleNotFoundError:  # a source tree on sys.path that was never installed
+        return Path(__file__).resolve().parent.parent / "data"
+
+
+DEFAULT_DATA_ROOT = _installed_data_root()
 _TASK_FILE = re.compile(r"^p(\d+)\.pddl$")
 
 
