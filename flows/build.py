@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 
 from flows.checks import JobError, check_values
 from flows.config import TwostepConfig
-from twostep.benchmark import BenchmarkTask, load_task
+from twostep.benchmark import BenchmarkTask, load_task, task_path
 from twostep.decomposers.base import Decomposer
 from twostep.embodied import ExecutorSettings
 from twostep.execution import SearchBudget
@@ -99,8 +99,51 @@ def load_job_task(cfg: TwostepConfig) -> BenchmarkTask:
 
 
 def check_job(cfg: TwostepConfig) -> None:
-    """Reject a config that cannot run, before any work (and before any server starts)."""
-    check_values(cfg)  # every value in range, one line naming the key and allowed values
+    """Reject a config that cannot run, before any work (and before any server starts or
+    anything heavy is imported): every value in range (one line naming the key and the
+    allowed values), and the task's files where the config says they are."""
+    check_values(cfg)
+    task_path(cfg.domain.name, int(cfg.task), Path(cfg.data.root))  # BenchmarkError
+
+
+def check_task(cfg: TwostepConfig, task: BenchmarkTask) -> None:
+    """What needs the task read: agent predicates the domain has (every method), and a
+    kitchen for ``executor=embodied``; before any planning."""
+    predicates = task.problem.domain.predicates
+    unknown = [p for p in cfg.domain.agent_predicates if str(p).lower() not in predicates]
+    if unknown:
+        raise JobError(
+            f"domain.agent_predicates: {', '.join(unknown)} not in domain '{cfg.domain.name}' "
+            f"({task.domain_path}); its predicates: {', '.join(sorted(predicates))}"
+        )
+    if cfg.executor.name == "embodied":
+        check_kitchen(task)
+
+
+def check_kitchen(task: BenchmarkTask) -> None:
+    """``executor=embodied`` runs plans on the task's floor plan: the domain folder's
+    kitchen.yaml, or the grid of its location objects. Neither there, or a kitchen.yaml
+    that cannot be read, is one line naming the file or the domain."""
+    import yaml
+
+    from twostep.embodied import FloorPlanError, task_floor_plan
+
+    kitchen = task.domain_path.parent / "kitchen.yaml"
+    try:
+        task_floor_plan(task.problem, task.domain_path.parent)
+    except yaml.YAMLError as error:
+        mark = getattr(error, "problem_mark", None)
+        where = f"{kitchen}:{mark.line + 1}" if mark is not None else str(kitchen)
+        problem = getattr(error, "problem", None) or str(error).strip().splitlines()[0]
+        raise JobError(f"{where}: not valid YAML ({problem})") from None
+    except FloorPlanError as error:
+        if kitchen.is_file():
+            raise JobError(f"{kitchen}: {error}") from None
+        raise JobError(
+            f"executor=embodied needs a kitchen: domain '{task.domain_name}' has no "
+            f"kitchen.yaml in {kitchen.parent} and no location objects to lay out "
+            "(the kitchen domain is alfworld)"
+        ) from None
 
 
 @contextmanager
@@ -205,6 +248,7 @@ def build_job(cfg: TwostepConfig) -> Iterator[Job]:
     start = time.perf_counter()
     task = load_job_task(cfg)
     task_load_s = time.perf_counter() - start
+    check_task(cfg, task)
     with open_decomposer(cfg) as decomposer:
         request = MethodRequest(
             task,

@@ -10,6 +10,7 @@ multirun (the jobs of a sweep write where the sweep was checked).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -33,12 +34,22 @@ def _choice(key: str, value: Any, allowed: Iterable[str]) -> str | None:
     return f"{key}={value} is not allowed (allowed: {', '.join(allowed)})"
 
 
-def _positive(key: str, value: Any) -> str | None:
+# The longest time limit a key may set: the planner's wall-clock guard (1.25 x its limit +
+# 15 s) must fit the operating system's poll() timeout (2**31 - 1 ms, about 24.8 days).
+MAX_SECONDS = 1_000_000
+
+
+def _seconds(key: str, value: Any) -> str | None:
+    """A time limit: a finite number of seconds, > 0 and at most :data:`MAX_SECONDS`."""
     try:
         number = float(value)
     except (TypeError, ValueError):
         return f"{key}={value} must be a number > 0"
-    return None if number > 0 else f"{key}={value} must be > 0"
+    if not number > 0:
+        return f"{key}={value} must be > 0"
+    if not math.isfinite(number) or number > MAX_SECONDS:
+        return f"{key}={value} is too large (allowed: > 0 and at most {MAX_SECONDS} seconds)"
+    return None
 
 
 def value_problems(cfg: Any) -> list[str]:
@@ -46,18 +57,20 @@ def value_problems(cfg: Any) -> list[str]:
     # Imported here: the writability check of every run needs none of this.
     from twostep.execution.model import MODES as SCORE_MODES
     from twostep.llm.client import MODES as LLM_MODES
+    from twostep.llm.client import key_env_problem
     from twostep.methods.registry import DECOMPOSERS, METHODS
 
     problems = [
         _choice("score_mode", cfg.score_mode, SCORE_MODES),
         _choice("method", cfg.method.name, METHODS),
         _choice("llm.mode", cfg.llm.mode, LLM_MODES),
-        _positive("planner.time_limit_s", cfg.planner.time_limit_s),
-        _positive("llm.timeout_s", cfg.llm.timeout_s),
-        _positive("mlflow.connect_timeout_s", cfg.mlflow.connect_timeout_s),
-        _positive(
+        _seconds("planner.time_limit_s", cfg.planner.time_limit_s),
+        _seconds("llm.timeout_s", cfg.llm.timeout_s),
+        _seconds("mlflow.connect_timeout_s", cfg.mlflow.connect_timeout_s),
+        _seconds(
             "orchestration.server_startup_timeout_s", cfg.orchestration.server_startup_timeout_s
         ),
+        key_env_problem(cfg.llm.api_key_env),
     ]
     if cfg.method.name == "twostep":
         problems.append(_choice("decomposer", cfg.decomposer.name, DECOMPOSERS))
@@ -68,7 +81,7 @@ def value_problems(cfg: Any) -> list[str]:
     if cfg.score_max_nodes is not None and int(cfg.score_max_nodes) < 0:
         problems.append(f"score_max_nodes={cfg.score_max_nodes} must be >= 0 (or null)")
     if cfg.score_time_limit_s is not None:
-        problems.append(_positive("score_time_limit_s", cfg.score_time_limit_s))
+        problems.append(_seconds("score_time_limit_s", cfg.score_time_limit_s))
     if int(cfg.llm.max_retries) < 0:
         problems.append(f"llm.max_retries={cfg.llm.max_retries} must be >= 0")
     return [p for p in problems if p]
@@ -79,6 +92,30 @@ def check_values(cfg: Any) -> None:
     problems = value_problems(cfg)
     if problems:
         raise JobError(problems[0])
+
+
+def secret_problem(cfg: Any) -> str | None:
+    """A key pasted where a variable's name belongs (``llm.api_key_env``), in the config or
+    in any value a sweep's override lists: refused before Hydra writes the config and the
+    overrides to disk. The message never repeats the value."""
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+
+    from twostep.llm.client import key_env_problem
+
+    values = [cfg.llm.api_key_env]
+    overrides = [str(o) for o in cfg.hydra.overrides.task] if "hydra" in cfg else []
+    named = [o for o in overrides if o.lstrip("+~").split("=", 1)[0] == "llm.api_key_env"]
+    try:
+        for override in OverridesParser.create().parse_overrides(named):
+            sweep = override.is_sweep_override()
+            values += list(override.sweep_iterator()) if sweep else [override.value()]
+    except Exception:  # Hydra refuses the override itself, with its own message
+        pass
+    for value in values:
+        problem = key_env_problem(None if value is None else str(value))
+        if problem:
+            return problem
+    return None
 
 
 # ----------------------------------------------------------------- writable locations

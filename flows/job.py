@@ -3,9 +3,11 @@
 :func:`execute_job` is what the ``twostep`` command runs for every job, in a single run
 and in each job of a sweep (any launcher):
 
-1. check the MLflow store (single run; a sweep's callback checked it already):
-   :class:`~flows.tracking.runs.TrackingError` before any work;
-2. a job whose key is in the job store is read back, not recomputed (``reused``);
+1. check the job's input (values in range, data root, domain, task: :func:`flows.build.
+   check_job`) and the MLflow store (single run; a sweep's callback checked it already):
+   one line before any work, nothing heavy imported yet;
+2. a job whose key is in the job store as a whole result is read back, not recomputed
+   (``reused``); a process computing a job holds its lock, so a second one waits for it;
 3. otherwise build it from its config, once (:func:`flows.build.build_job`), and run it
    (:func:`compute_job`): as the Prefect flow on the sweep's server (started on demand by
    the first job that needs it, then waited for); a single run as a flow on a running
@@ -13,10 +15,11 @@ and in each job of a sweep (any launcher):
    temporary server of its own; otherwise (a single run by default,
    ``orchestration.prefect=false``) the library directly;
 4. write result.json and the other files to the job's Hydra directory;
-5. log params, metrics, artifacts and status to the job's MLflow run
-   (:class:`~flows.tracking.runs.JobRunLog`), found again by ``twostep.job_key`` (a re-run
-   adds no duplicate), child of the sweep's parent run; skipped when the reused result is
-   known to be logged there already.
+5. under the job's lock, log params, metrics, artifacts and status to the job's MLflow
+   run (:class:`~flows.tracking.runs.JobRunLog`), found again by ``twostep.job_key`` (a
+   re-run adds no duplicate), child of the sweep's parent run; skipped when the run the
+   job store remembers is still in the MLflow store, logged again from the job store's
+   record when it is not (MLflow is a view the job store can rebuild).
 
 A job that raises is recorded as ``failed`` (result.json, MLflow status and error), is
 not stored (a re-run tries again), and the sweep goes on.
@@ -34,7 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from flows.artifacts import write_job_files
-from flows.build import Job, build_job
+from flows.build import Job, build_job, check_job
 from flows.checks import JobError
 from flows.config import TwostepConfig, typed
 from flows.console import one_line
@@ -42,9 +45,15 @@ from flows.services import running_prefect_api
 from flows.step_stats import StepStats, counting_steps
 from flows.store import JobStore, job_config, job_inputs, job_key
 from flows.sweep_state import SweepState
-from flows.tracking.runs import DEFAULT_EXPERIMENT, JobRunLog, check_store, job_record
+from flows.tracking.runs import (
+    DEFAULT_EXPERIMENT,
+    JobRunLog,
+    check_store,
+    job_record,
+    run_exists,
+)
 from twostep.benchmark import BenchmarkError
-from twostep.identity import job_name
+from twostep.identity import is_complete_result, job_name
 from twostep.pddl import PDDLError
 
 # Errors in what the user asked for: one line, no traceback.
@@ -234,23 +243,73 @@ def execute_job(
     key = job_key(config, job_inputs(config))
     cfg = typed(cfg)
     name = job_name(config)
+    refused = _input_problem(cfg)  # values, data, keys: one line, before any work
     tracking = bool(cfg.mlflow.enabled)
     if tracking and sweep is None:
         check_store(str(cfg.mlflow.tracking_uri), float(cfg.mlflow.connect_timeout_s))
     store = JobStore(str(cfg.orchestration.job_store))
-    stored = store.load_or_claim(key) if cfg.orchestration.reuse_results else None
-    experiment = _experiment(cfg, sweep)
-    uri = str(cfg.mlflow.tracking_uri)
-    logged = stored is not None and f"{uri} {experiment}" in store.logged_to(key)
+    reuse = cfg.orchestration.reuse_results and refused is None
+    stored = store.load_or_claim(key, accept=is_complete_result) if reuse else None
+    destination = MlflowDestination(str(cfg.mlflow.tracking_uri), _experiment(cfg, sweep))
     run_log = None
-    if tracking and not logged:
+    if tracking and not destination.holds(store, key):
         location = cfg.mlflow.artifact_location
-        run_log = JobRunLog.open(uri, location, experiment, sweep, single_run=tracking_worker)
-    stats, error, details, input_error = StepStats(), None, None, False
+        run_log = JobRunLog.open(
+            destination.uri, location, destination.experiment, sweep, single_run=tracking_worker
+        )
+    try:
+        outcome, details = _run_or_reuse(
+            cfg, config, (key, name), sweep, stored, refused, store, start
+        )
+        files = write_job_files(job_dir, outcome.result)
+        if details:
+            (job_dir / "error.txt").write_text(details)
+        tracking_start = time.perf_counter()
+        if run_log is not None:
+            # Under the job's lock: two processes that both hold this job (two sweeps at
+            # once) never both create its run.
+            with store.locked(key):
+                _log_run(run_log, outcome, config, files, store, destination)
+    finally:
+        store.release(key)  # a process waiting for this job reads its result and run now
+        if run_log is not None:
+            run_log.close()
+    # With MLflow logging: what the job cost end to end (the progress record, the bench).
+    outcome.timings["tracking_s"] = time.perf_counter() - tracking_start
+    outcome.timings["job_wall_time_s"] = job_wall = time.perf_counter() - start
+    outcome.timings["orchestration_overhead_s"] = max(0.0, job_wall - _work(outcome))
+    return outcome
+
+
+def _input_problem(cfg: TwostepConfig) -> str | None:
+    """What is wrong with the job's input before any work (None: nothing found): values
+    out of range, a data root, domain or task that is not there (:func:`check_job`)."""
+    try:
+        check_job(cfg)
+    except INPUT_ERRORS as exc:
+        return one_line(exc, name_type=False)
+    return None
+
+
+def _run_or_reuse(
+    cfg: TwostepConfig,
+    config: dict[str, Any],
+    identity: tuple[str, str],
+    sweep: SweepState | None,
+    stored: dict[str, Any] | None,
+    refused: str | None,
+    store: JobStore,
+    start: float,
+) -> tuple[JobOutcome, str | None]:
+    """The job's outcome (the stored result, or computed and stored now) and, for a job
+    that raised, its traceback (``identity``: its key and name; ``start``: when it started)."""
+    key, name = identity
+    stats, error, details = StepStats(), refused, None
+    input_error = refused is not None
     compute_timings: dict[str, float] = {"server_wait_s": 0.0}
     if stored is not None:
         result = stored
-    else:
+    elif error is None:
         try:
             result, compute_timings = compute_job(cfg, config, name, sweep, stats)
         except INPUT_ERRORS as exc:
@@ -259,22 +318,11 @@ def execute_job(
             error, details = one_line(exc), traceback.format_exc()
         if error is None:
             store.save(key, config, result)  # unless it did not finish (llm_error, error)
-        else:
-            result = failed_result(config, error)
-    store.release(key)  # a second process waiting for this job reads its result now
+    if error is not None:
+        result = failed_result(config, error)
     outcome = _outcome(name, key, result, stored is not None, stats, compute_timings, start)
     outcome.input_error = input_error
-    files = write_job_files(job_dir, outcome.result)
-    if details:
-        (job_dir / "error.txt").write_text(details)
-    tracking_start = time.perf_counter()
-    if run_log is not None:
-        _log_run(run_log, outcome, config, files, store, uri, experiment)
-    # With MLflow logging: what the job cost end to end (the progress record, the bench).
-    outcome.timings["tracking_s"] = time.perf_counter() - tracking_start
-    outcome.timings["job_wall_time_s"] = job_wall = time.perf_counter() - start
-    outcome.timings["orchestration_overhead_s"] = max(0.0, job_wall - _work(outcome))
-    return outcome
+    return outcome, details
 
 
 def _work(outcome: JobOutcome) -> float:
@@ -316,36 +364,79 @@ def _outcome(
     return outcome
 
 
+@dataclass(frozen=True)
+class MlflowDestination:
+    """Where a job's run goes: a tracking store and an experiment in it."""
+
+    uri: str
+    experiment: str
+
+    @property
+    def name(self) -> str:
+        """How the job store remembers it (:meth:`JobStore.logged_to`)."""
+        return f"{self.uri} {self.experiment}"
+
+    def holds(self, store: JobStore, key: str) -> bool:
+        """Whether the job's run, logged here before, is still in the store (a lost or
+        emptied store, or a deleted run: it is logged again)."""
+        run_id = store.logged_to(key).get(self.name)
+        return run_id is not None and run_exists(self.uri, run_id)
+
+
 def _log_run(
     run_log: JobRunLog,
     outcome: JobOutcome,
     config: dict[str, Any],
     files: list[tuple[Path, str | None]],
     store: JobStore,
-    uri: str,
-    experiment: str,
+    destination: MlflowDestination,
 ) -> None:
-    """Log the job to its MLflow run and remember where; a failure is a warning (the
-    result is stored: the next run logs it again)."""
+    """Log the job to its MLflow run and remember where and what; a failure is a warning
+    (the result is stored: the next run logs it again).
+
+    The job store is the source of truth and MLflow a view of it: a job logged here
+    before whose run the store has lost is logged again with the record it had (same
+    params, metrics, tags; the files of its first run directory when they are still
+    there), tagged ``twostep.restored_from_job_store``.
+    """
     try:
-        record = job_record(
-            key=outcome.key,
-            name=outcome.name,
-            status=outcome.status.value,
-            error=outcome.error,
-            reused=outcome.reused,
-            config=config,
-            result=outcome.result,
-            timings=outcome.timings,
-            files=files,
-        )
+        if destination.holds(store, outcome.key):  # a parallel process logged it meanwhile
+            outcome.mlflow_run_id = store.logged_to(outcome.key)[destination.name]
+            return
+        record = _restored_record(store, outcome.key, destination)
+        if record is None:
+            record = job_record(
+                key=outcome.key,
+                name=outcome.name,
+                status=outcome.status.value,
+                error=outcome.error,
+                reused=outcome.reused,
+                config=config,
+                result=outcome.result,
+                timings=outcome.timings,
+                files=files,
+            )
+        elif not all(Path(path).is_file() for path, _ in record["files"]):
+            record["files"] = [[str(path), folder] for path, folder in files]
         outcome.mlflow_run_id = run_log.log(record)
-        store.mark_logged(outcome.key, uri, experiment, outcome.mlflow_run_id)
+        record.pop("restored", None)
+        store.mark_logged(
+            outcome.key, destination.uri, destination.experiment, outcome.mlflow_run_id, record
+        )
     except Exception as exc:
         outcome.tracking_error = one_line(exc)
         print(
             f"warning: {outcome.name}: not logged to MLflow: {outcome.tracking_error}",
             file=sys.stderr,
         )
-    finally:
-        run_log.close()
+
+
+def _restored_record(
+    store: JobStore, key: str, destination: MlflowDestination
+) -> dict[str, Any] | None:
+    """The record to log again when the store lost the job's run (None: not logged there
+    before, or logged before the job store kept records)."""
+    if destination.name not in store.logged_to(key):
+        return None
+    record = store.logged_record(key, destination.name)
+    return None if record is None else {**record, "restored": True}

@@ -14,7 +14,8 @@ grouping of runs (``twostep/report``) all ask this module.
   subgoal file, an LLM script or a prompt gives a new key, so the job is computed again;
   a re-run with unchanged inputs finds the stored result.
 * A result is **stored** (reused by later runs) unless its status says the job did not
-  finish its work (:func:`is_storable`): a re-run tries those again.
+  finish its work (:func:`is_storable`): a re-run tries those again; a stored entry is
+  reused only when it is a whole result (:func:`is_complete_result`).
 
 Plain data in, plain data out; the only I/O is reading the input files' bytes.
 """
@@ -43,6 +44,9 @@ NOT_IDENTITY_KEYS: frozenset[str] = frozenset(
 
 # Results with these statuses did not finish their work: never stored, retried by a re-run.
 UNFINISHED_STATUSES: frozenset[str] = frozenset({"error", "llm_error", "failed"})
+
+# What every result has (``RunResult.to_dict``): a stored entry without them is no result.
+RESULT_KEYS: frozenset[str] = frozenset({"domain", "task", "method", "agents", "success", "status"})
 
 _PROMPTS = Path(__file__).resolve().parent / "prompts"
 
@@ -179,6 +183,16 @@ def input_digests(files: Mapping[str, Path]) -> dict[str, str]:
 def is_storable(result: Mapping[str, Any]) -> bool:
     """Whether a finished job's result may be reused by later runs."""
     return str(result.get("status")) not in UNFINISHED_STATUSES and "error" not in result
+
+
+def is_complete_result(result: Mapping[str, Any]) -> bool:
+    """Whether a stored entry is the whole result of a finished job (an emptied, cut or
+    hand-edited entry is not: the job is computed again)."""
+    return (
+        set(result) >= RESULT_KEYS
+        and isinstance(result.get("success"), bool)
+        and is_storable(result)
+    )
 
 
 def _task_text(task: Any) -> str:

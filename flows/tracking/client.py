@@ -2,7 +2,8 @@
 (:class:`Tracker`, :func:`log_job_run`), and the check of a store before any work.
 
 * :func:`check_store` runs before any work: a store that cannot be reached or written
-  is a one-line :class:`TrackingError`, not a traceback after an hour of planning.
+  is a one-line :class:`TrackingError`, not a traceback after an hour of planning;
+  :func:`run_exists` tells cheaply whether a run the job store remembers is still there.
 * One experiment per sweep; the sweep's parent run is found again by its
   ``twostep.sweep_key`` tag and each job's run by its ``twostep.job_key`` tag, so a
   sweep started again after ``kill -9`` reuses them instead of adding duplicates.
@@ -13,6 +14,7 @@ MLflow is imported lazily (seconds): a finished job that needs no logging never 
 from __future__ import annotations
 
 import hashlib
+import json
 import re
 import time
 import urllib.error
@@ -21,7 +23,7 @@ from collections.abc import Callable, Iterable, Mapping
 from functools import partial
 from pathlib import Path
 from typing import Any, TypeVar
-from urllib.parse import urlparse
+from urllib.parse import quote, urlparse
 
 from flows.console import one_line
 from flows.locations import sqlite_path, write_problem
@@ -37,6 +39,7 @@ from flows.tracking.contents import (
     metric_points,
 )
 from flows.tracking.template import quiet_mlflow_logging, seed_store
+from twostep.redaction import redact_text
 
 T = TypeVar("T")
 
@@ -55,6 +58,7 @@ def check_store(tracking_uri: str, timeout_s: float = 10.0) -> None:
     parsed = urlparse(tracking_uri)
     scheme = parsed.scheme
     hint = "set mlflow.tracking_uri=<uri> or mlflow.enabled=false"
+    shown = redact_text(tracking_uri)  # the messages below never show URL credentials
     if scheme in ("http", "https"):
         url = tracking_uri.rstrip("/") + "/health"
         try:
@@ -65,28 +69,60 @@ def check_store(tracking_uri: str, timeout_s: float = 10.0) -> None:
         except (urllib.error.URLError, OSError) as error:
             reason = getattr(error, "reason", error)
             raise TrackingError(
-                f"MLflow tracking server {tracking_uri} cannot be reached: {reason} ({hint})"
+                f"MLflow tracking server {shown} cannot be reached: {reason} ({hint})"
             ) from None
         if status != 200:
-            raise TrackingError(f"MLflow tracking server {tracking_uri} answered {status} ({hint})")
+            raise TrackingError(f"MLflow tracking server {shown} answered {status} ({hint})")
         return
     if scheme == "sqlite":
         database = sqlite_path(tracking_uri)
         if database is None:
             return
-        _check_writable(database.parent, f"MLflow store {tracking_uri}", hint)
+        _check_writable(database.parent, f"MLflow store {shown}", hint)
         if database.exists():
             _check_sqlite(database, tracking_uri, hint)
         return
     if scheme in ("", "file"):
-        _check_writable(Path(parsed.path or tracking_uri), f"MLflow store {tracking_uri}", hint)
+        _check_writable(Path(parsed.path or tracking_uri), f"MLflow store {shown}", hint)
         return
     try:
         mlflow_client(tracking_uri).search_experiments(max_results=1)
     except Exception as error:
         raise TrackingError(
-            f"MLflow store {tracking_uri} cannot be used: {one_line(error, limit=300)}"
+            f"MLflow store {shown} cannot be used: {one_line(error, limit=300)}"
         ) from None
+
+
+def run_exists(tracking_uri: str, run_id: str, timeout_s: float = 10.0) -> bool:
+    """Whether the store still holds the active run ``run_id``, asked cheaply: a read of a
+    SQLite store, a GET to a tracking server (MLflow is not imported). False also when it
+    cannot be told cheaply: the caller then logs through the interface, which finds a run
+    that exists by its job key (no duplicate)."""
+    database = sqlite_path(tracking_uri)
+    if database is not None:
+        if not database.is_file():
+            return False
+        import sqlite3
+        from contextlib import closing
+
+        try:
+            with closing(sqlite3.connect(f"file:{database}?mode=ro", uri=True, timeout=30.0)) as db:
+                rows = db.execute(
+                    "SELECT lifecycle_stage FROM runs WHERE run_uuid = ?", (run_id,)
+                ).fetchall()
+        except sqlite3.Error:  # no tables (an emptied file), or not a database
+            return False
+        return rows == [("active",)]
+    if urlparse(tracking_uri).scheme in ("http", "https"):
+        url = f"{tracking_uri.rstrip('/')}/api/2.0/mlflow/runs/get?run_id={quote(run_id)}"
+        try:
+            with urllib.request.urlopen(url, timeout=timeout_s) as response:
+                answer = json.load(response)
+        except (OSError, ValueError):  # 404 for a lost run, or no answer
+            return False
+        info = answer.get("run", {}).get("info", {}) if isinstance(answer, dict) else {}
+        return bool(info.get("lifecycle_stage") == "active")
+    return False
 
 
 def _check_sqlite(path: Path, uri: str, hint: str) -> None:

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from twostep.params import flatten_config
+from twostep.redaction import redact_config
 
 KIND = "twostep.kind"
 JOB_KEY = "twostep.job_key"
@@ -21,6 +22,7 @@ STATUS = "twostep.status"
 ERROR = "twostep.error"
 SCRIPTED = "twostep.scripted_llm"
 REUSED = "twostep.reused"
+RESTORED = "twostep.restored_from_job_store"  # logged again: the store had lost the run
 PARENT = "mlflow.parentRunId"
 
 DEFAULT_EXPERIMENT = "twostep"
@@ -55,6 +57,8 @@ def job_tags(record: Mapping[str, Any]) -> dict[str, str]:
     }
     if record["error"]:
         tags[ERROR] = str(record["error"])
+    if record.get("restored"):
+        tags[RESTORED] = "true"
     return tags
 
 
@@ -68,13 +72,14 @@ def experiment_name_for(overrides: Iterable[str]) -> str:
 
 
 def job_params(config: Mapping[str, Any]) -> dict[str, str]:
-    """The flattened resolved config as params; secret-looking keys are left out.
+    """The flattened resolved config as params; secret-looking keys are left out, and
+    credentials inside URLs masked (:func:`twostep.redaction.redact_config`).
 
     ``*_env`` keys name an environment variable (``llm.api_key_env: OPENAI_API_KEY``),
-    never hold its value, so they are kept.
+    never hold its value, so they are kept (a value that looks like a key: ``***``).
     """
     params: dict[str, str] = {}
-    for key, text in flatten_config(config).items():
+    for key, text in flatten_config(redact_config(config)).items():
         if key.startswith("hydra.") or (_SECRET.search(key) and not key.endswith("_env")):
             continue
         params[key] = clip(text, PARAM_LIMIT)

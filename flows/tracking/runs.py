@@ -1,7 +1,7 @@
 """The one interface the rest of ``flows/`` calls for MLflow: :func:`check_store` before
-any work, :class:`JobRunLog` for a job's run, :func:`end_sweep_run` for a sweep's parent
-run (and the names they need: :class:`TrackingError`, :func:`job_record`,
-:func:`experiment_name_for`).
+any work, :func:`run_exists` for a run the job store remembers, :class:`JobRunLog` for a
+job's run, :func:`end_sweep_run` for a sweep's parent run (and the names they need:
+:class:`TrackingError`, :func:`job_record`, :func:`experiment_name_for`).
 
 Behind :class:`JobRunLog` are three writers, chosen when the job starts so that the slow
 part (importing MLflow, opening its store: 2-4 s) overlaps the job or is skipped:
@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 from flows.locations import sqlite_path
 from flows.servers import file_lock
-from flows.tracking.client import Tracker, TrackingError, check_store, log_job_run
+from flows.tracking.client import Tracker, TrackingError, check_store, log_job_run, run_exists
 from flows.tracking.contents import DEFAULT_EXPERIMENT, experiment_name_for, job_record
 from flows.tracking.sqlite import SqliteJobLog
 from flows.tracking.worker import TrackingWorker
@@ -42,6 +42,7 @@ __all__ = [
     "end_sweep_run",
     "experiment_name_for",
     "job_record",
+    "run_exists",
 ]
 
 
