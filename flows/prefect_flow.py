@@ -69,6 +69,7 @@ from twostep.methods import Steps
 from twostep.methods.steps import progress, score
 from twostep.pddl import Fact, Problem
 from twostep.planner import PlannerSettings, PlanResult, Status
+from twostep.redaction import redact_config
 
 if TYPE_CHECKING:
     from flows.build import Job
@@ -407,7 +408,8 @@ def run_flow(
     running = _RUNNING.set((built, stats if stats is not None else StepStats(), submit))
     try:
         with job_settings(api_url, storage), tags(*flow_tags):
-            state = job_flow.with_options(**options)(dict(config), return_state=True)
+            # The parameter is what Prefect stores and shows: no URL credentials in it.
+            state = job_flow.with_options(**options)(redact_config(dict(config)), return_state=True)
     finally:
         _RUNNING.reset(running)
     result: dict[str, Any] = state.result()  # raises the exception the job raised

@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from hydra.experimental.callback import Callback
+from hydra.types import RunMode
 from omegaconf import DictConfig
 
 from flows.console import footer, header
@@ -47,7 +48,8 @@ from flows.servers import (
     stop_sweep_server,
 )
 from flows.sweep_state import SweepState, count_jobs, job_records, sweep_key, sweep_overrides
-from twostep.files import write_json_atomic
+from twostep.files import write_json_atomic, write_text_atomic
+from twostep.redaction import redact_text
 
 
 def _set_hydra_config(config: DictConfig) -> None:
@@ -57,13 +59,19 @@ def _set_hydra_config(config: DictConfig) -> None:
         HydraConfig.instance().set_config(config)  # for ${hydra:...} in output.root
 
 
-def _check_writable(config: DictConfig, run_dir: Path) -> None:
-    from flows.checks import ValidationError, check_writable
+def _check_before_writing(config: DictConfig, run_dir: Path) -> None:
+    """Before Hydra writes the run's (or sweep's) directory and config: no key where a
+    variable's name belongs, and every output location writable. One line, exit 2."""
+    from flows.checks import ValidationError, check_writable, secret_problem
 
-    try:
-        check_writable(config, run_dir)
-    except ValidationError as error:
-        print(f"error: {error}", file=sys.stderr, flush=True)
+    problem = secret_problem(config)
+    if problem is None:
+        try:
+            check_writable(config, run_dir)
+        except ValidationError as error:
+            problem = str(error)
+    if problem is not None:
+        print(f"error: {problem}", file=sys.stderr, flush=True)
         sys.exit(2)
 
 
@@ -86,12 +94,28 @@ def _refuse_running_sweep(sweep_dir: Path) -> None:
         sys.exit(2)
 
 
+def mask_credentials(files: list[Path]) -> None:
+    """Rewrite each file with the credentials inside its URLs masked (``https://***@host``);
+    a file without any is left untouched."""
+    for path in files:
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, ValueError):
+            continue
+        masked = redact_text(text)
+        if masked != text:
+            write_text_atomic(path, masked)
+
+
 class SweepCallback(Callback):
     """Sets up and tears down what the jobs of one multirun share (see module doc)."""
+
+    composed = False  # Hydra made one: the command line composed into a config
 
     def __init__(self) -> None:
         self._cluster: Any = None
         self._state: SweepState | None = None
+        SweepCallback.composed = True
 
     def __getstate__(self) -> dict[str, Any]:
         # joblib pickles the callbacks into its workers: the cluster stays here.
@@ -104,13 +128,25 @@ class SweepCallback(Callback):
     def on_run_start(self, config: DictConfig, **kwargs: Any) -> None:
         # Before Hydra creates the run directory: a read-only output root is one line.
         _set_hydra_config(config)
-        _check_writable(config, Path(str(config.hydra.run.dir)))
+        _check_before_writing(config, Path(str(config.hydra.run.dir)))
+
+    def on_job_start(self, config: DictConfig, **kwargs: Any) -> None:
+        # Hydra has just saved the job's config and overrides (and a sweep's multirun.yaml):
+        # credentials inside URLs are masked in those copies (the job keeps its values).
+        runtime = config.hydra.runtime.output_dir
+        files = []
+        if config.hydra.output_subdir is not None:
+            folder = Path(str(runtime)) / str(config.hydra.output_subdir)
+            files += [folder / "config.yaml", folder / "hydra.yaml", folder / "overrides.yaml"]
+        if config.hydra.mode == RunMode.MULTIRUN:
+            files.append(Path(str(config.hydra.sweep.dir)) / "multirun.yaml")
+        mask_credentials(files)
 
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
         quiet_defaults()
         _set_hydra_config(config)
         sweep_dir = Path(str(config.hydra.sweep.dir)).resolve()
-        _check_writable(config, sweep_dir)
+        _check_before_writing(config, sweep_dir)
         _refuse_running_sweep(sweep_dir)
         overrides = sweep_overrides(config)
         state = SweepState(

@@ -21,6 +21,7 @@ from omegaconf import DictConfig
 
 from twostep.files import write_json_atomic
 from twostep.identity import is_sweep_identity_key
+from twostep.redaction import redact_text
 
 STATE_DIR = ".twostep"
 
@@ -86,6 +87,7 @@ def sweep_overrides(config: DictConfig) -> list[str]:
     for item in config.hydra.overrides.task:
         key, _, value = str(item).partition("=")
         chosen[key] = value
+    chosen = {key: redact_text(value) for key, value in chosen.items()}  # no URL credentials
     return sorted(f"{key}={value}" for key, value in chosen.items() if is_sweep_identity_key(key))
 
 

@@ -19,7 +19,8 @@
   :class:`LLMCallError`) naming the variable to set and the offline alternatives. No key
   is ever printed, logged or stored.
 
-litellm is imported lazily on the first live call (it takes seconds to import).
+litellm is imported lazily on the first live call (it takes seconds to import); the
+import is not counted in the call's time (:attr:`LLMResponse.seconds`).
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from twostep.files import write_json_atomic
+from twostep.redaction import looks_like_a_key, redact_text
 
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 
@@ -122,6 +124,9 @@ class LLMSettings:
     def __post_init__(self) -> None:
         if self.mode not in MODES:
             raise LLMError(f"llm.mode must be one of {', '.join(MODES)}, got '{self.mode}'")
+        problem = key_env_problem(self.api_key_env)
+        if problem:
+            raise LLMError(problem)
         self.cache_dir = Path(self.cache_dir)
         if self.script is not None:
             self.script = Path(self.script)
@@ -157,11 +162,49 @@ class LLMResponse:
     key: str = ""
 
 
-def credentials_message(settings: LLMSettings) -> str:
-    var = settings.key_env or f"the API key variable of provider '{settings.provider}'"
+def key_env_problem(name: str | None) -> str | None:
+    """Why ``name`` cannot be ``llm.api_key_env`` (None: it can). The value is never
+    repeated: it may be a key pasted where the variable's name belongs."""
+    if name is None or not looks_like_a_key(name):
+        return None
     return (
-        f"LLM credentials missing for model {settings.model}: set the environment variable "
-        f"{var}, {OFFLINE_HINT}."
+        "llm.api_key_env looks like a key, not a variable name: give the name of the "
+        "environment variable that holds the key (e.g. llm.api_key_env=OPENAI_API_KEY); "
+        "the value is not shown"
+    )
+
+
+def credentials_message(settings: LLMSettings) -> str:
+    """No key to send: which variable to set (or how to name one), and the offline ways."""
+    where = f"for model {settings.model}"
+    if settings.key_env:
+        return (
+            f"LLM credentials missing {where}: set the environment variable "
+            f"{settings.key_env}, {OFFLINE_HINT}."
+        )
+    return (
+        f"LLM credentials missing {where}: no API key variable is known for provider "
+        f"'{settings.provider or 'unknown'}'; put the key in an environment variable and "
+        f"name it with llm.api_key_env=<VARIABLE>, {OFFLINE_HINT}."
+    )
+
+
+def rejected_message(settings: LLMSettings, status: int | None) -> str:
+    """The provider refused the credentials it got (HTTP 401/403): which key, and where."""
+    server = (
+        redact_text(settings.api_base) if settings.api_base else f"provider '{settings.provider}'"
+    )
+    code = f" (HTTP {status})" if status else ""
+    if settings.key_env:
+        sent = f"the key in the environment variable {settings.key_env}"
+        fix = "check that key"
+    else:
+        placeholder = (settings.api_base or settings.local) and settings.provider == "openai"
+        sent = "a placeholder key (no key variable is set)" if placeholder else "no API key"
+        fix = "if it needs a key, name the variable that holds it with llm.api_key_env=<VARIABLE>"
+    return (
+        f"LLM credentials rejected by {server}{code} for model {settings.model}: "
+        f"it was sent {sent}; {fix}, {OFFLINE_HINT}."
     )
 
 
@@ -206,7 +249,7 @@ class LLMClient:
             "top_p": s.top_p,
             "max_tokens": s.max_tokens,
             "seed": seed,
-            "api_base": "local" if s.local else s.api_base,
+            "api_base": "local" if s.local else (s.api_base and redact_text(s.api_base)),
             "extra": {k: v for k, v in sorted(s.extra.items()) if not _SECRET_PARAM.search(k)},
         }
 
@@ -242,7 +285,13 @@ class LLMClient:
                 f"seed {seed} (request {key[:12]}, prompt ending '...{snippet}'); "
                 "record it once with llm.mode=live"
             )
-        text = self._call_live(request)
+        kwargs, secret = self._call_arguments(request)  # missing credentials: at once
+        # Importing litellm (seconds, once per process) is not the call's time: it would be
+        # charged to the first call of every job as LLM and so planning time.
+        imported = time.perf_counter()
+        _import_litellm()
+        start += time.perf_counter() - imported
+        text = self._call_live(kwargs, secret)
         seconds = time.perf_counter() - start
         if s.use_cache:
             self._write_cache(key, request, text, seconds)
@@ -260,7 +309,8 @@ class LLMClient:
         self._next_answer += 1
         return LLMResponse(text, False, True, "scripted", time.perf_counter() - start)
 
-    def _call_live(self, request: Mapping[str, Any]) -> str:
+    def _call_arguments(self, request: Mapping[str, Any]) -> tuple[dict[str, Any], str | None]:
+        """litellm's arguments for ``request``, and the key among them (None: no key)."""
         s = self.settings
         kwargs: dict[str, Any] = {
             "model": s.model,
@@ -286,6 +336,11 @@ class LLMClient:
             kwargs["api_key"] = secret
         elif (s.api_base or s.local) and s.provider == "openai":
             kwargs["api_key"] = "not-needed"  # OpenAI-compatible servers ignore it
+        return kwargs, secret
+
+    def _call_live(self, kwargs: Mapping[str, Any], secret: str | None) -> str:
+        """litellm's answer, with the one retry loop (the module docstring)."""
+        s = self.settings
         litellm = _import_litellm()
         attempt = 0
         while True:
@@ -293,8 +348,9 @@ class LLMClient:
                 response = litellm.completion(**kwargs)
                 content = response.choices[0].message.content
                 return content if isinstance(content, str) else ""
-            except litellm.AuthenticationError:
-                raise LLMCredentialsError(credentials_message(s)) from None
+            except (litellm.AuthenticationError, litellm.PermissionDeniedError) as exc:
+                status = getattr(exc, "status_code", None)
+                raise LLMCredentialsError(rejected_message(s, status)) from None
             except Exception as exc:
                 if not _retryable(litellm, exc) or attempt >= s.max_retries:
                     what = _scrub(f"{type(exc).__name__}: {exc}", secret)
@@ -357,7 +413,4 @@ def _retryable(litellm: Any, exc: Exception) -> bool:
 
 
 def _scrub(text: str, secret: str | None) -> str:
-    text = " ".join(text.split())
-    if secret:
-        text = text.replace(secret, "***")
-    return re.sub(r"\b(sk-[A-Za-z0-9_\-]{4})[A-Za-z0-9_\-*]+", r"\1***", text)[:400]
+    return redact_text(" ".join(text.split()), [secret])[:400]

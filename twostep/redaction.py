@@ -1,0 +1,69 @@
+"""Secrets kept out of everything that is stored or printed: the one owner of these rules.
+
+* Credentials inside a URL (``https://user:pass@host/v1``) become ``https://***@host/v1``
+  (:func:`redact_text`), in any text: a config value, an error line, a file's content.
+* A setting that names an environment variable (``llm.api_key_env``) must hold a variable
+  *name*; a value that is not one, or that looks like a random token, is taken for a
+  pasted key (:func:`looks_like_a_key`): refused before any work, and written as ``***``
+  wherever a config is stored (:func:`redact_config`).
+* A secret the caller knows (the API key of a call) is replaced wherever it appears, and
+  so is anything shaped like a provider key (``sk-...``).
+
+Plain functions on text and plain data; nothing here reads the environment.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+MASK = "***"
+
+# scheme://userinfo@ : the userinfo part (user, user:password, or a token) is the secret.
+_URL_CREDENTIALS = re.compile(r"\b([A-Za-z][A-Za-z0-9+.\-]*://)[^/@\s'\"<>]+@")
+# Provider keys that announce themselves (OpenAI, Anthropic, many gateways: sk-..., sk-ant-...).
+_PROVIDER_KEY = re.compile(r"\b(sk-[A-Za-z0-9_\-]{4})[A-Za-z0-9_\-*]+")
+_VARIABLE_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def is_variable_name(text: str) -> bool:
+    """Whether ``text`` can name an environment variable (letters, digits, ``_``)."""
+    return _VARIABLE_NAME.fullmatch(text) is not None
+
+
+def looks_like_a_key(value: str) -> bool:
+    """Whether a value given as a variable's name is rather a key: not a variable name at
+    all (``sk-...``), or a long token that mixes lower- and upper-case letters and digits
+    the way generated keys do and variable names do not."""
+    if not is_variable_name(value):
+        return True
+    mixed = (
+        any(c.islower() for c in value)
+        and any(c.isupper() for c in value)
+        and any(c.isdigit() for c in value)
+    )
+    return len(value) >= 20 and mixed
+
+
+def redact_text(text: str, secrets: Iterable[str | None] = ()) -> str:
+    """``text`` with URL credentials, provider keys and the given ``secrets`` masked."""
+    for secret in secrets:
+        if secret:
+            text = text.replace(secret, MASK)
+    text = _URL_CREDENTIALS.sub(rf"\1{MASK}@", text)
+    return _PROVIDER_KEY.sub(rf"\1{MASK}", text)
+
+
+def redact_config(data: Any, key: str = "") -> Any:
+    """A copy of a (nested) config with every string redacted (:func:`redact_text`) and a
+    ``*_env`` value that looks like a key replaced by ``***``."""
+    if isinstance(data, Mapping):
+        return {k: redact_config(v, str(k)) for k, v in data.items()}
+    if isinstance(data, list | tuple):
+        return [redact_config(v, key) for v in data]
+    if isinstance(data, str):
+        if key.endswith("_env") and looks_like_a_key(data):  # names a variable: no key here
+            return MASK
+        return redact_text(data)
+    return data
