@@ -252,7 +252,8 @@ def execute_job(
     stored = store.load_or_claim(key, accept=is_complete_result) if reuse else None
     destination = MlflowDestination(str(cfg.mlflow.tracking_uri), _experiment(cfg, sweep))
     run_log = None
-    if tracking and not destination.holds(store, key):
+    held = destination.held_run(store, key) if tracking else None
+    if tracking and held is None:
         location = cfg.mlflow.artifact_location
         run_log = JobRunLog.open(
             destination.uri, location, destination.experiment, sweep, single_run=tracking_worker
@@ -261,6 +262,7 @@ def execute_job(
         outcome, details = _run_or_reuse(
             cfg, config, (key, name), sweep, stored, refused, store, start
         )
+        outcome.mlflow_run_id = held
         files = write_job_files(job_dir, outcome.result)
         if details:
             (job_dir / "error.txt").write_text(details)
@@ -376,11 +378,11 @@ class MlflowDestination:
         """How the job store remembers it (:meth:`JobStore.logged_to`)."""
         return f"{self.uri} {self.experiment}"
 
-    def holds(self, store: JobStore, key: str) -> bool:
-        """Whether the job's run, logged here before, is still in the store (a lost or
-        emptied store, or a deleted run: it is logged again)."""
+    def held_run(self, store: JobStore, key: str) -> str | None:
+        """The job's run, logged here before, if the store still holds it (a lost or
+        emptied store, or a deleted run: None, and the job is logged again)."""
         run_id = store.logged_to(key).get(self.name)
-        return run_id is not None and run_exists(self.uri, run_id)
+        return run_id if run_id is not None and run_exists(self.uri, run_id) else None
 
 
 def _log_run(
@@ -400,8 +402,9 @@ def _log_run(
     there), tagged ``twostep.restored_from_job_store``.
     """
     try:
-        if destination.holds(store, outcome.key):  # a parallel process logged it meanwhile
-            outcome.mlflow_run_id = store.logged_to(outcome.key)[destination.name]
+        held = destination.held_run(store, outcome.key)
+        if held is not None:  # a parallel process logged it meanwhile
+            outcome.mlflow_run_id = held
             return
         record = _restored_record(store, outcome.key, destination)
         if record is None:

@@ -41,6 +41,7 @@ from urllib.parse import urlparse
 
 import pandas as pd
 
+from flows.sweep_state import job_records
 from twostep.benchmark import DEFAULT_DATA_ROOT
 from twostep.report import (
     METRICS,
@@ -107,6 +108,17 @@ class MlflowRuns:
     runs: pd.DataFrame
     experiment_id: str
     ignored: int  # runs of the experiment that are not jobs (sweep/report parents, others)
+    sweep_dirs: tuple[str, ...] = ()  # the sweeps' directories (their parents' tags)
+
+    def missing_jobs(self) -> tuple[int, int, list[str]]:
+        """(job keys with a run, job keys the sweeps' records list, the record folders
+        read): the store is a view of the job store, and can have lost runs."""
+        recorded: set[str] = set()
+        folders = [folder for folder in self.sweep_dirs if Path(folder).is_dir()]
+        for folder in folders:
+            recorded |= {str(r["job_key"]) for r in job_records(Path(folder)) if r.get("job_key")}
+        logged = {str(key) for key in self.runs.get("job_key", []) if key}
+        return len(logged & recorded), len(recorded), folders
 
 
 def _run_row(run: Any) -> dict[str, Any] | None:
@@ -180,12 +192,21 @@ def read_mlflow_runs(tracking_uri: str, experiment: str) -> MlflowRuns:
             f"cannot read MLflow at {tracking_uri}: {_one_line(error)}"
         ) from error
     rows = [row for row in (_run_row(run) for run in runs) if row is not None]
+    sweep_dirs = tuple(
+        sorted(
+            {
+                str(run.data.tags["twostep.sweep_dir"])
+                for run in runs
+                if run.data.tags.get(KIND_TAG) == "sweep" and run.data.tags.get("twostep.sweep_dir")
+            }
+        )
+    )
     if not rows:
         raise ReportInputError(
             f"experiment '{experiment}' has no job runs (tag {KIND_TAG}=job) in {tracking_uri}"
         )
     frame = normalise_runs(pd.DataFrame.from_records(rows))
-    return MlflowRuns(frame, str(found.experiment_id), len(runs) - len(rows))
+    return MlflowRuns(frame, str(found.experiment_id), len(runs) - len(rows), sweep_dirs)
 
 
 def load_runs_from_mlflow(tracking_uri: str, experiment: str) -> pd.DataFrame:
@@ -308,6 +329,19 @@ def task_titles(runs: pd.DataFrame, data_root: Path | None) -> dict[int, str]:
     return {}
 
 
+def _warn_missing_jobs(loaded: MlflowRuns) -> None:
+    """One line when the store holds fewer job runs than the sweep recorded jobs."""
+    logged, recorded, folders = loaded.missing_jobs()
+    if logged < recorded:
+        print(
+            f"twostep-report: warning: the MLflow store holds {logged} job run(s) of the "
+            f"{recorded} job(s) recorded in {', '.join(folders)}: the report misses the "
+            "others; run the sweep's command again to log them (finished jobs are reused, "
+            "not recomputed)",
+            file=sys.stderr,
+        )
+
+
 def _experiment_name(runs: pd.DataFrame) -> str:
     """The one MLflow experiment the runs were logged to, or ``""``."""
     column = f"{PARAM_PREFIX}mlflow.experiment"
@@ -350,6 +384,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             read_line = f"read {len(runs)} job run(s) from MLflow experiment '{name}'"
             if loaded.ignored:
                 read_line += f" (skipped {loaded.ignored} sweep/report run(s))"
+            _warn_missing_jobs(loaded)
         report = build_report(runs, task_titles(runs, args.data_root))
     except ReportInputError as error:
         print(f"twostep-report: {error}", file=sys.stderr)

@@ -112,9 +112,7 @@ def test_help_is_the_tools_own_text(tmp_path: Path) -> None:
 def test_version_names_twostep_and_what_it_runs_on(tmp_path: Path) -> None:
     """Before: `Hydra 1.3.8`. The Fast Downward release is checked against its own driver
     (`fast-downward.py --version`); nothing heavy is imported for it."""
-    done = run(
-        [sys.executable, "-X", "importtime", "-m", "flows.cli", "--version"], cwd=tmp_path
-    )
+    done = run([sys.executable, "-X", "importtime", "-m", "flows.cli", "--version"], cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
     assert lines[0].startswith(f"twostep {metadata.version('twostep')} (git ")  # a checkout
@@ -188,34 +186,36 @@ def test_schedule_columns_are_as_wide_as_their_actions() -> None:
 
 @pytest.mark.slow
 def test_installed_wheel_runs_the_demo_from_a_fresh_directory(tmp_path: Path) -> None:
-    """`uv build`, then the wheel and the locked dependencies installed offline (from uv's
-    cache) into a new virtual environment; the demo runs from an empty directory."""
+    """`uv build`; a new virtual environment with the locked dependencies (offline, from
+    uv's cache) and the wheel (no source tree); the demo, --version and --help from an
+    empty directory."""
     uv = os.environ.get("UV") or "uv"
     dist, venv, work = tmp_path / "dist", tmp_path / "venv", tmp_path / "work"
     work.mkdir()
     built = run([uv, "build", "--wheel", "--out-dir", str(dist), str(REPO)], REPO, 600)
     assert built.returncode == 0, built.stderr[-2000:]
     (wheel,) = dist.glob("twostep-*.whl")
-    requirements = tmp_path / "requirements.txt"
-    exported = run(
-        [uv, "export", "--frozen", "--no-dev", "--no-hashes", "--no-emit-project",
-         "--output-file", str(requirements)],
-        REPO,
+    environment = {**os.environ, "UV_PROJECT_ENVIRONMENT": str(venv)}
+    locked = subprocess.run(
+        [uv, "sync", "--frozen", "--offline", "--no-dev", "--no-install-project",
+         "--python", sys.executable],
+        capture_output=True, text=True, cwd=REPO, env=environment, timeout=1200,
     )  # fmt: skip
-    assert exported.returncode == 0, exported.stderr
-    assert run([uv, "venv", "--python", sys.executable, str(venv)], tmp_path).returncode == 0
+    assert locked.returncode == 0, locked.stderr[-2000:]
+    python = venv / "bin" / "python"
     installed = run(
-        [uv, "pip", "install", "--offline", "--python", str(venv / "bin" / "python"),
-         "-r", str(requirements), str(wheel)],
-        tmp_path, 1200,
-    )  # fmt: skip
+        [uv, "pip", "install", "--offline", "--no-deps", "--python", str(python), str(wheel)],
+        tmp_path,
+    )
     assert installed.returncode == 0, installed.stderr[-2000:]
     twostep = venv / "bin" / "twostep"
     demo = run([str(twostep), "domain=grippers", "task=1", "method=sa"], work, 600)
     assert demo.returncode == 0, demo.stdout + demo.stderr
     assert demo.stdout.startswith("grippers p01 sa | N=1 | success | exec_length=")
     assert list(work.glob("outputs/runs/*/*/result.json"))
-    assert list(work.glob("outputs/mlflow.db"))  # logged to MLflow by default
+    assert (work / "outputs" / "mlflow.db").is_file()  # logged to MLflow by default
     version = run([str(twostep), "--version"], work).stdout.splitlines()[0]
     assert version.endswith("(installed package, no git checkout)")
     assert "Usage: twostep" in run([str(twostep), "--help"], work).stdout
+    where = run([str(python), "-c", "import flows, twostep.data; print(flows.__file__)"], work)
+    assert str(venv) in where.stdout  # the installed package, not a source tree

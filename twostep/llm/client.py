@@ -25,7 +25,9 @@ import is not counted in the call's time (:attr:`LLMResponse.seconds`).
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import importlib
 import json
 import logging
 import os
@@ -65,14 +67,29 @@ log = logging.getLogger(__name__)
 
 _litellm: Any = None  # the lazily imported litellm module
 
+# What litellm's first real call would import on its own (hundreds of modules, about half
+# a second): the OpenAI SDK's chat resources and types, which it uses for OpenAI and
+# OpenAI-compatible servers, and the HTTP stack.
+_FIRST_CALL_MODULES = ("openai.resources.chat", "httpcore", "h11")
 
-def _import_litellm() -> Any:
+
+def _import_litellm(model: str = "openai/warm-up") -> Any:
+    """litellm, imported once per process and warmed up, so that no call's time holds
+    an import: a completion answered by litellm's own ``mock_response`` (no network)
+    walks its routing for ``model``, and the modules of its first real call are loaded."""
     global _litellm
     if _litellm is None:
         os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
         import litellm
 
         litellm.suppress_debug_info = True
+        with contextlib.suppress(Exception):  # a model litellm cannot route: no warm-up
+            litellm.completion(
+                model=model, messages=[{"role": "user", "content": "-"}], mock_response="-"
+            )
+        for name in _FIRST_CALL_MODULES:
+            with contextlib.suppress(ImportError):
+                importlib.import_module(name)
         _litellm = litellm
     return _litellm
 
@@ -289,7 +306,7 @@ class LLMClient:
         # Importing litellm (seconds, once per process) is not the call's time: it would be
         # charged to the first call of every job as LLM and so planning time.
         imported = time.perf_counter()
-        _import_litellm()
+        _import_litellm(s.model)
         start += time.perf_counter() - imported
         text = self._call_live(kwargs, secret)
         seconds = time.perf_counter() - start
