@@ -31,6 +31,7 @@ import os
 import sys
 import time
 import traceback
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
 from pathlib import Path
@@ -83,7 +84,7 @@ class JobOutcome:
     tracking_error: str | None = None  # logging failed; the result itself is safe
 
 
-def job_status(result: dict[str, Any]) -> tuple[JobStatus, str | None]:
+def job_status(result: Mapping[str, Any]) -> tuple[JobStatus, str | None]:
     """``twostep.status`` and ``twostep.error`` of a result.json dict."""
     if result.get("success"):
         return JobStatus.SUCCESS, None

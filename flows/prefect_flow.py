@@ -31,6 +31,10 @@ The LLM tasks exist for observability only: the LLM client owns the one answer c
 (its disk cache, which replay reads) and the one retry loop, so these tasks neither
 cache nor retry. A failed LLM call is the job's outcome (``llm_error``), not a task
 crash: the task ends in a state named :data:`LLM_ERROR_STATE`, with no traceback.
+
+The flow run's own state tells the truth: a job that ends without success (``llm_error``,
+``error``, ``timeout``, an embodied execution that failed, ...) ends its flow run in a
+Failed state named after it, with the reason (:func:`final_state`).
 """
 
 from __future__ import annotations
@@ -59,7 +63,7 @@ from prefect.settings import (
     Settings,
     get_current_settings,
 )
-from prefect.states import Completed
+from prefect.states import Completed, Failed
 from prefect.utilities.annotations import quote
 
 from flows.step_stats import StepStats
@@ -377,12 +381,39 @@ def running_job() -> tuple[Job, StepStats, bool]:
     return _RUNNING.get()
 
 
+# The flow run's state name for a job that ends without success, by what the result says
+# (others: the status in CamelCase). Every one is a FAILED state: red in the Prefect UI.
+FAILED_STATE_NAMES = {
+    "llm_error": LLM_ERROR_STATE,
+    "timeout": "TimedOut",  # Prefect's own name for a run stopped by its time limit
+    "embodied_failed": "EmbodiedFailed",
+}
+
+
+def final_state(result: Mapping[str, Any]) -> dict[str, Any] | State[Any]:
+    """What the flow returns for a job's result: the result itself (the run is Completed)
+    for a success, else a Failed state named after how the job ended, with the reason as
+    its message and the result as its data (the job is still recorded; a sweep goes on)."""
+    from flows.job import JobStatus, job_status
+
+    status, reason = job_status(result)
+    if status is JobStatus.SUCCESS:
+        return dict(result)
+    kind = str(result.get("status") or "failed")
+    embodied = result.get("executor") == "embodied" and result.get("embodied_status")
+    if embodied and embodied != "success" and kind == "solved":
+        kind = "embodied_failed"  # planned, but the plans did not execute in the kitchen
+    name = FAILED_STATE_NAMES.get(kind) or kind.replace("_", " ").title().replace(" ", "")
+    return Failed(name=name, message=f"{kind}: {reason}", data=dict(result))
+
+
 @flow(name="twostep-job", persist_result=False, validate_parameters=False, log_prints=False)
-def job_flow(job: dict[str, Any]) -> dict[str, Any]:
+def job_flow(job: dict[str, Any]) -> dict[str, Any] | State[Any]:
     """One job (``job``: its resolved config); the steps, the LLM calls among them, run as
-    tasks and the library keeps the control flow."""
+    tasks and the library keeps the control flow. A job that did not succeed ends its
+    flow run Failed (:func:`final_state`)."""
     built, stats, submit = running_job()
-    return built.run(prefect_steps(stats, submit=submit)).to_dict()
+    return final_state(built.run(prefect_steps(stats, submit=submit)).to_dict())
 
 
 def run_flow(
@@ -412,5 +443,8 @@ def run_flow(
             state = job_flow.with_options(**options)(redact_config(dict(config)), return_state=True)
     finally:
         _RUNNING.reset(running)
-    result: dict[str, Any] = state.result()  # raises the exception the job raised
+    result = state.result(raise_on_failure=False)
+    if isinstance(result, BaseException):
+        raise result  # the job raised: the caller records it as failed
+    assert isinstance(result, dict)  # the job's result, whatever the flow run's state
     return result

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -51,3 +52,26 @@ def data_root() -> Path:
 @pytest.fixture(scope="session")
 def quirks_root() -> Path:
     return FIXTURES / "llmp_quirks"
+
+
+@pytest.fixture(scope="session")
+def prefect_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    """One Prefect server for the session's integration tests; stopped by PID."""
+    from flows.servers import (
+        ServerSettings,
+        pid_alive,
+        spawn_server,
+        stop_server,
+        wait_until_healthy,
+    )
+
+    home = tmp_path_factory.mktemp("prefect-home")
+    info = spawn_server(
+        ServerSettings(home=str(home), startup_timeout_s=240), owner_pid=os.getpid()
+    )
+    try:
+        wait_until_healthy(info)
+        yield info.api_url
+    finally:
+        stop_server(info)
+        assert info.pid is not None and not pid_alive(info.pid)

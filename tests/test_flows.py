@@ -30,7 +30,7 @@ from flows.build import Job
 from flows.config import register
 from flows.console import format_summary, progress_line
 from flows.job import execute_job
-from flows.servers import pid_alive, stop_server
+from flows.servers import pid_alive
 from flows.store import JobStore, job_config, job_key
 from flows.sweep_state import SweepState, record_job
 from flows.tracking.contents import job_metrics, job_params
@@ -395,23 +395,6 @@ def test_watchdog_stops_its_command_when_the_owner_is_killed(tmp_path: Path) -> 
 
 
 # ----------------------------------------------------------------- with a Prefect server
-
-
-@pytest.fixture(scope="session")
-def prefect_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
-    """One Prefect server for the session's integration tests; stopped by PID."""
-    from flows.servers import ServerSettings, spawn_server, wait_until_healthy
-
-    home = tmp_path_factory.mktemp("prefect-home")
-    info = spawn_server(
-        ServerSettings(home=str(home), startup_timeout_s=240), owner_pid=os.getpid()
-    )
-    try:
-        wait_until_healthy(info)
-        yield info.api_url
-    finally:
-        stop_server(info)
-        assert info.pid is not None and not pid_alive(info.pid)
 
 
 def api(url: str, path: str, body: dict[str, Any]) -> Any:
