@@ -3,6 +3,7 @@ line, header and footer, any error on one line, and ``twostep --version``."""
 
 from __future__ import annotations
 
+import logging
 import platform
 import re
 import subprocess
@@ -31,6 +32,18 @@ def one_line(error: BaseException, name_type: bool = True, limit: int | None = N
     else:
         text = f"{type(error).__name__}: {text}" if text else type(error).__name__
     return text if limit is None else text[:limit]
+
+
+class MaskCredentials(logging.Filter):
+    """A logging filter (conf/hydra/*_logging/twostep.yaml): every record's text with the
+    credentials inside its URLs masked, e.g. Hydra's line of a job's overrides."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        text = record.getMessage()
+        masked = redact_text(text)
+        if masked != text:
+            record.msg, record.args = masked, ()
+        return True
 
 
 # ----------------------------------------------------------------- one job

@@ -55,10 +55,11 @@ from flows.tracking.runs import (
 )
 from twostep.benchmark import BenchmarkError
 from twostep.identity import is_complete_result, job_name
+from twostep.llm.client import LLMScriptError
 from twostep.pddl import PDDLError
 
 # Errors in what the user asked for: one line, no traceback.
-INPUT_ERRORS: tuple[type[Exception], ...] = (BenchmarkError, PDDLError, JobError)
+INPUT_ERRORS: tuple[type[Exception], ...] = (BenchmarkError, PDDLError, JobError, LLMScriptError)
 
 
 class JobStatus(StrEnum):

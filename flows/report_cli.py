@@ -14,7 +14,7 @@ Table II's task descriptions come from ``titles.yaml`` in the kitchen's data fol
 (``--data-root``, else the runs' ``data.root``, else the package's data).
 
 Exit codes: 0 report written; 1 nothing could be reported (unknown experiment, no runs,
-no successful run); 2 bad command line.
+no successful run); 2 bad command line, or an input file that is not text (named).
 
 For a test or a notebook, the building blocks are::
 
@@ -43,6 +43,7 @@ import pandas as pd
 
 from flows.sweep_state import job_records
 from twostep.benchmark import DEFAULT_DATA_ROOT
+from twostep.files import NotTextError, read_text_file
 from twostep.report import (
     METRICS,
     Report,
@@ -342,6 +343,26 @@ def _warn_missing_jobs(loaded: MlflowRuns) -> None:
         )
 
 
+def _first_file_not_text(args: argparse.Namespace) -> str | None:
+    """The first input file that is not UTF-8 text (a runs.csv, a sweep's result.json or
+    job config), as the line to print; None when all are text (or there are none)."""
+    if args.runs_csv is not None:
+        files = [args.runs_csv]
+    elif args.sweep_dir is not None and Path(args.sweep_dir).is_dir():
+        folder = Path(args.sweep_dir)
+        files = sorted([*folder.rglob("result.json"), *folder.rglob(".hydra/config.yaml")])
+    else:
+        files = []
+    for path in files:
+        try:
+            read_text_file(path)
+        except NotTextError as error:
+            return f"{error}: move it out of the way or delete it"
+        except OSError:
+            continue  # a directory or no such file: the readers report those themselves
+    return None
+
+
 def _experiment_name(runs: pd.DataFrame) -> str:
     """The one MLflow experiment the runs were logged to, or ``""``."""
     column = f"{PARAM_PREFIX}mlflow.experiment"
@@ -366,6 +387,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     arguments = list(sys.argv[1:] if argv is None else argv)
     command = shlex.join(["twostep-report", *arguments])
     experiment_id: str | None = None
+    not_text = _first_file_not_text(args)
+    if not_text is not None:
+        print(f"twostep-report: {not_text}", file=sys.stderr)
+        return 2
     try:
         if args.sweep_dir is not None:
             runs = load_runs_from_sweep_dir(args.sweep_dir)

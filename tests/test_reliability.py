@@ -1,5 +1,8 @@
 """Regression tests for the reliability findings (issue 12, findings 3, 4 and 5): concurrent
-sweeps, unwritable locations, bad config values, PDDL errors, and a fast kill -9 / resume.
+sweeps, unwritable locations, bad config values, PDDL errors, and a fast kill -9 / resume;
+and issue 20's finding 7 (values and messages). The other findings of issue 20 have their
+own files: test_tracking_view (1, 2), test_llm_client (3, 7: HTTP 401), test_bad_files
+(4, 7), test_secrets (5), test_prefect_states (6), test_packaging (8).
 
 Every run goes through the ``twostep`` command as a user starts it, with Prefect off
 (``orchestration.prefect=false``) and tiny blocksworld tasks, so each takes seconds.
@@ -77,6 +80,22 @@ def _compose(*overrides: str) -> Any:
         ),
         ("agents=0", "agents=0 must be at least 1"),
         ("llm.timeout_s=0", "llm.timeout_s=0.0 must be > 0"),
+        # issue 20, finding 7: before, `OverflowError: timeout is too large` (no key named)
+        (
+            "planner.time_limit_s=1e9",
+            "planner.time_limit_s=1000000000.0 is too large (allowed: > 0 and at most 1000000 "
+            "seconds)",
+        ),
+        (
+            "score_time_limit_s=inf",
+            "score_time_limit_s=inf is too large (allowed: > 0 and at most 1000000 seconds)",
+        ),
+        (
+            "llm.api_key_env=sk-proj-0123456789abcdef",
+            "llm.api_key_env looks like a key, not a variable name: give the name of the "
+            "environment variable that holds the key (e.g. llm.api_key_env=OPENAI_API_KEY); "
+            "the value is not shown",
+        ),
     ],
 )
 def test_each_bad_value_is_named_with_what_is_allowed(override: str, expected: str) -> None:
@@ -392,3 +411,66 @@ def test_a_binary_task_file_exits_2_with_its_name(data: Path, tmp_path: Path) ->
         (data / "blocksworld" / "p09.pddl").unlink()
     line = one_error_line(done)
     assert "p09.pddl" in line and "not a text file" in line
+
+
+# ----------------------------------------------------------------- issue 20, finding 7
+
+
+@pytest.mark.parametrize("method", ["sa", "ma", "twostep"])
+def test_agent_predicates_the_domain_lacks_are_an_error_for_every_method(
+    data: Path, tmp_path: Path, method: str
+) -> None:
+    """Before: `domain.agent_predicates=[nonexistent]` was accepted and stored (the
+    twostep-score command refuses the same value)."""
+    out = tmp_path / "out"
+    done = twostep(
+        f"method={method}", "task=1", "domain.agent_predicates=[holding,levitating]",
+        "mlflow.enabled=false", f"data.root={data}", f"output.root={out}", *FAST,
+    )  # fmt: skip
+    line = one_error_line(done)
+    assert line.startswith("error: domain.agent_predicates: levitating not in domain 'blocksworld'")
+    assert "its predicates: arm-empty, clear, holding, on, on-table" in line
+    assert not list((out / "jobs").glob("*/result.json"))  # nothing stored
+    (result,) = out.glob("runs/*/*/result.json")
+    assert "plan_calls" not in json.loads(result.read_text())  # refused before planning
+
+
+def test_a_stored_entry_that_is_not_a_whole_result_is_computed_again(
+    data: Path, tmp_path: Path
+) -> None:
+    """Before: a stored `{}` replayed as `None pNone None | N=None | FAILED (None: None)`."""
+    out = tmp_path / "out"
+    args = ["method=sa", "task=1", "mlflow.enabled=false", f"data.root={data}",
+            f"output.root={out}", *FAST]  # fmt: skip
+    first = twostep(*args)
+    assert first.returncode == 0, first.stderr
+    (stored,) = (out / "jobs").glob("*/result.json")
+    whole = json.loads(stored.read_text())
+    stored.write_text("{}")
+    again = twostep(*args)
+    assert again.returncode == 0, again.stderr
+    assert again.stdout.startswith("blocksworld p01 sa | N=1 | success")
+    assert "reused" not in again.stdout.splitlines()[0]  # computed, not replayed
+    assert f"job store entry {stored} is not a complete result" in again.stderr
+    again_stored = json.loads(stored.read_text())  # the entry is whole again (new timings)
+    assert again_stored["plans"] == whole["plans"] and again_stored["success"] is True
+
+
+def test_score_says_that_no_agent_predicates_means_every_fact_is_shared(
+    data: Path, tmp_path: Path
+) -> None:
+    """Before: without --agent-predicates the arm was silently shared by the agents."""
+    plan = tmp_path / "agent0.plan"
+    plan.write_text("(pickup a)\n")
+    files = [data / "blocksworld" / "domain.pddl", data / "blocksworld" / "p03.pddl", plan]
+    score = Path(sys.executable).parent / "twostep-score"
+    silent = subprocess.run(
+        [str(score), *map(str, files)], capture_output=True, text=True, timeout=120
+    )
+    assert silent.returncode == 0, silent.stderr
+    assert "no --agent-predicates: every fact is shared by all agents" in silent.stderr
+    explicit = subprocess.run(
+        [str(score), *map(str, files), "--agent-predicates", "none"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert explicit.stdout == silent.stdout and explicit.stderr == ""

@@ -10,6 +10,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from tests.llm_standin import standin_server
 
 REPO = Path(__file__).resolve().parent.parent
@@ -43,3 +45,56 @@ def test_canary_key_is_used_but_never_written_or_printed(data_root: Path, tmp_pa
     assert list(out.rglob("result.json")), "the run wrote no result"
     assert (out / "mlflow.db").is_file(), "MLflow logging did not run"
     assert _files_containing(out, CANARY.encode()) == []
+
+
+# ----------------------------------------------------------------- issue 20, finding 5
+
+
+def _nothing_written_or_printed(out: Path, done: subprocess.CompletedProcess[str]) -> None:
+    assert CANARY not in done.stdout and CANARY not in done.stderr
+    found = _files_containing(out, CANARY.encode()) if out.exists() else []
+    assert found == []
+
+
+@pytest.mark.parametrize("sweep", [[], ["-m", "seed=0,1"]], ids=["single run", "sweep"])
+def test_a_key_pasted_as_the_variable_name_is_refused_and_never_stored(
+    data_root: Path, tmp_path: Path, sweep: list[str]
+) -> None:
+    """Before: the key was printed in the error line and stored in result.json, the MLflow
+    store and .hydra/*.yaml."""
+    out = tmp_path / "out"
+    done = subprocess.run(
+        [sys.executable, "-m", "flows.cli", *sweep, "domain=blocksworld", "task=6",
+         "method=twostep", "decomposer=llm", f"llm.api_key_env={CANARY}",
+         f"data.root={data_root}", f"output.root={out}", "orchestration.prefect=false"],
+        capture_output=True, text=True, cwd=REPO, timeout=240,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert done.stderr.startswith("error: llm.api_key_env looks like a key, not a variable name")
+    _nothing_written_or_printed(out, done)
+    assert not list(out.glob("*runs/*/*")) if out.exists() else True  # refused before Hydra
+
+
+def test_credentials_in_a_url_are_masked_everywhere(data_root: Path, tmp_path: Path) -> None:
+    """Before: `llm.api_base=https://user:pass@host` was stored as an MLflow param (and in
+    the job store's config, .hydra/*.yaml, the sweep's files). A one-job sweep through the
+    stand-in server, with the password in the URL: it is used, and found nowhere."""
+    out = tmp_path / "out"
+    with standin_server([ENGLISH, PDDL, "none"]) as server:
+        host = server.address.removeprefix("http://")
+        done = subprocess.run(
+            [sys.executable, "-m", "flows.cli", "-m", "domain=blocksworld", "task=6",
+             "agents=3", "method=twostep", "decomposer=llm", "llm=openai-compatible",
+             "llm.model=openai/standin", f"llm.api_base=http://user:{CANARY}@{host}/v1",
+             "llm.max_retries=0", f"data.root={data_root}", f"output.root={out}",
+             "orchestration.prefect=false", "planner.time_limit_s=20"],
+            capture_output=True, text=True, cwd=REPO, timeout=240,
+        )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert server.requests, "the LLM path was not exercised"
+    assert (out / "mlflow.db").is_file() and list(out.glob("jobs/*/config.json"))
+    assert list(out.glob("multiruns/*/*/multirun.yaml"))
+    _nothing_written_or_printed(out, done)
+    masked = f"http://***@{host}/v1"
+    (config,) = out.glob("jobs/*/config.json")
+    assert masked in config.read_text()  # the URL is kept, without its credentials

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
+from twostep.files import NotTextError, read_text_file
 from twostep.pddl import PDDLError, Problem, load_problem
 
 
@@ -64,9 +65,41 @@ def _read(path: Path) -> str:
     if not path.is_file():
         return ""
     try:
-        return path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError as error:
-        raise BenchmarkError(f"{path}: not a text file (byte {error.start} is not UTF-8)") from None
+        return read_text_file(path)
+    except NotTextError as error:
+        raise BenchmarkError(str(error)) from None
+
+
+def load_pddl_files(
+    domain_path: Path, problem_path: Path, cache_dir: Path | None = None
+) -> Problem:
+    """Read a domain and a problem file (:func:`twostep.pddl.load_problem`) so that every
+    bad file is one :class:`PDDLError` naming it: also a directory where a file belongs,
+    and expressions nested deeper than the reader can follow (Python's recursion limit)."""
+    for path in (domain_path, problem_path):
+        if Path(path).is_dir():
+            raise PDDLError("a directory, not a PDDL file", str(path))
+    try:
+        return load_problem(domain_path, problem_path, cache_dir)
+    except RecursionError:
+        depth, line, path = max((*_deepest(Path(p)), Path(p)) for p in (domain_path, problem_path))
+        raise PDDLError(
+            f"expressions nested {depth} levels deep: deeper than the reader can follow "
+            "(write the formula flatter, e.g. one (and ...) holding all its parts)",
+            str(path),
+            line,
+        ) from None
+
+
+def _deepest(path: Path) -> tuple[int, int]:
+    """The deepest nesting of parentheses in a PDDL file, and its line (comments skipped)."""
+    depth = deepest = deepest_line = 0
+    for number, line in enumerate(path.read_bytes().decode("utf-8", "replace").splitlines(), 1):
+        for char in line.split(";", 1)[0]:
+            depth += {"(": 1, ")": -1}.get(char, 0)
+            if depth > deepest:
+                deepest, deepest_line = depth, number
+    return deepest, deepest_line
 
 
 def list_domains(root: Path = DEFAULT_DATA_ROOT) -> list[str]:
@@ -77,11 +110,15 @@ def list_domains(root: Path = DEFAULT_DATA_ROOT) -> list[str]:
 
 def list_tasks(domain: str, root: Path = DEFAULT_DATA_ROOT) -> list[int]:
     folder = domain_dir(domain, root)
-    return sorted(int(m.group(1)) for p in folder.iterdir() if (m := _TASK_FILE.match(p.name)))
+    return sorted(
+        int(m.group(1)) for p in folder.iterdir() if (m := _TASK_FILE.match(p.name)) and p.is_file()
+    )
 
 
 def domain_dir(domain: str, root: Path = DEFAULT_DATA_ROOT) -> Path:
     folder = Path(root) / domain
+    if (folder / "domain.pddl").exists() and not (folder / "domain.pddl").is_file():
+        raise BenchmarkError(f"{folder / 'domain.pddl'}: not a file (a directory?)")
     if not (folder / "domain.pddl").is_file():
         known = ", ".join(list_domains(Path(root))) or "none"
         raise BenchmarkError(f"unknown domain '{domain}' in {root}; domains: {known}")
@@ -116,6 +153,8 @@ def task_path(domain: str, task: int, root: Path = DEFAULT_DATA_ROOT) -> Path:
     for candidate in (folder / f"p{task:02d}.pddl", folder / f"p{task}.pddl"):
         if candidate.is_file():
             return candidate
+        if candidate.exists():
+            raise BenchmarkError(f"{candidate}: not a file (a directory?)")
     tasks = list_tasks(domain, root)
     listing = f"{tasks[0]}..{tasks[-1]}" if tasks else "none"
     raise BenchmarkError(f"unknown task {task} of domain '{domain}'; tasks: {listing}")
@@ -129,7 +168,7 @@ def load_task(
     root = Path(root)
     folder = domain_dir(domain, root)
     path = task_path(domain, task, root)
-    problem = load_problem(folder / "domain.pddl", path, cache_dir)
+    problem = load_pddl_files(folder / "domain.pddl", path, cache_dir)
     plan_text = _read(folder / "p_example.sol")
     example_plan = tuple(
         line.split(";", 1)[0].strip()
@@ -158,6 +197,7 @@ __all__ = [
     "domain_dir",
     "list_domains",
     "list_tasks",
+    "load_pddl_files",
     "load_task",
     "task_path",
 ]

@@ -1,4 +1,6 @@
-"""Files that readers (or a ``kill -9``) never see half-written: the one atomic writer."""
+"""Files that readers (or a ``kill -9``) never see half-written: the one atomic writer; and
+the one reader of text files a user hands over (UTF-8, a byte-order mark dropped, a file
+that is not text named as such)."""
 
 from __future__ import annotations
 
@@ -28,3 +30,18 @@ def write_json_atomic(path: Path, data: Any, indent: int | None = 2) -> None:
     """Write ``data`` as JSON atomically (``default=str`` for paths and enums)."""
     text = json.dumps(data, indent=indent, ensure_ascii=False, default=str)
     write_text_atomic(path, text + "\n")
+
+
+class NotTextError(ValueError):
+    """A file that should hold text does not (binary, or another encoding than UTF-8)."""
+
+
+def read_text_file(path: Path) -> str:
+    """A text file's content, decoded as UTF-8 (a leading byte-order mark, which some
+    editors write, is dropped); raises :class:`NotTextError` naming the file and the first
+    byte that is not UTF-8, and ``OSError`` as reading does (a directory, no file)."""
+    data = Path(path).read_bytes()
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        raise NotTextError(f"{path}: not a text file (byte {error.start} is not UTF-8)") from None

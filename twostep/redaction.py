@@ -20,8 +20,9 @@ from typing import Any
 
 MASK = "***"
 
-# scheme://userinfo@ : the userinfo part (user, user:password, or a token) is the secret.
-_URL_CREDENTIALS = re.compile(r"\b([A-Za-z][A-Za-z0-9+.\-]*://)[^/@\s'\"<>]+@")
+# scheme://userinfo@ : the userinfo part (user, user:password, or a token) is the secret
+# (also as Hydra shows an override, its colons escaped: http\://user\:pass@host).
+_URL_CREDENTIALS = re.compile(r"\b([A-Za-z][A-Za-z0-9+.\-]*\\?://)[^/@\s'\"<>]+@")
 # Provider keys that announce themselves (OpenAI, Anthropic, many gateways: sk-..., sk-ant-...).
 _PROVIDER_KEY = re.compile(r"\b(sk-[A-Za-z0-9_\-]{4})[A-Za-z0-9_\-*]+")
 _VARIABLE_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")

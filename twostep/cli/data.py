@@ -15,6 +15,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from twostep.benchmark import DEFAULT_DATA_ROOT
 from twostep.generators import (
     DOMAINS,
     GENERATORS,
@@ -58,7 +59,11 @@ def compare_files(folder: Path, files: dict[str, str]) -> list[str]:
         if not path.is_file():
             problems.append(f"{path}: missing")
             continue
-        found = path.read_text()
+        try:
+            found = path.read_bytes().decode("utf-8")  # byte for byte: a BOM is a difference
+        except UnicodeDecodeError as error:
+            problems.append(f"{path}: not a text file (byte {error.start} is not UTF-8)")
+            continue
         if found == text:
             continue
         want, have = text.splitlines(), found.splitlines()
@@ -68,8 +73,12 @@ def compare_files(folder: Path, files: dict[str, str]) -> list[str]:
         )
         expected = want[line] if line < len(want) else "<end of file>"
         actual = have[line] if line < len(have) else "<end of file>"
-        problems.append(f"{path}:{line + 1}: expected {expected!r}, found {actual!r}")
+        problems.append(f"{path}:{line + 1}: expected {_clip(expected)!r}, found {_clip(actual)!r}")
     return problems
+
+
+def _clip(text: str, limit: int = 100) -> str:
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def _generate(args: argparse.Namespace) -> int:
@@ -129,7 +138,11 @@ def build_parser() -> argparse.ArgumentParser:
     generate = commands.add_parser("generate", help="rebuild the benchmark tasks")
     generate.add_argument("--out", default="data", help="data folder (default: data)")
     check = commands.add_parser("check", help="verify a data folder rebuilds identically")
-    check.add_argument("--data", default="data", help="data folder (default: data)")
+    check.add_argument(
+        "--data",
+        default=str(DEFAULT_DATA_ROOT),
+        help="data folder (default: the package's, data/ of a checkout)",
+    )
     for sub in (generate, check):
         sub.add_argument(
             "--domain",

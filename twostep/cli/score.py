@@ -28,8 +28,10 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+from twostep.benchmark import load_pddl_files
 from twostep.execution import DEFAULT_SEARCH_BUDGET, MODES, ScheduleError, parallel_length
-from twostep.pddl import PDDLError, load_problem
+from twostep.files import NotTextError, read_text_file
+from twostep.pddl import PDDLError
 from twostep.strips import Grounder, PlanError, read_plan
 
 EXIT_VALID = 0
@@ -56,10 +58,11 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--agent-predicates",
-        default="",
+        default=None,
         metavar="P,Q",
         help="comma-separated agent-specific predicates: each agent has its own copy "
-        "(e.g. arm-empty,holding for blocksworld); default: none",
+        "(e.g. arm-empty,holding for blocksworld); 'none': every fact is shared (what "
+        "leaving it out means too, with a note on stderr)",
     )
     parser.add_argument(
         "--mode",
@@ -130,12 +133,20 @@ def _fail(message: str) -> int:
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
-        problem = load_problem(
+        problem = load_pddl_files(
             args.domain, args.problem, cache_dir=None if args.no_cache else args.cache_dir
         )
     except PDDLError as error:
         return _fail(str(error))
-    agent_predicates = [p.strip().lower() for p in args.agent_predicates.split(",") if p.strip()]
+    if args.agent_predicates is None:
+        print(
+            f"{PROG}: no --agent-predicates: every fact is shared by all agents (name the "
+            "agent-specific predicates, e.g. --agent-predicates arm-empty,holding, or say "
+            "--agent-predicates none)",
+            file=sys.stderr,
+        )
+    given = "" if args.agent_predicates in (None, "none") else args.agent_predicates
+    agent_predicates = [p.strip().lower() for p in given.split(",") if p.strip()]
     unknown = [p for p in agent_predicates if p not in problem.domain.predicates]
     if unknown:
         known = ", ".join(sorted(problem.domain.predicates))
@@ -144,7 +155,9 @@ def main(argv: list[str] | None = None) -> int:
     plans = []
     for path in args.plans:
         try:
-            plans.append(grounder.ground_plan(read_plan(path.read_text())))
+            plans.append(grounder.ground_plan(read_plan(read_text_file(path))))
+        except NotTextError as error:
+            return _fail(f"{error}: expected a plan")
         except OSError as error:
             return _fail(f"{path}: cannot read plan: {error.strerror or error}")
         except PlanError as error:
