@@ -169,7 +169,7 @@ def score_files(tmp_path: Path) -> dict[str, Path]:
     shutil.copy(DATA / "blocksworld" / "domain.pddl", files["domain"])
     shutil.copy(DATA / "blocksworld" / "p01.pddl", files["problem"])
     result = run(
-        "twostep", "method=sa", "task=1", f"output.root={tmp_path / 'out'}",
+        "twostep", "method=sa", "task=1", f"data.root={DATA}", f"output.root={tmp_path / 'out'}",
         "mlflow.enabled=false", "orchestration.prefect=false", cwd=tmp_path,
     )  # fmt: skip
     assert result.returncode == 0, result.stderr
@@ -267,8 +267,8 @@ def test_data_check_names_a_binary_file(blocks: Path, tmp_path: Path) -> None:
 def sweep_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("bad-files-sweep")
     done = run(
-        "twostep", "-m", "task=1,2", "method=sa", f"output.root={out}", "mlflow.enabled=false",
-        "orchestration.prefect=false", cwd=out,
+        "twostep", "-m", "task=1,2", "method=sa", f"data.root={DATA}", f"output.root={out}",
+        "mlflow.enabled=false", "orchestration.prefect=false", cwd=out,
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
     (folder,) = out.glob("multiruns/*/*")

@@ -157,9 +157,11 @@ def test_one_run_per_job_when_two_processes_hold_the_job_at_once(
     data: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Before: the second process waited for the first one's computation, then logged the
-    job itself while the first was still logging it: two runs for one job (two sweeps
-    at once logged 5 runs for 4 jobs). The first log here is slowed down to make that
-    window wide; two threads stand for the two processes (the lock is a file lock)."""
+    job itself while the first was still logging it: two runs for one job when both
+    looked for the job's run before either created it (two sweeps at once logged 5 runs
+    for 4 jobs). Now the job's lock covers its logging: the second one finds the run
+    logged and asks the tracking interface for nothing. The first log is slowed down to
+    make the window wide; two threads stand for the two processes (a file lock)."""
     original = JobRunLog.log
     calls: list[float] = []
 
@@ -190,6 +192,7 @@ def test_one_run_per_job_when_two_processes_hold_the_job_at_once(
     first.join(timeout=200)
     second.join(timeout=200)
     assert sorted(o.reused for o in outcomes) == [False, True]  # computed once
+    assert len(calls) == 1  # logged by one of them only (before: by both, one after the other)
     runs = job_runs(tmp_path / "out")
     assert Counter(r["tags"]["twostep.job_key"] for r in runs) == {outcomes[0].key: 1}
     assert {o.mlflow_run_id for o in outcomes} == {runs[0]["run_id"]}
