@@ -105,7 +105,8 @@ def test_help_is_the_tools_own_text(tmp_path: Path) -> None:
     assert "powered by Hydra" not in text and text.startswith("twostep: ")
     for expected in ("Usage: twostep", "method=twostep", "agents=2", "data.root=", "Examples:"):
         assert expected in text
-    assert "domain: alfred, alfworld, barman, blocksworld" in text  # Hydra fills in the groups
+    groups = [line for line in text.splitlines() if line.startswith("domain: ")]
+    assert groups and "blocksworld, grippers" in groups[0]  # Hydra fills in the groups
     assert "output.root" in text and "runs/<date>/<time>" in text  # where outputs go
 
 
