@@ -1,24 +1,34 @@
-"""Fault-injection bench: a 20-job sweep through an LLM that fails, killed twice with kill -9.
+"""Fault bench: what a user's mishaps do to a sweep's records, and whether any command
+shows a traceback. One table, one row per scenario, each in an output root of its own:
 
-The sweep (``twostep -m domain=blocksworld task=range(1,21) method=twostep decomposer=llm``)
-asks its LLM questions of the stand-in server of ``tests/llm_standin.py`` on 127.0.0.1
-(``llm=openai-compatible llm.model=openai/standin``), which answers each request at
-random with a rate limit (429), a server error (500/503), a delay longer than the
-client's timeout, a junk answer, or "none" (no further helper subgoal). Twice, at a
-random moment, the sweep's process gets SIGKILL and the same command is started again;
-the third start runs to the end. Then, from the sweeps' job records, the job store and
-the MLflow store:
+    llm-faults        a 20-job TwoStep-LLM sweep through a stand-in LLM server on 127.0.0.1
+                      that answers at random with a rate limit (429), a server error
+                      (500/503), a delay longer than the client's timeout, a junk answer or
+                      "none"; killed with SIGKILL twice, then run to the end
+    deleted-store     a 6-job sweep; `rm outputs/mlflow.db`; the same command again
+    truncated-store   a 6-job sweep; the MLflow store truncated to 0 bytes; the same again
+    concurrent        two identical 4-job sweeps started together (Prefect off)
+    concurrent+svc    the same with `twostep-services up` (jobs as Prefect flows on them)
+    bad-files         a corpus of bad files (binary, a byte-order mark, 20,000 nested
+                      `(and`, a directory, not YAML, wrong arity, an undeclared type, an
+                      action twice) through every console script that reads files
 
-    jobs completed      jobs of the last sweep that finished (goal: all 20)
-    jobs recomputed     job keys whose finished result was computed more than once (goal: 0)
-    MLflow duplicates   job runs beyond one per job key (goal: 0)
-    stored failures     results in the job store that are not a finished job (goal: 0)
+Columns (from the sweeps' job records, the job store and the MLflow store, read with
+MLflow's own client):
 
-    .venv/bin/python bench/bench_faults.py                    # 20 jobs, 2 kills, seed 0
-    .venv/bin/python bench/bench_faults.py --jobs 10 --kills 1 --prefect --seed 3
+    jobs              jobs of the sweep (bad-files: cases)
+    completed         jobs the last sweep finished (bad-files: cases answered with one line
+                      naming the file, or read as the file without its BOM)
+    recomputed        job keys whose finished result was computed more than once (goal: 0)
+    MLflow runs       job runs in the MLflow store
+    duplicates        job runs beyond one per job key (goal: 0)
+    missing           jobs the sweeps recorded whose run is not in the store (goal: 0)
+    stored failures   results in the job store that are not a finished job (goal: 0)
+    tracebacks        Python tracebacks in anything the commands printed (goal: 0)
 
-Prefect is off by default (``orchestration.prefect=false``: the bench is about the
-failures, not the server start); ``--prefect`` runs the jobs as flows on the sweep's server.
+    .venv/bin/python bench/bench_faults.py                          # every scenario
+    .venv/bin/python bench/bench_faults.py --only bad-files,concurrent
+    .venv/bin/python bench/bench_faults.py --jobs 10 --kills 1 --seed 3 --only llm-faults
 """
 
 from __future__ import annotations
@@ -28,6 +38,7 @@ import collections
 import contextlib
 import json
 import random
+import shutil
 import signal
 import socketserver
 import subprocess
@@ -35,17 +46,116 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
+from tests import bad_files  # noqa: E402
 from tests.llm_standin import Fault, Reply, standin_server  # noqa: E402
 
-TWOSTEP = Path(sys.executable).parent / "twostep"
+BIN = Path(sys.executable).parent
+TWOSTEP = BIN / "twostep"
+DATA = REPO / "data"
 JUNK = "As an AI model I cannot ```pddl (:goal (and (on-table"  # unparseable on purpose
 CLIENT_TIMEOUT_S = 2.0
+# A valid single-agent plan of blocksworld p01 (b3 off b1, b1 off b2, then b2 on b3, b1 on b2).
+P01_PLAN = "".join(
+    f"({step})\n"
+    for step in ("unstack b3 b1", "putdown b3", "unstack b1 b2", "putdown b1", "pickup b2",
+                 "stack b2 b3", "pickup b1", "stack b1 b2")
+)  # fmt: skip
+OFFLINE = ["method=twostep", "decomposer=goal-split", "agents=2", "planner.time_limit_s=20"]
+
+
+@dataclass
+class Row:
+    """One scenario's line of the table (None: not measured there)."""
+
+    scenario: str
+    jobs: int
+    completed: int
+    recomputed: int | None = None
+    runs: int | None = None
+    duplicates: int | None = None
+    missing: int | None = None
+    stored_failures: int | None = None
+    tracebacks: int = 0
+    notes: list[str] = field(default_factory=list)
+
+
+# ----------------------------------------------------------------- reading the records
+
+
+def records(out: Path) -> list[dict[str, Any]]:
+    found = []
+    for path in sorted(out.glob("multiruns/*/*/.twostep/jobs/*.json")):
+        with contextlib.suppress(OSError, ValueError):  # a record being written
+            found.append(json.loads(path.read_text()))
+    return found
+
+
+def computed(out: Path) -> int:
+    return sum(1 for r in records(out) if not r.get("reused"))
+
+
+def last_summary(out: Path) -> dict[str, Any]:
+    paths = sorted(out.glob("multiruns/*/*/.twostep/summary.json"), key=lambda p: p.stat().st_mtime)
+    return json.loads(paths[-1].read_text()) if paths else {}
+
+
+def store_keys(out: Path) -> collections.Counter[str]:
+    """Job runs per job key in the output root's MLflow store."""
+    keys: collections.Counter[str] = collections.Counter()
+    if not (out / "mlflow.db").is_file():
+        return keys
+    from mlflow.tracking import MlflowClient
+
+    client = MlflowClient(f"sqlite:///{out}/mlflow.db")
+    for experiment in client.search_experiments():
+        for run in client.search_runs([experiment.experiment_id], max_results=10000):
+            if run.data.tags.get("twostep.kind") == "job":
+                keys[run.data.tags.get("twostep.job_key", run.info.run_id)] += 1
+    return keys
+
+
+def sweep_row(scenario: str, out: Path, jobs: int, outputs: Sequence[str]) -> Row:
+    """The table's columns for a sweep scenario, from what it left in ``out``."""
+    summary = last_summary(out)
+    computations: collections.Counter[str] = collections.Counter()
+    recorded = set()
+    for record in records(out):
+        if record.get("job_key"):
+            recorded.add(str(record["job_key"]))
+        if not record.get("reused") and record.get("status") == "success":
+            computations[str(record.get("job_key"))] += 1
+    stored = [json.loads(p.read_text()) for p in out.glob("jobs/*/result.json")]
+    keys = store_keys(out)
+    return Row(
+        scenario,
+        jobs,
+        int(summary.get("jobs_done", 0)) - int(summary.get("jobs_failed", 0)),
+        recomputed=sum(1 for n in computations.values() if n > 1),
+        runs=sum(keys.values()),
+        duplicates=sum(n - 1 for n in keys.values()),
+        missing=len(recorded - set(keys)),
+        stored_failures=sum(1 for r in stored if r.get("status") in ("llm_error", "error")),
+        tracebacks=sum(text.count("Traceback") for text in outputs),
+    )
+
+
+def run(command: list[str], **kwargs: Any) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(command, capture_output=True, text=True, timeout=3600, **kwargs)
+
+
+def sweep(out: Path, *extra: str) -> list[str]:
+    return [str(TWOSTEP), "-m", f"data.root={DATA}", f"output.root={out}", *OFFLINE, *extra]
+
+
+# ----------------------------------------------------------------- llm-faults
 
 
 class FaultyLLM:
@@ -77,27 +187,14 @@ class FaultyLLM:
             return kind, reply
 
 
-def sweep_command(data: Path, out: Path, jobs: int, api_base: str, prefect: bool) -> list[str]:
+def llm_sweep_command(data: Path, out: Path, jobs: int, api_base: str) -> list[str]:
     return [
         str(TWOSTEP), "-m", "domain=blocksworld", f"task=range(1,{jobs + 1})", "agents=2",
         "method=twostep", "decomposer=llm", "llm=openai-compatible", "llm.model=openai/standin",
         f"llm.api_base={api_base}", "llm.api_key_env=null", f"llm.timeout_s={CLIENT_TIMEOUT_S}",
         "llm.max_retries=4", "llm.backoff_s=0.1", "planner.time_limit_s=20",
-        f"orchestration.prefect={'true' if prefect else 'false'}",
-        f"data.root={data}", f"output.root={out}",
+        "orchestration.prefect=false", f"data.root={data}", f"output.root={out}",
     ]  # fmt: skip
-
-
-def records(out: Path) -> list[dict[str, Any]]:
-    found = []
-    for path in sorted(out.glob("multiruns/*/*/.twostep/jobs/*.json")):
-        with contextlib.suppress(OSError, ValueError):  # a record being written
-            found.append(json.loads(path.read_text()))
-    return found
-
-
-def computed(out: Path) -> int:
-    return sum(1 for r in records(out) if not r.get("reused"))
 
 
 def run_until_killed(command: list[str], out: Path, after: int, rng: random.Random) -> str:
@@ -120,75 +217,277 @@ def run_until_killed(command: list[str], out: Path, after: int, rng: random.Rand
     return f"{len(records(out)) - seen} job(s) finished, {new} of them computed"
 
 
-def mlflow_counts(out: Path) -> tuple[int, int]:
-    """(job runs, duplicates: runs beyond one per job key) in the MLflow store."""
-    from mlflow.tracking import MlflowClient
-
-    client = MlflowClient(f"sqlite:///{out}/mlflow.db")
-    keys: collections.Counter[str] = collections.Counter()
-    for experiment in client.search_experiments():
-        for run in client.search_runs([experiment.experiment_id], max_results=10000):
-            if run.data.tags.get("twostep.kind") == "job":
-                keys[run.data.tags.get("twostep.job_key", run.info.run_id)] += 1
-    return sum(keys.values()), sum(n - 1 for n in keys.values())
-
-
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--jobs", type=int, default=20)
-    parser.add_argument("--kills", type=int, default=2)
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--fault-rate", type=float, default=0.15, help="per fault kind")
-    parser.add_argument("--prefect", action="store_true")
-    parser.add_argument("--data", type=Path, default=REPO / "data")
-    parser.add_argument("--out", type=Path, default=None)
-    parser.add_argument("--save", type=Path, default=None, help="also write the table here")
-    args = parser.parse_args()
-
+def llm_faults(root: Path, args: argparse.Namespace) -> Row:
+    out = root / "out"
     rng = random.Random(args.seed)
-    out = args.out or Path(tempfile.mkdtemp(prefix="bench-faults-")) / "out"
     llm = FaultyLLM(args.seed, args.fault_rate)
-    start = time.perf_counter()
-    lines: list[str] = []
+    notes = []
     # A client that gave up on a delayed answer closes its socket: not worth a traceback.
     socketserver.BaseServer.handle_error = lambda self, request, address: None  # type: ignore[method-assign]
     with standin_server() as server:
         server.next_reply = lambda request, authorization: llm.reply()[1]  # type: ignore[method-assign]
-        command = sweep_command(args.data, out, args.jobs, server.api_base, args.prefect)
+        command = llm_sweep_command(DATA, out, args.jobs, server.api_base)
         for kill in range(args.kills):
             finished = run_until_killed(command, out, rng.randint(3, 6), rng)
-            lines.append(f"start {kill + 1}: killed with SIGKILL after {finished}")
-        final = subprocess.run(command, capture_output=True, text=True, timeout=3600)
-    wall = time.perf_counter() - start
-    summaries = sorted(out.glob("multiruns/*/*/.twostep/summary.json"))
-    summary = json.loads(summaries[-1].read_text()) if summaries else {}
-    computations: collections.Counter[str] = collections.Counter()
-    for record in records(out):
-        if not record.get("reused") and record.get("status") == "success":
-            computations[str(record.get("job_key"))] += 1
-    stored = [json.loads(p.read_text()) for p in out.glob("jobs/*/result.json")]
-    stored_failures = sum(1 for r in stored if r.get("status") in ("llm_error", "error"))
-    runs, duplicates = mlflow_counts(out) if (out / "mlflow.db").is_file() else (0, 0)
+            notes.append(f"start {kill + 1}: killed with SIGKILL after {finished}")
+        final = run(command)
     faults = {k: v for k, v in llm.counts.items() if k != "answer"}
-    lines += [
-        f"start {args.kills + 1}: ran to the end (exit {final.returncode})",
-        "",
-        f"{'jobs':<22}{args.jobs}",
-        f"{'jobs completed':<22}{summary.get('jobs_done', 0) - summary.get('jobs_failed', 0)}"
-        f" (failed {summary.get('jobs_failed', '?')}, reused {summary.get('jobs_reused', '?')})",
-        f"{'jobs recomputed':<22}{sum(1 for n in computations.values() if n > 1)}",
-        f"{'MLflow job runs':<22}{runs}",
-        f"{'MLflow duplicates':<22}{duplicates}",
-        f"{'stored failures':<22}{stored_failures}",
-        f"{'LLM requests':<22}{sum(llm.counts.values())}",
-        f"{'faults injected':<22}"
-        + (", ".join(f"{n} {k}" for k, n in sorted(faults.items())) or "none"),
-        f"{'wall time':<22}{wall:.0f} s ({args.kills + 1} starts, "
-        f"prefect {'on' if args.prefect else 'off'}, seed {args.seed})",
+    notes.append(
+        f"start {args.kills + 1}: ran to the end (exit {final.returncode}); "
+        f"{sum(llm.counts.values())} LLM requests, faults injected: "
+        + (", ".join(f"{n} {k}" for k, n in sorted(faults.items())) or "none")
+    )
+    row = sweep_row("llm-faults", out, args.jobs, [final.stdout + final.stderr])
+    row.notes = notes
+    return row
+
+
+# ----------------------------------------------------------------- a lost MLflow store
+
+
+def lost_store(root: Path, scenario: str, lose: Callable[[Path], None]) -> Row:
+    out = root / "out"
+    command = sweep(out, "domain=blocksworld,grippers", "task=1,2,3")
+    first = run(command)
+    lose(out / "mlflow.db")
+    again = run(command)
+    row = sweep_row(scenario, out, 6, [first.stdout + first.stderr, again.stdout + again.stderr])
+    restored = sum(1 for path in out.glob("jobs/*/mlflow.json"))
+    row.notes.append(
+        f"{scenario}: first run exit {first.returncode}, re-run exit {again.returncode}; "
+        f"{restored} jobs remember their run"
+    )
+    return row
+
+
+def deleted_store(root: Path, args: argparse.Namespace) -> Row:
+    return lost_store(root, "deleted-store", lambda store: store.unlink())
+
+
+def truncated_store(root: Path, args: argparse.Namespace) -> Row:
+    return lost_store(root, "truncated-store", lambda store: store.write_bytes(b""))
+
+
+# ----------------------------------------------------------------- concurrent sweeps
+
+
+def two_sweeps_at_once(out: Path, scenario: str, *extra: str) -> Row:
+    command = sweep(out, "domain=blocksworld", "task=1,2,3,4", *extra)
+    processes = [
+        subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        for _ in range(2)
     ]
-    if final.returncode != 0:
-        lines.append("last start's output (tail):")
-        lines += (final.stdout + final.stderr).strip().splitlines()[-10:]
+    outputs = ["".join(p.communicate(timeout=3600)) for p in processes]
+    row = sweep_row(scenario, out, 4, outputs)
+    summaries = [json.loads(p.read_text()) for p in out.glob("multiruns/*/*/.twostep/summary.json")]
+    row.completed = min(int(s["jobs_done"]) - int(s["jobs_failed"]) for s in summaries)
+    row.notes.append(
+        f"{scenario}: exits {[p.returncode for p in processes]}, "
+        f"jobs reused per sweep {[s['jobs_reused'] for s in summaries]}"
+    )
+    return row
+
+
+def concurrent(root: Path, args: argparse.Namespace) -> Row:
+    return two_sweeps_at_once(root / "out", "concurrent", "orchestration.prefect=false")
+
+
+def concurrent_services(root: Path, args: argparse.Namespace) -> Row:
+    out = root / "out"
+    services = BIN / "twostep-services"
+    up = run([str(services), "up", "--root", str(out)])
+    try:
+        if up.returncode != 0:
+            return Row("concurrent+svc", 4, 0, notes=[f"services did not start: {up.stderr}"])
+        row = two_sweeps_at_once(out, "concurrent+svc")
+    finally:
+        run([str(services), "down", "--root", str(out)])
+    row.tracebacks += (up.stdout + up.stderr).count("Traceback")
+    return row
+
+
+# ----------------------------------------------------------------- bad files
+
+
+@dataclass(frozen=True)
+class Case:
+    """A console script on one spoiled file."""
+
+    name: str
+    command: list[str]
+    spoiled: Path
+    expected_exit: int = 2
+
+
+def bad_file_cases(root: Path) -> list[Case]:
+    """Set up every case under ``root``: the spoiled files and the commands that read them."""
+    cases: list[Case] = []
+    spoilers = {
+        "binary": bad_files.binary,
+        "bom": bad_files.with_bom,
+        "deep": bad_files.deep,
+        "directory": bad_files.directory,
+    }
+    pddl_only = {
+        "wrong-arity": ("p01.pddl", bad_files.wrong_arity),
+        "undeclared-type": ("p01.pddl", bad_files.undeclared_type),
+        "action-twice": ("domain.pddl", bad_files.duplicate_action),
+    }
+
+    def data_root(tag: str) -> Path:
+        folder = root / tag / "data"
+        shutil.copytree(DATA / "blocksworld", folder / "blocksworld")
+        return folder
+
+    def twostep(tag: str, data: Path, *extra: str) -> list[str]:
+        return [str(TWOSTEP), "task=1", f"data.root={data}", f"output.root={root / tag / 'out'}",
+                "mlflow.enabled=false", "orchestration.prefect=false", *extra]  # fmt: skip
+
+    targets = [(f, spoil, n) for f in ("p01.pddl", "domain.pddl") for n, spoil in spoilers.items()]
+    targets += [(f, spoil, n) for n, (f, spoil) in pddl_only.items()]
+    targets += [
+        ("expert.yaml", bad_files.not_yaml, "not-yaml"),
+        ("p01.nl", bad_files.binary, "binary"),
+    ]
+    for file, spoil, kind in targets:
+        tag = f"twostep-{file}-{kind}"
+        data = data_root(tag)
+        spoil(data / "blocksworld" / file)
+        extra = ["method=twostep", "decomposer=expert"] if file == "expert.yaml" else []
+        cases.append(Case(tag, twostep(tag, data, *extra), data / "blocksworld" / file))
+    for role, file in (("domain", "domain.pddl"), ("problem", "p01.pddl"), ("plan", "a.plan")):
+        for kind, spoil in [
+            *spoilers.items(),
+            *[(n, s) for n, (f, s) in pddl_only.items() if f == file],
+        ]:
+            if role == "plan" and kind == "deep":
+                continue
+            tag = f"score-{role}-{kind}"
+            folder = root / tag
+            folder.mkdir(parents=True)
+            for name in ("domain.pddl", "p01.pddl"):
+                shutil.copy(DATA / "blocksworld" / name, folder / name)
+            (folder / "a.plan").write_text(P01_PLAN)
+            spoil(folder / file)
+            command = [str(BIN / "twostep-score"), str(folder / "domain.pddl"),
+                       str(folder / "p01.pddl"), str(folder / "a.plan"), "--no-cache",
+                       "--agent-predicates", "none"]  # fmt: skip
+            cases.append(
+                Case(tag, command, folder / file, 0 if role == "plan" and kind == "bom" else 2)
+            )
+    for kind, spoil in spoilers.items():
+        tag = f"prompts-p01-{kind}"
+        data = data_root(tag)
+        spoil(data / "blocksworld" / "p01.pddl")
+        command = [str(BIN / "twostep-prompts"), "--data", str(data), "--domain", "blocksworld",
+                   "--task", "1"]  # fmt: skip
+        cases.append(Case(tag, command, data / "blocksworld" / "p01.pddl"))
+    data = data_root("data-check")
+    bad_files.binary(data / "blocksworld" / "p01.pddl")
+    command = [str(BIN / "twostep-data"), "check", "--data", str(data), "--domain", "blocksworld"]
+    cases.append(Case("data-check-binary", command, data / "blocksworld" / "p01.pddl", 1))
+    out = root / "report-sweep" / "out"
+    done = run(
+        sweep(out, "method=sa", "task=1,2", "mlflow.enabled=false", "orchestration.prefect=false")
+    )
+    assert done.returncode == 0, done.stderr
+    (sweep_dir,) = out.glob("multiruns/*/*")
+    for name in ("result.json", ".hydra/config.yaml"):
+        copy = root / f"report-{name.replace('/', '-')}"
+        shutil.copytree(sweep_dir, copy)
+        (job,) = [p for p in copy.iterdir() if p.name.startswith("0_")]
+        bad_files.binary(job / name)
+        command = [
+            str(BIN / "twostep-report"),
+            "--sweep-dir",
+            str(copy),
+            "--out",
+            str(copy / "report"),
+        ]
+        cases.append(Case(f"report-{name}-binary", command, job / name))
+    runs_csv = root / "runs.csv"
+    bad_files.binary(runs_csv)
+    command = [str(BIN / "twostep-report"), "--runs-csv", str(runs_csv), "--out", str(root / "r")]
+    cases.append(Case("report-runs.csv-binary", command, runs_csv))
+    record = root / "services" / "services.json"
+    record.parent.mkdir()
+    bad_files.binary(record)
+    command = [str(BIN / "twostep-services"), "status", "--root", str(record.parent)]
+    cases.append(Case("services-record-binary", command, record, 3))
+    return cases
+
+
+def bad_files_row(root: Path, args: argparse.Namespace) -> Row:
+    cases = bad_file_cases(root)
+    answered, tracebacks, notes = 0, 0, []
+    for case in cases:
+        done = run(case.command, cwd=root)
+        output = done.stdout + done.stderr
+        tracebacks += output.count("Traceback")
+        errors = [line for line in done.stderr.splitlines() if line.strip()]
+        if case.expected_exit == 2:
+            ok = done.returncode == 2 and len(errors) == 1 and str(case.spoiled) in errors[0]
+        else:
+            ok = done.returncode == case.expected_exit and "Traceback" not in output
+        answered += ok
+        if not ok:
+            shown = (errors or [output.strip()])[0][:160]
+            notes.append(f"bad-files: {case.name}: exit {done.returncode}: {shown}")
+    return Row("bad-files", len(cases), answered, tracebacks=tracebacks, notes=notes)
+
+
+# ----------------------------------------------------------------- the table
+
+SCENARIOS: dict[str, Callable[[Path, argparse.Namespace], Row]] = {
+    "llm-faults": llm_faults,
+    "deleted-store": deleted_store,
+    "truncated-store": truncated_store,
+    "concurrent": concurrent,
+    "concurrent+svc": concurrent_services,
+    "bad-files": bad_files_row,
+}
+COLUMNS = ("jobs", "completed", "recomputed", "MLflow runs", "duplicates", "missing",
+           "stored failures", "tracebacks")  # fmt: skip
+
+
+def table(rows: list[Row]) -> list[str]:
+    def cell(value: int | None) -> str:
+        return "-" if value is None else str(value)
+
+    values = [
+        [r.scenario, *map(cell, (r.jobs, r.completed, r.recomputed, r.runs, r.duplicates,
+                                 r.missing, r.stored_failures, r.tracebacks))]
+        for r in rows
+    ]  # fmt: skip
+    header = ["scenario", *COLUMNS]
+    widths = [max(len(row[i]) for row in [header, *values]) for i in range(len(header))]
+    lines = ["  ".join(text.ljust(w) if i == 0 else text.rjust(w) for i, (text, w) in
+                       enumerate(zip(row, widths, strict=True))) for row in [header, *values]]  # fmt: skip
+    return [lines[0], "-" * len(lines[0]), *lines[1:]]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--only", default=",".join(SCENARIOS), help="comma-separated scenarios")
+    parser.add_argument("--jobs", type=int, default=20, help="llm-faults: jobs")
+    parser.add_argument("--kills", type=int, default=2, help="llm-faults: SIGKILLs")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--fault-rate", type=float, default=0.15, help="per fault kind")
+    parser.add_argument("--save", type=Path, default=None, help="also write the table here")
+    args = parser.parse_args()
+    chosen = [name.strip() for name in args.only.split(",") if name.strip()]
+    unknown = [name for name in chosen if name not in SCENARIOS]
+    if unknown:
+        parser.error(f"unknown scenario(s) {', '.join(unknown)}; known: {', '.join(SCENARIOS)}")
+    base = Path(tempfile.mkdtemp(prefix="bench-faults-"))
+    rows, start = [], time.perf_counter()
+    for name in chosen:
+        began = time.perf_counter()
+        row = SCENARIOS[name](base / name.replace("+", "-"), args)
+        row.notes.append(f"{name}: {time.perf_counter() - began:.0f} s")
+        rows.append(row)
+    lines = table(rows) + [""] + [note for row in rows for note in row.notes]
+    lines.append(f"total {time.perf_counter() - start:.0f} s, seed {args.seed}, outputs in {base}")
     text = "\n".join(lines)
     print(text)
     if args.save:

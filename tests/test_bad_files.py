@@ -24,36 +24,20 @@ from pathlib import Path
 
 import pytest
 
+from tests.bad_files import (
+    binary,
+    deep,
+    directory,
+    duplicate_action,
+    not_yaml,
+    undeclared_type,
+    with_bom,
+    wrong_arity,
+)
 from tests.conftest import DATA
 
 BIN = Path(sys.executable).parent
-BOM = b"\xef\xbb\xbf"
 NEW_READER = pytest.mark.xfail(strict=True, reason="new reader, issue 17")
-
-
-def binary(path: Path) -> None:
-    path.write_bytes(b"\x89PNG\r\n\x1a\n\x00\xff\xfe binary")
-
-
-def with_bom(path: Path) -> None:
-    path.write_bytes(BOM + path.read_bytes())
-
-
-def deep(path: Path) -> None:
-    """20,000 nested (and ...) in the file's first goal or precondition."""
-    text = path.read_text()
-    anchor = ":goal" if ":goal" in text else ":precondition"
-    head, tail = text.split(anchor, 1)
-    path.write_text(f"{head}{anchor} {'(and ' * 20_000}(arm-empty){')' * 20_000}\n{tail}")
-
-
-def directory(path: Path) -> None:
-    path.unlink()
-    path.mkdir()
-
-
-def not_yaml(path: Path) -> None:
-    path.write_text("p01:\n  2: [(on b1 b2)\n  3: {broken\n")
 
 
 def run(script: str, *args: str | Path, cwd: Path) -> subprocess.CompletedProcess[str]:
@@ -299,21 +283,6 @@ def test_services_read_a_record_that_is_not_text_as_no_services(tmp_path: Path) 
     done = run("twostep-services", "status", "--root", tmp_path, cwd=tmp_path)
     assert "Traceback" not in done.stderr and done.returncode == 3  # nothing is up
     assert done.stdout.splitlines() == ["prefect: down", "mlflow: down"]
-
-
-def wrong_arity(path: Path) -> None:
-    path.write_text(path.read_text().replace("    (on b1 b2)\n", "    (on b1)\n", 1))
-
-
-def undeclared_type(path: Path) -> None:
-    path.write_text(path.read_text().replace("- block\n", "- block w1 - widget\n", 1))
-
-
-def duplicate_action(path: Path) -> None:
-    text = path.read_text()
-    first = text.index("(:action")
-    second = text.index("(:action", first + 1)
-    path.write_text(text[:second] + text[first:second] + text[second:])
 
 
 @NEW_READER
