@@ -25,6 +25,7 @@ from twostep.benchmark import BenchmarkTask, load_task, task_path
 from twostep.decomposers.base import Decomposer
 from twostep.embodied import ExecutorSettings
 from twostep.execution import SearchBudget
+from twostep.files import yaml_problem
 from twostep.methods import (
     DIRECT,
     Method,
@@ -132,10 +133,7 @@ def check_kitchen(task: BenchmarkTask) -> None:
     try:
         task_floor_plan(task.problem, task.domain_path.parent)
     except yaml.YAMLError as error:
-        mark = getattr(error, "problem_mark", None)
-        where = f"{kitchen}:{mark.line + 1}" if mark is not None else str(kitchen)
-        problem = getattr(error, "problem", None) or str(error).strip().splitlines()[0]
-        raise JobError(f"{where}: not valid YAML ({problem})") from None
+        raise JobError(yaml_problem(kitchen, error)) from None
     except FloorPlanError as error:
         if kitchen.is_file():
             raise JobError(f"{kitchen}: {error}") from None

@@ -1,6 +1,6 @@
 """Files that readers (or a ``kill -9``) never see half-written: the one atomic writer; and
-the one reader of text files a user hands over (UTF-8, a byte-order mark dropped, a file
-that is not text named as such)."""
+the one reader of text and YAML files a user hands over (UTF-8, a byte-order mark dropped;
+a file that is not text, or not YAML, named with its line)."""
 
 from __future__ import annotations
 
@@ -45,3 +45,26 @@ def read_text_file(path: Path) -> str:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as error:
         raise NotTextError(f"{path}: not a text file (byte {error.start} is not UTF-8)") from None
+
+
+class FileFormatError(ValueError):
+    """A text file whose content is not in the format it should be (``file:line: what``)."""
+
+
+def yaml_problem(path: Path, error: Exception) -> str:
+    """A YAML parser's error as one line: ``file:line: not valid YAML (what)``."""
+    mark = getattr(error, "problem_mark", None)
+    where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
+    return f"{where}: not valid YAML ({getattr(error, 'problem', None) or 'unreadable'})"
+
+
+def read_yaml_file(path: Path) -> Any:
+    """A YAML file's data; :class:`NotTextError` or :class:`FileFormatError` (with the
+    file and line) when it cannot be read as YAML, ``OSError`` as reading does."""
+    import yaml
+
+    text = read_text_file(path)
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        raise FileFormatError(yaml_problem(path, error)) from None

@@ -15,11 +15,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from twostep.benchmark import BenchmarkError
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
-from twostep.files import NotTextError, read_text_file
+from twostep.files import FileFormatError, NotTextError, read_yaml_file
 
 
 def load_expert_subgoals(path: Path) -> dict[str, dict[int, list[str]]]:
@@ -28,18 +26,13 @@ def load_expert_subgoals(path: Path) -> dict[str, dict[int, list[str]]]:
     if not path.is_file():
         return {}
     try:
-        raw: Any = yaml.safe_load(read_text_file(path)) or {}
+        raw: Any = read_yaml_file(path) or {}
         return {
             str(task): {int(n): [str(g) for g in goals or []] for n, goals in (per_n or {}).items()}
             for task, per_n in raw.items()
         }
-    except NotTextError as error:
+    except (NotTextError, FileFormatError) as error:
         raise BenchmarkError(str(error)) from None
-    except yaml.YAMLError as error:
-        mark = getattr(error, "problem_mark", None)
-        where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
-        problem = getattr(error, "problem", None) or "not YAML"
-        raise BenchmarkError(f"{where}: not valid YAML ({problem})") from None
     except (AttributeError, TypeError, ValueError):
         raise BenchmarkError(
             f"{path}: expected 'p01: {{N: [helper 1's subgoal, ...]}}' entries"

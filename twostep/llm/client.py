@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from twostep.files import NotTextError, read_text_file, write_json_atomic
+from twostep.files import FileFormatError, NotTextError, read_yaml_file, write_json_atomic
 from twostep.redaction import looks_like_a_key, redact_text
 
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
@@ -227,17 +227,11 @@ def rejected_message(settings: LLMSettings, status: int | None) -> str:
 
 def load_script(path: Path) -> list[str]:
     """Read the ``answers:`` list of a script file."""
-    import yaml
 
     try:
-        data = yaml.safe_load(read_text_file(Path(path)))
-    except NotTextError as exc:
+        data = read_yaml_file(Path(path))
+    except (NotTextError, FileFormatError) as exc:
         raise LLMScriptError(f"cannot read LLM script: {exc}") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
-        problem = getattr(exc, "problem", None) or "not YAML"
-        raise LLMScriptError(f"cannot read LLM script {where}: {problem}") from None
     except OSError as exc:
         raise LLMScriptError(f"cannot read LLM script {path}: {exc.strerror or exc}") from None
     answers = data.get("answers") if isinstance(data, dict) else None
