@@ -27,6 +27,7 @@ from flows.config import register
 from flows.console import format_schedule, format_summary
 from flows.environment import quiet_defaults
 from flows.sweep_callback import SweepCallback
+from twostep.cli import console_main
 
 if TYPE_CHECKING:
     from flows.job import JobOutcome
@@ -128,6 +129,7 @@ def _sweep_record(outcome: JobOutcome) -> dict[str, Any]:
     }
 
 
+@console_main
 def main() -> None:
     if "--version" in sys.argv[1:]:  # ours, not Hydra's
         from flows.console import version_text

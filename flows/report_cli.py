@@ -43,6 +43,7 @@ import pandas as pd
 
 from flows.sweep_state import job_records
 from twostep.benchmark import DEFAULT_DATA_ROOT
+from twostep.cli import console_main
 from twostep.files import NotTextError, read_text_file
 from twostep.report import (
     METRICS,
@@ -381,6 +382,7 @@ def _safe_dir_name(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.\-]+", "_", name).strip("_") or "report"
 
 
+@console_main
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command; returns the exit code (0 ok, 1 nothing to report)."""
     args = _parser().parse_args(argv)

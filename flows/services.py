@@ -36,6 +36,7 @@ from flows.servers import (
     stop_process,
     url_host,
 )
+from twostep.cli import console_main
 from twostep.files import write_json_atomic
 
 RECORD = "services.json"
@@ -180,6 +181,7 @@ def status_lines(root: Path) -> tuple[list[str], bool]:
     return lines, ok
 
 
+@console_main
 def main(argv: Sequence[str] | None = None) -> int:
     quiet_defaults()
     parser = argparse.ArgumentParser(

@@ -309,3 +309,31 @@ def test_score_names_what_is_wrong_in_pddl_with_file_and_line(
     message = one_line_naming(score(score_files, tmp_path), score_files[role], line)
     assert all(word in message for word in words), message
     assert "Error(" not in message and "error_used_name" not in message
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["twostep", "--help"],
+        ["twostep", "--version"],
+        ["twostep-prompts", "--domain", "blocksworld", "--task", "5", "--agents", "3"],
+        ["twostep-report", "--help"],
+        ["twostep-services", "status", "--root", "."],
+        ["twostep-data", "--help"],
+        ["twostep-score", "--help"],
+    ],
+    ids=lambda command: " ".join(command[:2]),
+)
+def test_no_traceback_when_the_reader_goes_away(tmp_path: Path, command: list[str]) -> None:
+    """`twostep --help | head -1` printed a BrokenPipeError traceback: the reader closes
+    the pipe here before the command writes."""
+    process = subprocess.Popen(
+        [str(BIN / command[0]), *command[1:]],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=tmp_path,
+    )  # fmt: skip
+    assert process.stdout is not None and process.stderr is not None
+    process.stdout.close()
+    stderr = process.stderr.read().decode()
+    process.wait(timeout=120)
+    assert "Traceback" not in stderr and "Exception ignored" not in stderr, stderr
+    assert process.returncode in (0, 3, 141)  # 3: services status with nothing up

@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from twostep.benchmark import DEFAULT_DATA_ROOT
+from twostep.cli import console_main
 from twostep.generators import (
     DOMAINS,
     GENERATORS,
@@ -174,6 +175,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+@console_main
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     code: int = args.run(args)

@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from twostep.benchmark import DEFAULT_DATA_ROOT, BenchmarkError, load_task
+from twostep.cli import console_main
 from twostep.llm.prompts import (
     Message,
     generator_messages,
@@ -44,6 +45,7 @@ def _show(title: str, messages: Sequence[Message]) -> str:
     return "\n".join(out)
 
 
+@console_main
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="twostep-prompts", description="Print the TwoStep LLM prompts of a task."

@@ -29,6 +29,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from twostep.benchmark import load_pddl_files
+from twostep.cli import console_main
 from twostep.execution import DEFAULT_SEARCH_BUDGET, MODES, ScheduleError, parallel_length
 from twostep.files import NotTextError, read_text_file
 from twostep.pddl import PDDLError
@@ -130,6 +131,7 @@ def _fail(message: str) -> int:
     return EXIT_BAD_INPUT
 
 
+@console_main
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
