@@ -196,3 +196,29 @@ def test_one_run_per_job_when_two_processes_hold_the_job_at_once(
     runs = job_runs(tmp_path / "out")
     assert Counter(r["tags"]["twostep.job_key"] for r in runs) == {outcomes[0].key: 1}
     assert {o.mlflow_run_id for o in outcomes} == {runs[0]["run_id"]}
+
+
+@pytest.mark.slow
+def test_two_identical_sweeps_on_the_services_log_one_run_per_job(
+    data: Path, tmp_path: Path
+) -> None:
+    """Before: two identical sweeps with `twostep-services up` logged 6 job runs for 4
+    jobs. Both run their jobs as Prefect flows on the services' server here."""
+    out = tmp_path / "out"
+    up = command("twostep-services", "up", "--root", str(out))
+    try:
+        assert up.returncode == 0, up.stderr
+        sweep = [str(BIN / "twostep"), "-m", "task=1,2,3", "method=sa", f"data.root={data}",
+                 f"output.root={out}", "planner.time_limit_s=20"]  # fmt: skip
+        processes = [
+            subprocess.Popen(sweep, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            for _ in range(2)
+        ]
+        outputs = [p.communicate(timeout=600) for p in processes]
+    finally:
+        command("twostep-services", "down", "--root", str(out))
+    for process, (stdout, stderr) in zip(processes, outputs, strict=True):
+        assert process.returncode == 0, stdout + stderr
+        assert "prefect http://127.0.0.1:" in stdout  # the services' server, not one of its own
+    keys = Counter(r["tags"]["twostep.job_key"] for r in job_runs(out))
+    assert len(keys) == 3 and set(keys.values()) == {1}
