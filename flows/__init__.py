@@ -8,6 +8,7 @@ module              what it is for
 ``checks``          checks before any work: config values, writable locations
 ``build``           config -> library objects, once per job (:class:`~flows.build.Job`)
 ``job``             one job end to end: reuse or compute, files, MLflow record
+``status``          how a job ended, from its result (tags, records, flow state)
 ``step_stats``      what a job's step calls did: fresh calls, cache hits, time
 ``prefect_flow``    the Prefect flow of one job and its tasks (cache keys, retries)
 ``store``           the store of finished jobs (keys: :mod:`twostep.identity`)

@@ -31,9 +31,7 @@ import os
 import sys
 import time
 import traceback
-from collections.abc import Mapping
 from dataclasses import dataclass, field
-from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
@@ -43,6 +41,7 @@ from flows.checks import JobError
 from flows.config import TwostepConfig, typed
 from flows.console import one_line
 from flows.services import running_prefect_api
+from flows.status import JobStatus, job_status
 from flows.step_stats import StepStats, counting_steps
 from flows.store import JobStore, job_config, job_inputs, job_key
 from flows.sweep_state import SweepState
@@ -62,14 +61,6 @@ from twostep.pddl import PDDLError
 INPUT_ERRORS: tuple[type[Exception], ...] = (BenchmarkError, PDDLError, JobError, LLMScriptError)
 
 
-class JobStatus(StrEnum):
-    """How a job ended (the ``twostep.status`` tag, the sweep's job records)."""
-
-    SUCCESS = "success"
-    FAILED = "failed"
-    TIMEOUT = "timeout"
-
-
 @dataclass
 class JobOutcome:
     name: str
@@ -83,16 +74,6 @@ class JobOutcome:
     input_error: bool = False  # the job's input was bad (unknown task, malformed PDDL)
     mlflow_run_id: str | None = None
     tracking_error: str | None = None  # logging failed; the result itself is safe
-
-
-def job_status(result: Mapping[str, Any]) -> tuple[JobStatus, str | None]:
-    """``twostep.status`` and ``twostep.error`` of a result.json dict."""
-    if result.get("success"):
-        return JobStatus.SUCCESS, None
-    if result.get("status") == "timeout":
-        return JobStatus.TIMEOUT, result.get("message") or "planner time limit"
-    message = result.get("error") or result.get("message") or result.get("status") or "failed"
-    return JobStatus.FAILED, " ".join(str(message).split())[:500]
 
 
 def failed_result(config: dict[str, Any], error: str) -> dict[str, Any]:

@@ -66,6 +66,7 @@ from prefect.settings import (
 from prefect.states import Completed, Failed
 from prefect.utilities.annotations import quote
 
+from flows.status import JobStatus, job_status
 from flows.step_stats import StepStats
 from twostep import planner
 from twostep.execution import DEFAULT_SEARCH_BUDGET, ParallelExecution, SearchBudget
@@ -394,8 +395,6 @@ def final_state(result: Mapping[str, Any]) -> dict[str, Any] | State[Any]:
     """What the flow returns for a job's result: the result itself (the run is Completed)
     for a success, else a Failed state named after how the job ended, with the reason as
     its message and the result as its data (the job is still recorded; a sweep goes on)."""
-    from flows.job import JobStatus, job_status
-
     status, reason = job_status(result)
     if status is JobStatus.SUCCESS:
         return dict(result)
