@@ -51,12 +51,13 @@ def test_a_successful_job_returns_its_result() -> None:
 def test_failed_jobs_flow_runs_are_failed_on_the_server_and_the_sweep_goes_on(
     tmp_path: Path, prefect_server: str
 ) -> None:
-    """A 2-job sweep on a real Prefect server: goal-split succeeds; the LLM decomposer
-    without credentials ends `llm_error` (no network is tried)."""
+    """A 2-job sweep on a real Prefect server (the session's: its flow runs are told apart
+    by the sweep's tag, and named unlike other tests'): goal-split succeeds; the LLM
+    decomposer without credentials ends `llm_error` (no network is tried)."""
     data = make_data(tmp_path / "data")
     environment = {k: v for k, v in os.environ.items() if k != "OPENAI_API_KEY"}
     done = subprocess.run(
-        [str(Path(sys.executable).parent / "twostep"), "-m", "method=twostep", "task=2",
+        [str(Path(sys.executable).parent / "twostep"), "-m", "method=twostep", "task=2", "agents=3",
          "decomposer=goal-split,llm", "llm=gpt-4o", f"data.root={data}",
          f"output.root={tmp_path / 'out'}", "mlflow.enabled=false",
          f"orchestration.prefect_api_url={prefect_server}", "planner.time_limit_s=20"],
