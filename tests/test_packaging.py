@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tomllib
@@ -193,7 +194,20 @@ def test_installed_wheel_runs_the_demo_from_a_fresh_directory(tmp_path: Path) ->
     uv = os.environ.get("UV") or "uv"
     dist, venv, work = tmp_path / "dist", tmp_path / "venv", tmp_path / "work"
     work.mkdir()
-    built = run([uv, "build", "--wheel", "--out-dir", str(dist), str(REPO)], REPO, 600)
+    # Built from a copy of the sources: a build writes twostep.egg-info beside the packages,
+    # which in the checkout would shadow the installed metadata (version, entry points).
+    source = tmp_path / "source"
+    shutil.copytree(
+        REPO, source,
+        ignore=shutil.ignore_patterns(".git", ".venv*", ".uv-bootstrap", "outputs", "build",
+                                      "dist", "*.egg-info", ".mypy_cache", ".ruff_cache",
+                                      ".pytest_cache", "multirun"),
+    )  # fmt: skip
+    pretend = {**os.environ, "SETUPTOOLS_SCM_PRETEND_VERSION": metadata.version("twostep")}
+    built = subprocess.run(
+        [uv, "build", "--wheel", "--out-dir", str(dist), str(source)],
+        capture_output=True, text=True, cwd=source, env=pretend, timeout=600,
+    )  # fmt: skip
     assert built.returncode == 0, built.stderr[-2000:]
     (wheel,) = dist.glob("twostep-*.whl")
     environment = {**os.environ, "UV_PROJECT_ENVIRONMENT": str(venv)}
