@@ -57,7 +57,7 @@ def format_summary(result: RunResult | Mapping[str, Any]) -> str:
     parts = [
         display_name(r),
         f"N={r.get('agents')}",
-        "success" if r.get("success") else f"FAILED ({r.get('status')}: {r.get('message')})",
+        "success" if r.get("success") else f"FAILED ({_failure(r)})",
         f"exec_length={r.get('exec_length')}",
     ]
     if r.get("sa_length") is not None:
@@ -87,6 +87,13 @@ def format_summary(result: RunResult | Mapping[str, Any]) -> str:
                 f"embodied: {r.get('embodied_status')}{where}: {embodied.get('reason', '')}"
             )
     return " | ".join(parts)
+
+
+def _failure(result: Mapping[str, Any]) -> str:
+    """How a run failed: its status and message (a message that names its status, such as
+    an embodied verdict, alone)."""
+    status, message = str(result.get("status")), str(result.get("message") or "")
+    return message if message.startswith(f"{status}:") else f"{status}: {message}"
 
 
 def _agent_number(agent: str) -> int:

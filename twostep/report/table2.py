@@ -198,8 +198,9 @@ def _number(value: float, digits: int = 1) -> str:
 def length_cell(row: Mapping[str, Any]) -> str:
     mean, std = row["length_mean"], row["length_std"]
     if pd.isna(mean):
-        return "n/a"
-    text = _number(mean) if pd.isna(std) else f"{_number(mean)} ± {_number(std)}"
+        text = "n/a"
+    else:
+        text = _number(mean) if pd.isna(std) else f"{_number(mean)} ± {_number(std)}"
     if row["source"] == "ours":
         failed, unexecuted = row.get("n_failed"), row.get("n_not_executed")
         notes = [f"{int(failed)} failed"] if not pd.isna(failed) and failed else []
