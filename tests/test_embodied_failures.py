@@ -23,6 +23,7 @@ from hydra import compose, initialize_config_dir
 
 from flows.config import register
 from flows.job import JobStatus, execute_job
+from flows.report_cli import load_runs_from_mlflow
 from flows.report_cli import main as report_main
 from flows.store import JobStore
 from tests.test_cli import REPO, run_cli
@@ -145,13 +146,17 @@ def _csv(path: Path) -> list[dict[str, str]]:
         return list(csv.DictReader(handle))
 
 
-@pytest.mark.slow  # one process of the command: ~15 s
-def test_the_command_exits_1(tmp_path: Path) -> None:
-    data = boxed_in_kitchen(tmp_path / "data")
+@pytest.mark.slow  # one process of the command with MLflow: ~20 s
+def test_the_command_exits_1_and_mlflow_records_a_failure(tmp_path: Path) -> None:
+    data, out = boxed_in_kitchen(tmp_path / "data"), tmp_path / "out"
     proc = run_cli(
-        f"data.root={data}", f"output.root={tmp_path / 'out'}", "domain=alfworld",
-        *MA_ON_ITS_START,
+        f"data.root={data}", f"output.root={out}", "domain=alfworld", *MA_ON_ITS_START,
+        "mlflow.enabled=true",
     )  # fmt: skip
     assert proc.returncode == 1, proc.stderr
-    assert "FAILED (embodied_failed: boxed_in at step 0, agent1)" in proc.stdout
+    verdict = "embodied_failed: boxed_in at step 0, agent1"
+    assert f"FAILED ({verdict})" in proc.stdout
     assert "Traceback" not in proc.stderr
+    runs = load_runs_from_mlflow(f"sqlite:///{out / 'mlflow.db'}", "twostep")
+    assert list(runs["status"]) == ["failed"] and list(runs["error"]) == [verdict]
+    assert runs["embodied_length"].isna().all()
