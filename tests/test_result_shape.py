@@ -45,8 +45,8 @@ ORCHESTRATION = {
     "task_load_s",
 }  # fmt: skip
 PLANNER_CALL = {
-    "agent", "cost", "exit_code", "goal", "message", "plan", "planner_time_s", "plans_found",
-    "role", "status", "wall_time_s",
+    "agent", "cost", "exit_code", "goal", "guard_stopped", "message", "plan", "planner_time_s",
+    "plans_found", "role", "status", "wall_time_s",
 }  # fmt: skip
 JOB_FILES = {  # beyond result.json, schedule.txt and plans/agent0.plan
     "sa": set(),
@@ -57,8 +57,8 @@ JOB_FILES = {  # beyond result.json, schedule.txt and plans/agent0.plan
 }
 METRICS = {
     "exec_length", "job_wall_time_s", "llm_time_s", "orchestration_overhead_s",
-    "planner_time_s", "planner_timeouts", "planning_time_s", "sa_length", "server_wait_s",
-    "speedup_exec", "state_editing_time_s", "success", "wall_time_s",
+    "planner_guard_stops", "planner_time_s", "planner_timeouts", "planning_time_s", "sa_length",
+    "server_wait_s", "speedup_exec", "state_editing_time_s", "success", "wall_time_s",
 }  # fmt: skip
 SUBGOAL_METRICS = {"subgoals_accepted", "subgoals_discarded", "subgoals_proposed"}
 JOB_METRICS = {  # beyond METRICS
