@@ -90,25 +90,39 @@ def test_executor_config_alfworld_embodied_by_default() -> None:
     assert make().method.fallback_if_longer is True
 
 
-def test_domain_alfred_runs_a_real_problem_on_its_scene(tmp_path: Path) -> None:
-    """``domain=alfred``: the wheel's alfred.pddl beside our FloorPlan14 problem, MA with
-    three agents, executed on the scene's layout (no domain.* overrides needed)."""
+@pytest.mark.parametrize(
+    ("method", "agents"), [("sa", 1), ("ma", 2), ("ma", 3), ("twostep", 2), ("twostep", 3)]
+)
+def test_domain_alfred_runs_a_real_problem_on_its_scene(
+    tmp_path: Path, method: str, agents: int
+) -> None:
+    """``domain=alfred``: the wheel's alfred.pddl beside our FloorPlan14 problem, each
+    method through the command's front end (no domain.* overrides needed), executed on the
+    scene's layout; the trace checker, which reads the layout and the PDDL itself, replays
+    the trace: no violation, no interaction out of reach."""
     from tests.test_embodied_layouts import alfred_root
-    from twostep.trace_check import alfworld_layouts_folder
+    from twostep.trace_check import alfworld_layouts_folder, check_trace
 
     if alfworld_layouts_folder() is None:
         pytest.skip("the alfworld wheel (extra 'embodied') is missing")
     root = alfred_root(tmp_path)
-    cfg = make(f"data.root={root}", "domain=alfred", "task=1", "method=ma", "agents=3",
-               "executor.render=false")  # fmt: skip
+    cfg = make(f"data.root={root}", "domain=alfred", "task=1", f"method={method}",
+               f"agents={agents}", "executor.render=false")  # fmt: skip
     assert list(cfg.domain.agent_predicates) == [
         "atlocation", "holds", "holdsany", "holdsanyreceptacleobject",
     ]  # fmt: skip
     result = run_config(typed(cfg)).to_dict()
-    assert result["success"] and result["agents"] == 3
+    assert result["success"] and result["agents"] == agents
     assert result["embodied_status"] == "success", result["embodied"]
     assert result["embodied"]["floor_plan"] == "FloorPlan14"
-    assert result["embodied_trace"]["floor_plan"]["layout"] == "FloorPlan14"
+    record = result["embodied_trace"]
+    assert record["floor_plan"]["layout"] == "FloorPlan14"
+    folder = root / "alfred"
+    domain, problem = (folder / "domain.pddl").read_text(), (folder / "p01.pddl").read_text()
+    report = check_trace(record, result["plans"], domain, problem)
+    assert report.ok and report.out_of_reach == 0, report.violations
+    bodies = {t["agent"] for t in record["trace"]}
+    assert bodies <= set(result["plans"]) and len(result["plans"]) <= agents
 
 
 def test_pictures_in_single_runs_and_for_a_sweeps_seed_0(tmp_path: Path) -> None:
