@@ -27,6 +27,7 @@ from typing import Any
 import pandas as pd
 import yaml
 
+from twostep.benchmark import TITLES_FILE, BenchmarkError, parse_task_titles
 from twostep.planner import returncodes
 from twostep.report.aggregation import sample_std
 
@@ -34,8 +35,6 @@ TABLE2_DOMAIN = "alfworld"
 TABLE2_TASKS: tuple[int, ...] = (1, 2, 3, 4)
 TABLE2_AGENTS = 2
 PAPER_TIME_LIMIT_S = 3600.0
-#: Optional file of a kitchen domain's data folder with a short description per task.
-TITLES_FILE = "titles.yaml"
 
 #: The paper's Table II: per series, per task then macro, (length mean, std or None) and
 #: planning time in seconds (None: timeout at 60 minutes).
@@ -194,23 +193,16 @@ def table_two(
 
 
 def read_task_titles(domain_dir: Path) -> dict[int, str]:
-    """Task number -> short description from ``<domain_dir>/titles.yaml`` (a mapping such
-    as ``1: Put an apple, a heated egg and a clean fork on the dining table``); empty when
-    the file is absent or not such a mapping."""
+    """Task number -> short description from ``<domain_dir>/titles.yaml``
+    (:func:`twostep.benchmark.parse_task_titles` reads its lines); empty when the file is
+    absent or not such a mapping."""
     path = domain_dir / TITLES_FILE
     if not path.is_file():
         return {}
     try:
-        loaded = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return parse_task_titles(yaml.safe_load(path.read_text(encoding="utf-8")) or {}, path)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError, BenchmarkError):
         return {}
-    if not isinstance(loaded, Mapping):
-        return {}
-    titles: dict[int, str] = {}
-    for key, value in loaded.items():
-        if isinstance(key, int) and isinstance(value, str) and value.strip():
-            titles[key] = " ".join(value.split())
-    return titles
 
 
 def _number(value: float, digits: int = 1) -> str:
