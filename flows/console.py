@@ -13,7 +13,7 @@ from importlib import metadata, util
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from flows.status import failure_line
+from flows.status import reason_line
 from twostep.identity import display_name
 from twostep.redaction import redact_text
 
@@ -59,7 +59,7 @@ def format_summary(result: RunResult | Mapping[str, Any]) -> str:
     parts = [
         display_name(r),
         f"N={r.get('agents')}",
-        "success" if r.get("success") else f"FAILED ({failure_line(status, message)})",
+        "success" if r.get("success") else f"FAILED ({reason_line(status, message)})",
         f"exec_length={r.get('exec_length')}",
     ]
     if r.get("sa_length") is not None:

@@ -27,7 +27,7 @@ def job_status(result: Mapping[str, Any]) -> tuple[JobStatus, str | None]:
     return JobStatus.FAILED, " ".join(str(message).split())[:500]
 
 
-def failure_line(kind: str, reason: str) -> str:
+def reason_line(kind: str, reason: str) -> str:
     """``kind: reason`` (the console's summary, the Prefect state's message); a reason that
     names its kind already (an embodied verdict, ``embodied_failed: boxed_in at step 12,
     agent1``) alone."""
