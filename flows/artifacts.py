@@ -31,8 +31,12 @@ from twostep.files import write_json_atomic
 EMBODIED_FOLDER = "embodied"
 
 
-def write_job_files(job_dir: Path, result: Mapping[str, Any]) -> list[tuple[Path, str | None]]:
+def write_job_files(
+    job_dir: Path, result: Mapping[str, Any], pictures: bool = True
+) -> list[tuple[Path, str | None]]:
     """Write the job's files; return (file, artifact folder) pairs to log, result.json last.
+    ``pictures``: draw an embodied execution's GIF and timeline
+    (:func:`twostep.embodied.draws_pictures`).
 
     result.json goes last so that, in MLflow as on disk, its presence means the rest is there.
     """
@@ -72,15 +76,18 @@ def write_job_files(job_dir: Path, result: Mapping[str, Any]) -> list[tuple[Path
             path = job_dir / "llm" / f"helper{helper}.json"
             write_json_atomic(path, {k: subgoal.get(k) for k in _LLM_KEYS})
             files.append((path, "llm"))
-    files += _embodied_files(job_dir, result)
+    files += _embodied_files(job_dir, result, pictures)
     path = job_dir / "result.json"
     write_json_atomic(path, {k: v for k, v in result.items() if k != TRACE_KEY})
     files.append((path, None))
     return files
 
 
-def _embodied_files(job_dir: Path, result: Mapping[str, Any]) -> list[tuple[Path, str | None]]:
-    """The embodied trace (result.json keeps only its summary) and its two pictures."""
+def _embodied_files(
+    job_dir: Path, result: Mapping[str, Any], pictures: bool
+) -> list[tuple[Path, str | None]]:
+    """The embodied trace (result.json keeps only its summary) and, with ``pictures``, its
+    two pictures."""
     recorded = result.get(TRACE_KEY)
     if not isinstance(recorded, Mapping):
         return []
@@ -88,18 +95,18 @@ def _embodied_files(job_dir: Path, result: Mapping[str, Any]) -> list[tuple[Path
     path = folder / "trace.json"
     write_json_atomic(path, dict(recorded))
     files: list[tuple[Path, str | None]] = [(path, EMBODIED_FOLDER)]
-    if not recorded.get("render", True):
+    if not pictures:
         return files
     from twostep.embodied import write_pictures
 
     # Hydra logs INFO to the console; matplotlib's "Animation.save using ..." is noise there.
     logging.getLogger("matplotlib").setLevel(logging.WARNING)
     try:
-        pictures = write_pictures(result, folder)
+        drawn = write_pictures(result, folder)
     except Exception as error:  # a picture is not worth the job: the trace is kept
         print(f"warning: embodied pictures not drawn: {error}", file=sys.stderr)
         return files
-    return files + [(p, EMBODIED_FOLDER) for p in pictures.values()]
+    return files + [(p, EMBODIED_FOLDER) for p in drawn.values()]
 
 
 def picture_paths(job_dir: Path) -> list[tuple[str, Path]]:

@@ -33,6 +33,7 @@ from twostep.methods import (
     MethodRequest,
     RunResult,
     Steps,
+    adopt_execution,
     method_for,
     run_single_agent,
 )
@@ -187,7 +188,7 @@ class Job:
     request: MethodRequest
     compare_sa: bool
     executor: ExecutorSettings | None = None
-    render: bool = True  # embodied: draw the GIF and the timeline
+    layout: str | None = None  # embodied: the scene (FloorPlanN, open); None: found
     task_load_s: float = 0.0  # reading and parsing the task's PDDL
 
     def run(self, steps: Steps = DIRECT) -> RunResult:
@@ -209,9 +210,10 @@ class Job:
         return self.execute(result)
 
     def execute(self, run: RunResult) -> RunResult:
-        """``executor=embodied``: the run's plans executed on the task's floor plan; the
-        result gains the embodied fields (:func:`twostep.embodied.embodied_fields`). A
-        failed execution is a recorded status, never an exception."""
+        """``executor=embodied``: the run's plans executed on the task's floor plan (the
+        scene ``layout`` when set); the result gains the embodied fields and fails when the
+        execution does (:func:`twostep.methods.adopt_execution`). A failed execution is a
+        recorded status, never an exception."""
         if self.executor is None:
             return run
         from twostep.embodied import embodied_fields, execute_plans, task_floor_plan
@@ -221,10 +223,9 @@ class Job:
             run.extra["embodied"] = {"status": "not_run", "reason": "no plan to execute"}
             return run
         task = self.request.task
-        floor = task_floor_plan(task.problem, task.problem_path.parent)
+        floor = task_floor_plan(task.problem, task.problem_path.parent, self.layout)
         execution = execute_plans(task.problem, run.plans, run.agent_order, floor, self.executor)
-        run.extra.update(embodied_fields(execution, floor))
-        run.extra["embodied_trace"]["render"] = self.render
+        adopt_execution(run, embodied_fields(execution, floor))
         return run
 
 
@@ -266,7 +267,7 @@ def build_job(cfg: TwostepConfig) -> Iterator[Job]:
             request,
             compare_sa=bool(cfg.compare_sa),
             executor=executor_settings(cfg) if embodied else None,
-            render=bool(cfg.executor.render),
+            layout=cfg.executor.layout,
             task_load_s=task_load_s,
         )
 

@@ -66,7 +66,12 @@ class ExecutorConfig:
     stall_limit: int = _EXECUTOR.stall_limit
     backoff_radius: int = _EXECUTOR.backoff_radius
     random_start: bool = _EXECUTOR.random_start
-    render: bool = True  # GIF + timeline in the job directory (MLflow artifacts)
+    # The scene a real AlfWorld problem is placed on (FloorPlanN, or open); None: found
+    # from the problem (twostep.embodied.floor_plan_for_task)
+    layout: str | None = None
+    # GIF + timeline in the job directory (MLflow artifacts); None: every single run, and
+    # in a sweep the jobs of seed 0 (twostep.embodied.draws_pictures)
+    render: bool | None = None
 
 
 @dataclass

@@ -13,6 +13,7 @@ from importlib import metadata, util
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from flows.status import reason_line
 from twostep.identity import display_name
 from twostep.redaction import redact_text
 
@@ -54,10 +55,11 @@ def format_summary(result: RunResult | Mapping[str, Any]) -> str:
     r = result if isinstance(result, Mapping) else result.to_dict()
     if r.get("status") == "failed" and "error" in r:
         return f"{display_name(r)} | FAILED: {r['error']}"
+    status, message = str(r.get("status")), str(r.get("message") or "")
     parts = [
         display_name(r),
         f"N={r.get('agents')}",
-        "success" if r.get("success") else f"FAILED ({r.get('status')}: {r.get('message')})",
+        "success" if r.get("success") else f"FAILED ({reason_line(status, message)})",
         f"exec_length={r.get('exec_length')}",
     ]
     if r.get("sa_length") is not None:

@@ -53,6 +53,7 @@ from flows.tracking.runs import (
     run_exists,
 )
 from twostep.benchmark import BenchmarkError
+from twostep.embodied.run import draws_pictures
 from twostep.identity import is_complete_result, job_name
 from twostep.llm.client import LLMScriptError
 from twostep.pddl import PDDLError
@@ -246,7 +247,8 @@ def execute_job(
             cfg, config, (key, name), sweep, stored, refused, store, start
         )
         outcome.mlflow_run_id = held
-        files = write_job_files(job_dir, outcome.result)
+        pictures = draws_pictures(cfg.executor.render, int(cfg.seed), in_sweep=sweep is not None)
+        files = write_job_files(job_dir, outcome.result, pictures)
         if details:
             (job_dir / "error.txt").write_text(details)
         tracking_start = time.perf_counter()

@@ -66,7 +66,7 @@ from prefect.settings import (
 from prefect.states import Completed, Failed
 from prefect.utilities.annotations import quote
 
-from flows.status import JobStatus, job_status
+from flows.status import JobStatus, job_status, reason_line
 from flows.step_stats import StepStats
 from twostep import planner
 from twostep.execution import DEFAULT_SEARCH_BUDGET, ParallelExecution, SearchBudget
@@ -403,7 +403,7 @@ def final_state(result: Mapping[str, Any]) -> dict[str, Any] | State[Any]:
     if embodied and embodied != "success" and kind == "solved":
         kind = "embodied_failed"  # planned, but the plans did not execute in the kitchen
     name = FAILED_STATE_NAMES.get(kind) or kind.replace("_", " ").title().replace(" ", "")
-    return Failed(name=name, message=f"{kind}: {reason}", data=dict(result))
+    return Failed(name=name, message=reason_line(kind, str(reason)), data=dict(result))
 
 
 @flow(name="twostep-job", persist_result=False, validate_parameters=False, log_prints=False)

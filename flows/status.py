@@ -25,3 +25,10 @@ def job_status(result: Mapping[str, Any]) -> tuple[JobStatus, str | None]:
         return JobStatus.TIMEOUT, result.get("message") or "planner time limit"
     message = result.get("error") or result.get("message") or result.get("status") or "failed"
     return JobStatus.FAILED, " ".join(str(message).split())[:500]
+
+
+def reason_line(kind: str, reason: str) -> str:
+    """``kind: reason`` (the console's summary, the Prefect state's message); a reason that
+    names its kind already (an embodied verdict, ``embodied_failed: boxed_in at step 12,
+    agent1``) alone."""
+    return reason if reason.startswith(f"{kind}:") else f"{kind}: {reason}"

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from PIL import Image
 
 from twostep.embodied import (
@@ -113,16 +114,22 @@ def test_doors_labels_and_text_size_in_the_gif(tmp_path: Path) -> None:
     assert TEXT_PX >= 10 and _font(TEXT_PX).size >= 10
 
 
-def test_labels_never_overlap_on_the_kitchen() -> None:
+@pytest.mark.parametrize("dpi", [DPI, 200])  # the GIF's, and save_frame's PNG
+def test_labels_never_overlap_on_the_kitchen(dpi: float) -> None:
+    """The labels' boxes hold the text as PIL draws it at the picture's size (a box made
+    for smaller text let "microwave1" and "stoveburner1" run into each other in a PNG
+    frame), and no two boxes overlap."""
     from twostep.embodied import load_floor_plan
 
     floor = load_floor_plan(
         Path(__file__).resolve().parent.parent / "data" / "alfworld" / "kitchen.yaml"
     )
     result, _ = _run()
-    figure = _KitchenFigure(result, floor, DPI)
+    figure = _KitchenFigure(result, floor, dpi)
     boxes = [box for _, box in figure.labels]
     assert len(boxes) == len(floor.furniture) == 10
-    for i, box in enumerate(boxes):
-        assert box.height >= 10
+    font = _font(TEXT_PX * dpi / DPI)
+    for i, (text, box) in enumerate(figure.labels):
+        left, top, right, bottom = font.getbbox(text)
+        assert box.width >= right - left and box.height >= max(10, bottom - top), text
         assert not any(box.overlaps(other) for other in boxes[i + 1 :])

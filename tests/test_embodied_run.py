@@ -22,6 +22,7 @@ from flows.build import run_config
 from flows.config import register, typed
 from tests.conftest import BLOCKS_DOMAIN, FIXTURES, blocks_problem
 from tests.test_cli import REPO, run_cli
+from twostep.embodied import FloorPlanError
 
 OUTPUT: list[Path] = []  # the module's output.root (set by the fixture below)
 
@@ -89,25 +90,92 @@ def test_executor_config_alfworld_embodied_by_default() -> None:
     assert make().method.fallback_if_longer is True
 
 
-def test_domain_alfred_runs_a_real_problem_on_its_scene(tmp_path: Path) -> None:
-    """``domain=alfred``: the wheel's alfred.pddl beside our FloorPlan14 problem, MA with
-    three agents, executed on the scene's layout (no domain.* overrides needed)."""
+@pytest.mark.parametrize(
+    ("method", "agents"), [("sa", 1), ("ma", 2), ("ma", 3), ("twostep", 2), ("twostep", 3)]
+)
+def test_domain_alfred_runs_a_real_problem_on_its_scene(
+    tmp_path: Path, method: str, agents: int
+) -> None:
+    """``domain=alfred``: the wheel's alfred.pddl beside our FloorPlan14 problem, each
+    method through the command's front end (no domain.* overrides needed), executed on the
+    scene's layout; the trace checker, which reads the layout and the PDDL itself, replays
+    the trace: no violation, no interaction out of reach."""
+    from tests.test_embodied_layouts import alfred_root
+    from twostep.trace_check import alfworld_layouts_folder, check_trace
+
+    if alfworld_layouts_folder() is None:
+        pytest.skip("the alfworld wheel (extra 'embodied') is missing")
+    root = alfred_root(tmp_path)
+    cfg = make(f"data.root={root}", "domain=alfred", "task=1", f"method={method}",
+               f"agents={agents}", "executor.render=false")  # fmt: skip
+    assert list(cfg.domain.agent_predicates) == [
+        "atlocation", "holds", "holdsany", "holdsanyreceptacleobject",
+    ]  # fmt: skip
+    result = run_config(typed(cfg)).to_dict()
+    assert result["success"] and result["agents"] == agents
+    assert result["embodied_status"] == "success", result["embodied"]
+    assert result["embodied"]["floor_plan"] == "FloorPlan14"
+    record = result["embodied_trace"]
+    assert record["floor_plan"]["layout"] == "FloorPlan14"
+    folder = root / "alfred"
+    domain, problem = (folder / "domain.pddl").read_text(), (folder / "p01.pddl").read_text()
+    report = check_trace(record, result["plans"], domain, problem)
+    assert report.ok and report.out_of_reach == 0, report.violations
+    bodies = {t["agent"] for t in record["trace"]}
+    assert bodies <= set(result["plans"]) and len(result["plans"]) <= agents
+
+
+def test_pictures_in_single_runs_and_for_a_sweeps_seed_0(tmp_path: Path) -> None:
+    """``executor.render`` unset: a single run draws its GIF and timeline, a sweep's job
+    only for seed 0; ``true`` or ``false`` decide for every job. Drawing is no part of
+    what a job computes: the same job, asked again with another render setting, is
+    reused from the job store."""
+    import os
+    import time
+
+    from flows.job import execute_job
+    from flows.sweep_state import SweepState
+
+    sweep = SweepState(str(tmp_path / "sweep"), time.time(), os.getpid())
+    cases = [  # (seed, in a sweep, executor.render) -> drawn, reused
+        (1, True, None, False, False),
+        (1, False, None, True, True),
+        (1, True, "true", True, True),
+        (1, False, "false", False, True),
+        (0, True, None, True, False),
+    ]
+    for number, (seed, in_sweep, render, drawn, reused) in enumerate(cases):
+        extra = [] if render is None else [f"executor.render={render}"]
+        cfg = make("domain=alfworld", "task=4", "method=sa", f"seed={seed}",
+                   f"output.root={tmp_path / 'out'}", "mlflow.enabled=false",
+                   "orchestration.prefect=false", *extra)  # fmt: skip
+        job_dir = tmp_path / "jobs" / str(number)
+        outcome = execute_job(cfg, job_dir, sweep if in_sweep else None)
+        assert outcome.status == "success" and outcome.reused is reused
+        pictures = {p.name for p in (job_dir / "embodied").iterdir()}
+        expected = {"trace.json", "kitchen.gif", "timeline.png"} if drawn else {"trace.json"}
+        assert pictures == expected, (seed, in_sweep, render)
+
+
+def test_executor_layout_chooses_the_scene(tmp_path: Path) -> None:
+    """``executor.layout``: the problem's own scene is found without it; a scene that does
+    not hold the problem's locations is refused with their names; ``open`` places them on
+    an open grid."""
     from tests.test_embodied_layouts import alfred_root
     from twostep.trace_check import alfworld_layouts_folder
 
     if alfworld_layouts_folder() is None:
         pytest.skip("the alfworld wheel (extra 'embodied') is missing")
     root = alfred_root(tmp_path)
-    cfg = make(f"data.root={root}", "domain=alfred", "task=1", "method=ma", "agents=3",
-               "executor.render=false")  # fmt: skip
-    assert list(cfg.domain.agent_predicates) == [
-        "atlocation", "holds", "holdsany", "holdsanyreceptacleobject",
-    ]  # fmt: skip
-    result = run_config(typed(cfg)).to_dict()
-    assert result["success"] and result["agents"] == 3
-    assert result["embodied_status"] == "success", result["embodied"]
-    assert result["embodied"]["floor_plan"] == "FloorPlan14"
-    assert result["embodied_trace"]["floor_plan"]["layout"] == "FloorPlan14"
+    base = [f"data.root={root}", "domain=alfred", "task=1", "method=sa"]
+    found = run_config(typed(make(*base))).to_dict()["embodied_trace"]["floor_plan"]
+    chosen = run_config(typed(make(*base, "executor.layout=FloorPlan14"))).to_dict()
+    assert found["layout"] == chosen["embodied_trace"]["floor_plan"]["layout"] == "FloorPlan14"
+    opened = run_config(typed(make(*base, "executor.layout=open"))).to_dict()
+    assert opened["embodied"]["floor_plan"] == "alfworld-locations"
+    assert "layout" not in opened["embodied_trace"]["floor_plan"]
+    with pytest.raises(FloorPlanError, match="not on a reachable point"):
+        run_config(typed(make(*base, "executor.layout=FloorPlan1")))
 
 
 def test_alfworld_symbolic_executor_has_no_embodied_fields() -> None:

@@ -71,6 +71,9 @@ def test_wall_clock_guard_gives_timeout_status() -> None:
     problem = parse_problem(BLOCKS_DOMAIN, TOWER)
     result = plan(problem, PlannerSettings("lama-first", 10, wall_time_limit_s=0.01))
     assert result.status is Status.TIMEOUT and result.plan is None and result.exit_code is None
+    assert result.guard_stopped and result.to_dict()["guard_stopped"] is True
+    finished = plan(problem, PlannerSettings("lama-first", 10))
+    assert finished.solved and finished.exit_code == 0 and not finished.guard_stopped
 
 
 def test_unknown_alias_is_an_error_status() -> None:

@@ -30,6 +30,10 @@ BASE = {"domain": "blocksworld", "task": 1, "method": "twostep", "agents": 2, "s
         ({"status": "unsolvable", "message": ""}, "Unsolvable", "unsolvable: unsolvable"),
         ({"status": "solved", "message": "", "executor": "embodied",
           "embodied_status": "deadlock"}, "EmbodiedFailed", "embodied_failed: solved"),
+        # the result rule's verdict names its status already: said once
+        ({"status": "embodied_failed", "message": "embodied_failed: boxed_in at step 0, agent1",
+          "executor": "embodied", "embodied_status": "boxed_in"},
+         "EmbodiedFailed", "embodied_failed: boxed_in at step 0, agent1"),
     ],
 )  # fmt: skip
 def test_a_job_without_success_ends_its_flow_run_failed(

@@ -22,6 +22,7 @@ from matplotlib.lines import Line2D
 from matplotlib.text import Text
 
 from flows.report_cli import main
+from twostep.benchmark import DEFAULT_DATA_ROOT
 from twostep.report import build_report, format_console, load_runs_from_csv, write_report
 from twostep.report.plots import domain_figure, normalised_figure, overview_figure
 from twostep.report.table2 import read_task_titles
@@ -342,6 +343,9 @@ def test_table_two_is_headed_by_the_task_descriptions(tmp_path: Path) -> None:
         "Clear the sink |  |" in text
     )
     assert read_task_titles(tmp_path) == {}  # no file: no titles
+    # the kitchen's own titles.yaml names its tasks by file (p01: ...): read as well
+    shipped = read_task_titles(DEFAULT_DATA_ROOT / "alfworld")
+    assert sorted(shipped) == [1, 2, 3, 4] and shipped[3].startswith("Put the apple")
     # the command finds them under --data-root and writes them into table2.csv
     runs_csv = tmp_path / "runs.csv"
     kitchen_runs().to_csv(runs_csv, index=False)

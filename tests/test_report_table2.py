@@ -13,10 +13,11 @@ from typing import Any
 import pytest
 
 from twostep.report import build_report, format_console, load_runs_from_sweep_dir
-from twostep.report.table2 import planner_limit_hits
+from twostep.report.table2 import guard_stops, planner_limit_hits
 
 FINISHED = {"status": "solved", "exit_code": 0, "message": "plan found"}
 OUT_OF_TIME = {"status": "solved", "exit_code": 23, "message": "search out of time"}
+GUARD = {"status": "solved", "exit_code": None, "guard_stopped": True, "message": "guard"}
 
 
 def _result(
@@ -66,6 +67,8 @@ def table(tmp_path: Path) -> Any:
         _result("sa", 4, 2, 42, 7.0, FINISHED),
     ]
     twostep = [_result("twostep", 1, s, 8 + 2 * s, 0.5, FINISHED) for s in range(2)]
+    # task 2: the wall-clock guard stopped the planner (with a plan): a length, no time
+    twostep.append(_result("twostep", 2, 0, 15, 40.0, GUARD))
     _write(tmp_path, [*sa, *twostep])
     report = build_report(load_runs_from_sweep_dir(tmp_path))
     return report
@@ -95,12 +98,16 @@ def test_table2_means_stds_and_timeouts(table: Any) -> None:
     assert sa["macro"]["length_mean"] == pytest.approx((12 + 20 + 32 + 41) / 4)
     assert sa["macro"]["length_std"] == pytest.approx((2 + 0 + math.sqrt(8) + 1) / 4)
     assert sa["macro"]["n_timeouts"] == 1  # task 2 only: task 4 timed out in 1 run of 3
-    # TwoStep ran task 1 only: no macro length
+    # TwoStep ran tasks 1 and 2 only: no macro length
     twostep = [r for r in ours["series"].unique() if str(r).startswith("TwoStep")]
     assert len(twostep) == 1
     t1 = _row(frame, twostep[0], "1")
     assert t1["length_mean"] == 9.0 and t1["length_std"] == pytest.approx(math.sqrt(2))
     assert math.isnan(_row(frame, twostep[0], "macro")["length_mean"])
+    # the guard's stop is no timeout, and its time is no planning time
+    t2 = _row(frame, twostep[0], "2")
+    assert (t2["length_mean"], t2["n_timeouts"], t2["n_guard_stops"]) == (15.0, 0, 1)
+    assert math.isnan(t2["time_mean"])
     # the paper's rows are beside ours
     assert _row(frame, "paper: TwoStep", "macro")["length_mean"] == 129.8
     assert _row(frame, "paper: SA", "macro")["n_timeouts"] == 3
@@ -118,12 +125,26 @@ def test_table2_printed(table: Any) -> None:
         "1 timeout",
     ]
     assert "12.0 ± 2.0" in text and "32.0 ± 2.8 (1 not executed)" in text
+    lines = text.splitlines()
+    twostep_row = next(i for i, line in enumerate(lines) if line.startswith("| TwoStep"))
+    twostep_time = lines[twostep_row + 1]  # its planning-time row
+    cells = [c.strip() for c in twostep_time.strip("|").split("|")]
+    assert cells[2:4] == ["0.50 ± 0.00", "n/a (1 guard stop)"]
+    assert cells[-1] == "0 timeouts (1 guard stop)"
     assert "paper: MA" in text and "260.0 ± 248.5" in text
 
 
 def test_planner_limit_hits() -> None:
     assert planner_limit_hits({"planner_calls": [FINISHED, OUT_OF_TIME, OUT_OF_TIME]}) == 2
-    killed = {"status": "solved", "exit_code": None, "message": "wall-clock guard stopped it"}
-    assert planner_limit_hits({"planner_calls": [killed]}) == 1
     assert planner_limit_hits({"planner_calls": [], "status": "timeout"}) == 1
     assert planner_limit_hits({"planner_calls": [FINISHED], "status": "solved"}) == 0
+    # the wall-clock guard is reported apart: no timeout (issue 19), with or without the
+    # flag (results written before it have no exit code and the guard's message)
+    flagged = {**FINISHED, "exit_code": None, "guard_stopped": True, "status": "timeout"}
+    before = {"status": "solved", "exit_code": None, "message": "wall-clock guard stopped it"}
+    for killed in (flagged, before):
+        result = {"planner_calls": [OUT_OF_TIME, killed], "status": killed["status"]}
+        assert (planner_limit_hits(result), guard_stops(result)) == (1, 1)
+        alone = {"planner_calls": [killed], "status": killed["status"]}
+        assert (planner_limit_hits(alone), guard_stops(alone)) == (0, 1)
+    assert guard_stops({"planner_calls": [FINISHED, OUT_OF_TIME]}) == 0

@@ -45,8 +45,8 @@ ORCHESTRATION = {
     "task_load_s",
 }  # fmt: skip
 PLANNER_CALL = {
-    "agent", "cost", "exit_code", "goal", "message", "plan", "planner_time_s", "plans_found",
-    "role", "status", "wall_time_s",
+    "agent", "cost", "exit_code", "goal", "guard_stopped", "message", "plan", "planner_time_s",
+    "plans_found", "role", "status", "wall_time_s",
 }  # fmt: skip
 JOB_FILES = {  # beyond result.json, schedule.txt and plans/agent0.plan
     "sa": set(),
@@ -57,8 +57,8 @@ JOB_FILES = {  # beyond result.json, schedule.txt and plans/agent0.plan
 }
 METRICS = {
     "exec_length", "job_wall_time_s", "llm_time_s", "orchestration_overhead_s",
-    "planner_time_s", "planner_timeouts", "planning_time_s", "sa_length", "server_wait_s",
-    "speedup_exec", "state_editing_time_s", "success", "wall_time_s",
+    "planner_guard_stops", "planner_time_s", "planner_timeouts", "planning_time_s", "sa_length",
+    "server_wait_s", "speedup_exec", "state_editing_time_s", "success", "wall_time_s",
 }  # fmt: skip
 SUBGOAL_METRICS = {"subgoals_accepted", "subgoals_discarded", "subgoals_proposed"}
 JOB_METRICS = {  # beyond METRICS
@@ -77,10 +77,10 @@ TAGS = {
 PARAMS = {
     "agents", "compare_sa", "data.root", "decomposer.cut", "decomposer.link_degree",
     "decomposer.name", "domain.agent_predicates", "domain.name", "executor.backoff_radius",
-    "executor.max_steps", "executor.name", "executor.random_start", "executor.render",
-    "executor.stall_limit", "experiment", "llm.api_base", "llm.api_key_env", "llm.backoff_s",
-    "llm.cache_dir", "llm.local", "llm.max_retries", "llm.mode", "llm.model", "llm.script",
-    "llm.temperature", "llm.timeout_s", "llm.top_p", "llm.use_cache",
+    "executor.layout", "executor.max_steps", "executor.name", "executor.random_start",
+    "executor.render", "executor.stall_limit", "experiment", "llm.api_base", "llm.api_key_env",
+    "llm.backoff_s", "llm.cache_dir", "llm.local", "llm.max_retries", "llm.mode", "llm.model",
+    "llm.script", "llm.temperature", "llm.timeout_s", "llm.top_p", "llm.use_cache",
     "method.fallback_if_longer", "method.name", "mlflow.artifact_location",
     "mlflow.connect_timeout_s", "mlflow.enabled", "mlflow.experiment", "mlflow.tracking_uri",
     "orchestration.dask_address", "orchestration.dask_workers", "orchestration.job_store",

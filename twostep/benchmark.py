@@ -136,15 +136,20 @@ def task_titles(domain: str, root: Path = DEFAULT_DATA_ROOT) -> dict[int, str]:
     path = domain_dir(domain, root) / TITLES_FILE
     if not path.is_file():
         return {}
-    data = yaml.safe_load(path.read_text()) or {}
+    return parse_task_titles(yaml.safe_load(path.read_text()) or {}, path)
+
+
+def parse_task_titles(data: object, path: Path) -> dict[int, str]:
+    """Task id -> title from a loaded ``titles.yaml`` (keys ``p01`` or ``1``: the task's
+    file name or its number); a :class:`BenchmarkError` naming ``path`` for anything else."""
     if not isinstance(data, dict):
         raise BenchmarkError(f"{path}: expected p01: title lines")
     titles = {}
     for key, title in data.items():
-        match = re.fullmatch(r"p(\d+)", str(key))
+        match = re.fullmatch(r"p?(\d+)", str(key))
         if match is None:
             raise BenchmarkError(f"{path}: '{key}' is not a task name (p01, p02, ...)")
-        titles[int(match.group(1))] = str(title)
+        titles[int(match.group(1))] = " ".join(str(title).split())
     return titles
 
 

@@ -31,15 +31,16 @@ from typing import Any
 
 # Bump when a change to the pipeline makes stored results stale.
 # job-3: the methods moved into twostep/methods (one request, enums, typed SA time)
-JOB_VERSION = "job-3"
+# job-4: an embodied execution that fails fails the run (status embodied_failed)
+JOB_VERSION = "job-4"
 
 # Config groups (top-level keys) that say where or how a job runs. ``experiment`` only
 # selects values for other keys, which are in the config themselves.
 NOT_IDENTITY_GROUPS: tuple[str, ...] = ("hydra", "output", "mlflow", "orchestration", "experiment")
 
-# Single keys that change how an answer is obtained, never which answer.
+# Single keys that change how an answer is obtained or shown, never which answer.
 NOT_IDENTITY_KEYS: frozenset[str] = frozenset(
-    {"llm.cache_dir", "llm.max_retries", "llm.backoff_s", "llm.api_key_env"}
+    {"llm.cache_dir", "llm.max_retries", "llm.backoff_s", "llm.api_key_env", "executor.render"}
 )
 
 # Results with these statuses did not finish their work: never stored, retried by a re-run.

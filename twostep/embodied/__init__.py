@@ -32,6 +32,7 @@ from twostep.embodied.floorplan import (
 )
 from twostep.embodied.layouts import OPEN_GRID, find_scene, floor_plan_for_task, scene_floor_plan
 from twostep.embodied.run import (
+    draws_pictures,
     embodied_failure,
     embodied_fields,
     task_floor_plan,
@@ -50,6 +51,7 @@ __all__ = [
     "TraceStep",
     "alfworld_position",
     "build_floor_plan",
+    "draws_pictures",
     "embodied_failure",
     "embodied_fields",
     "embody",

@@ -30,7 +30,7 @@ executing the plan, and each body starts from a copy of that agent's initial fac
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from random import Random
 from typing import Any
@@ -319,7 +319,7 @@ def embody(
 class _Body:
     name: str
     plan: list[GroundAction]
-    source: tuple[str | None, ...]  # each step in the task's own terms; None: bookkeeping
+    source: tuple[str, ...]  # each step as its plan names it (the task's own terms)
     targets: list[Cell | None]  # the cell a navigation action walks to, None otherwise
     position: Cell
     index: int = 0
@@ -356,10 +356,8 @@ class _Execution:
         embodiment: Embodiment,
         floor_plan: FloorPlan,
         settings: ExecutorSettings,
-        task_action: Callable[[str], str | None] | None = None,
     ):
         self.floor_plan = floor_plan
-        self.task_action = task_action or (lambda action: action)
         self.settings = settings
         self.rng = Random(settings.seed)
         self.problem = embodiment.problem
@@ -393,13 +391,11 @@ class _Execution:
                         f"{floor_plan.name}",
                     )
                 targets.append(cell)
-            named = tuple(self.task_action(step) for step in source)
-            self.bodies.append(_Body(body, grounded, named, targets, (-1, -1)))
+            self.bodies.append(_Body(body, grounded, source, targets, (-1, -1)))
         self._place_bodies()
         self.start_cells = [b.position for b in self.bodies]
         for placed in self.bodies:
             placed.holding = self._held(placed.name)
-        self._settle()
         self.scene = self.start_scene = scene_of(self.state)
 
     # ---------------------------------------------------------------- set-up
@@ -491,11 +487,6 @@ class _Execution:
         action = body.plan[body.index]
         source = body.source[body.index]
         target = body.targets[body.index]
-        if source is None:  # bookkeeping that cannot apply yet (_settle applies it)
-            missing = action.failing_precondition(self.state)
-            self.waits += 1
-            self._record(body, "wait", reason=f"precondition {missing} of the goal")
-            return "waiting"
         if target is None:
             # An interaction is made from the cell of the location the body is at; a body
             # moved off it (a backoff, a random start) walks back first (queued navigation).
@@ -509,14 +500,13 @@ class _Execution:
             return "waiting"
         if target is None:
             self._apply(body, action)
-            self._settle()
             scene = scene_of(self.state)
             changed, self.scene = scene != self.scene, scene
             self._record(
                 body,
                 "interact",
                 action=source,
-                applied=self.task_action(str(action)),
+                applied=str(action),
                 scene=scene if changed else None,
             )
             return "progress"
@@ -525,24 +515,8 @@ class _Execution:
             if body.position != target:
                 return outcome
         self._apply(body, action)
-        self._record(body, "move", action=source, applied=self.task_action(str(action)))
-        self._settle()
+        self._record(body, "move", action=source, applied=str(action))
         return "progress"
-
-    def _settle(self) -> None:
-        """Apply every body's next steps that are bookkeeping of a compilation (its goal
-        action: no step in the task's own terms) as soon as they are applicable: they take
-        no environment step."""
-        changed = True
-        while changed:
-            changed = False
-            for body in self.bodies:
-                while not body.done and body.source[body.index] is None:
-                    action = body.plan[body.index]
-                    if action.failing_precondition(self.state) is not None:
-                        break
-                    self._apply(body, action)
-                    changed = True
 
     def _home(self, body: _Body, source: str) -> Cell:
         """The cell of the location ``body`` is at by the PDDL state."""
@@ -740,15 +714,11 @@ def execute(
     floor_plan: FloorPlan,
     names: Sequence[str] | None = None,
     settings: ExecutorSettings | None = None,
-    task_action: Callable[[str], str | None] | None = None,
 ) -> EmbodiedResult:
     """Execute per-agent plans (hand-off order) on ``floor_plan``; never raises on bad plans.
 
     ``names`` labels the agents (default ``agent0..``); failures come back as a status
-    with the agent, the step and the reason. ``task_action`` names a plan step (or a
-    ground action) in the task's own terms for the trace, None for a compilation's
-    bookkeeping step (its goal action), which then takes no environment step (default:
-    plans are in the task's own terms already).
+    with the agent, the step and the reason.
     """
     settings = settings or ExecutorSettings()
     names = list(names) if names is not None else [f"agent{i}" for i in range(len(plans))]
@@ -759,7 +729,7 @@ def execute(
     execution: _Execution | None = None
     failure: _Failure | None = None
     try:
-        execution = _Execution(embodiment, floor_plan, settings, task_action)
+        execution = _Execution(embodiment, floor_plan, settings)
         execution.run(budget)
     except _Failure as error:
         failure = error
@@ -808,10 +778,9 @@ def execute_plans(
     agent_order: Sequence[str],
     floor_plan: FloorPlan,
     settings: ExecutorSettings | None = None,
-    task_action: Callable[[str], str | None] | None = None,
 ) -> EmbodiedResult:
     """Execute a run's plans (``plans`` by agent, in the terms of ``problem``, with
-    ``agent_order``; agents without a plan are left out; ``task_action``: see
-    :func:`execute`); a failure is the result's status, never raised."""
+    ``agent_order``; agents without a plan are left out); a failure is the result's
+    status, never raised."""
     order = [agent for agent in agent_order if agent in plans]
-    return execute(problem, [plans[a] for a in order], floor_plan, order, settings, task_action)
+    return execute(problem, [plans[a] for a in order], floor_plan, order, settings)

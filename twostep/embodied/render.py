@@ -269,10 +269,10 @@ class _KitchenFigure:
             ax,
             self.canvas,
             [(self.names.get(n, n), (x + w / 2, y + h / 2)) for n, (x, y, w, h) in self._anchors().items()],
-            _pt(TEXT_PX, self.dpi),
+            _pt(TEXT_PX),
         )  # fmt: skip
         if floor.origin is not None:  # a real scene: its name and compass
-            ax.text(0, floor.height - 1, f"{floor.name} (north up)", fontsize=_pt(TEXT_PX, self.dpi),
+            ax.text(0, floor.height - 1, f"{floor.name} (north up)", fontsize=_pt(TEXT_PX),
                     va="center", ha="left", color="0.2", zorder=2)  # fmt: skip
 
     # ------------------------------------------------------------ what moves

@@ -5,7 +5,7 @@ the AlfWorld location names' coordinates); :func:`~twostep.embodied.executor.exe
 executes a run's plans (in hand-off order) on it; :func:`embodied_fields` is what result.json gains (the trace and
 the floor plan ride along under ``embodied_trace`` for the job's files, which
 :func:`write_pictures` draws from the result dict alone, so a reused result can be drawn
-again without re-executing).
+again without re-executing; :func:`draws_pictures` says which jobs draw).
 """
 
 from __future__ import annotations
@@ -114,6 +114,15 @@ def result_from_fields(fields: Mapping[str, Any]) -> tuple[EmbodiedResult, Floor
 
 GIF_NAME = "kitchen.gif"
 TIMELINE_NAME = "timeline.png"
+
+
+def draws_pictures(render: bool | None, seed: int, in_sweep: bool) -> bool:
+    """Whether a job draws its execution's GIF and timeline (about 2 s a run): as
+    ``render`` says when it is set; by default (None) every single run, and in a sweep
+    only the jobs of seed 0, so that the other seeds' jobs end without drawing."""
+    if render is not None:
+        return render
+    return not in_sweep or seed == 0
 
 
 def write_pictures(fields: Mapping[str, Any], folder: str | Path) -> dict[str, Path]:

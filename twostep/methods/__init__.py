@@ -35,6 +35,7 @@ from twostep.methods.result import (
     MethodName,
     RunResult,
     RunStatus,
+    adopt_execution,
     check_run,
 )
 from twostep.methods.single_agent import run_single_agent
@@ -52,6 +53,7 @@ __all__ = [
     "RunResult",
     "RunStatus",
     "Steps",
+    "adopt_execution",
     "check_run",
     "method_for",
     "run_multi_agent",

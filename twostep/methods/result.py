@@ -8,6 +8,9 @@ each rule the methods share when they fill it in:
   (``fallback_if_longer``);
 * :func:`count_sa_time` counts the SA plan's planner time in the run's planning time
   (:attr:`RunResult.sa_time_included_s`, result.json ``sa_time_included_s``);
+* :func:`adopt_execution` adds an embodied execution to the run: one that did not reach
+  the goal on the floor plan fails the run (``embodied_failed``), whatever the planners
+  found;
 * the vocabularies, as enums serialised to stable strings: :class:`MethodName`,
   :class:`RunStatus` and :class:`FallbackReason` (:class:`Fallback` is a reason and its
   details, as result.json's ``fallback`` text).
@@ -19,12 +22,13 @@ Downward's grounding of the task's own files: nothing is compiled, nothing is ad
 
 from __future__ import annotations
 
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
 
 from twostep.decomposers.base import SubgoalProposal
+from twostep.embodied.run import embodied_failure
 from twostep.execution import ParallelExecution, check_schedule
 from twostep.methods.request import MethodRequest
 from twostep.pddl import Problem
@@ -42,8 +46,10 @@ class MethodName(StrEnum):
 
 
 class RunStatus(StrEnum):
-    """How a run ended (result.json ``status``): the deciding planner call's status, or
-    ``llm_error`` when the decomposer's LLM calls failed (``message`` says why)."""
+    """How a run ended (result.json ``status``): the deciding planner call's status,
+    ``llm_error`` when the decomposer's LLM calls failed, or ``embodied_failed`` when the
+    plans were found but did not execute to the goal on the floor plan (``message`` says
+    why)."""
 
     SOLVED = Status.SOLVED.value
     TIMEOUT = Status.TIMEOUT.value
@@ -51,6 +57,7 @@ class RunStatus(StrEnum):
     INCOMPLETE = Status.INCOMPLETE.value
     ERROR = Status.ERROR.value
     LLM_ERROR = "llm_error"
+    EMBODIED_FAILED = "embodied_failed"
 
 
 class FallbackReason(StrEnum):
@@ -240,6 +247,21 @@ def count_sa_time(run: RunResult, sa_plan: PlanResult) -> float:
     """Record that the SA plan's planner time counts in the run's planning time; return it."""
     run.sa_time_included_s = sa_plan.planner_time_s
     return sa_plan.planner_time_s
+
+
+def adopt_execution(run: RunResult, fields: Mapping[str, Any]) -> None:
+    """Add an embodied execution of the run's plans (``fields``:
+    :func:`twostep.embodied.embodied_fields`) to the run. Any embodied status but
+    ``success`` makes a successful run a failed one: ``status`` ``embodied_failed`` and
+    the one-line verdict as its ``message`` (``embodied_failed: boxed_in at step 12,
+    agent1``); the plans, the schedule and its symbolic length stay as found. A run that
+    had already failed keeps its own status."""
+    run.extra.update(fields)
+    verdict = embodied_failure(fields)
+    if verdict is not None and run.success:
+        run.success = False
+        run.status = RunStatus.EMBODIED_FAILED
+        run.message = verdict
 
 
 def record_proposals(run: RunResult, proposals: Sequence[SubgoalProposal]) -> None:

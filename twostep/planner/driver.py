@@ -2,7 +2,9 @@
 
 It writes the problem as PDDL into a private temporary folder, runs the driver with a CPU
 search time limit and a wall-clock guard, reads the last complete plan file and turns the
-exit code into a :class:`~twostep.planner.results.Status`.
+exit code into a :class:`~twostep.planner.results.Status`. The planner's own limit ends a
+search (its exit code says so); the guard is a safety net whose stops are flagged apart
+(:attr:`~twostep.planner.results.PlanResult.guard_stopped`).
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ _PLANNER_TIME = re.compile(r"Planner time: ([0-9.]+)s")
 def status_for(code: int | None, plan: PlanFile | None) -> tuple[Status, str]:
     """The status of a run that ended with exit ``code`` (None: killed by the guard)."""
     if code is None:
-        stopped = "wall-clock guard stopped the planner"
+        stopped = "wall-clock guard stopped the planner before its own time limit ended it"
         return (Status.SOLVED if plan is not None else Status.TIMEOUT), stopped
     message = returncodes.meaning(code)
     ended_with_plans = returncodes.PLAN_FOUND | returncodes.OUT_OF_TIME | returncodes.OUT_OF_MEMORY
@@ -109,6 +111,7 @@ def run_driver(
         code,
         len(plans),
         best.cost if solved and best is not None else None,
+        guard_stopped=code is None,
     )
 
 

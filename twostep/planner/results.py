@@ -35,6 +35,9 @@ class PlanResult:
     exit_code: int | None = None
     plans_found: int = 0
     cost: int | None = None
+    # The wall-clock guard stopped the planner (a safety net, not the planner's own time
+    # limit: on a machine that gives the search too little CPU the guard can come first).
+    guard_stopped: bool = False
 
     def __post_init__(self) -> None:
         if self.cost is None and self.plan is not None:
@@ -54,4 +57,5 @@ class PlanResult:
             "message": self.message,
             "exit_code": self.exit_code,
             "plans_found": self.plans_found,
+            "guard_stopped": self.guard_stopped,
         }

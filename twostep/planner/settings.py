@@ -4,11 +4,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-# The search time limit is CPU time of the search component alone; the translator, the
-# driver's own start-up and a loaded machine add wall time on top. The guard allows for
-# that before it kills the whole process group.
-WALL_GUARD_FACTOR = 1.25
-WALL_GUARD_OFFSET_S = 15.0
+# The search time limit is CPU time of the search component alone: the planner's own limit,
+# which decides a timeout (its exit code). The translator, the driver's own start-up and a
+# loaded machine add wall time on top: with five jobs on two cores a search gets about a
+# third of a core, so 20 s of CPU take about a minute. The guard is a safety net against a
+# planner that hangs: it allows for that load before it kills the whole process group.
+WALL_GUARD_FACTOR = 4.0
+WALL_GUARD_OFFSET_S = 60.0
 
 
 @dataclass(frozen=True)

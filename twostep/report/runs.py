@@ -42,7 +42,7 @@ import pandas as pd
 import yaml
 
 from twostep.params import flatten_config
-from twostep.report.table2 import planner_limit_hits
+from twostep.report.table2 import guard_stops, planner_limit_hits
 
 
 class ReportInputError(Exception):
@@ -65,6 +65,7 @@ METRICS: tuple[str, ...] = (
     "waits",
     "backoffs",
     "planner_timeouts",  # planner calls that hit their time limit (Table II's "timeout")
+    "planner_guard_stops",  # planner calls the wall-clock guard stopped (reported apart)
 )
 
 #: Columns that identify a job: one (domain, task, method, decomposer, N, seed) cell.
@@ -273,6 +274,7 @@ def result_to_row(result: Mapping[str, Any]) -> dict[str, Any]:
             row[metric] = result[metric]
     row.update(_subgoal_counts(result.get("subgoals")))
     row["planner_timeouts"] = float(planner_limit_hits(result))
+    row["planner_guard_stops"] = float(guard_stops(result))
     exec_length = _to_float(result.get("exec_length"))
     sa_length = _to_float(result.get("sa_length"))
     if "speedup_exec" not in result and exec_length > 0 and not math.isnan(sa_length):

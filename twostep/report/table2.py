@@ -10,8 +10,11 @@ mean of the task stds (the paper's MA macro std 105.8 is the mean of its four st
 
 Planning time as in the paper: a task cell whose runs all hit the planner's time limit
 reads ``timeout``; the macro column counts those cells. A run hit the limit when one of its
-planner calls stopped for lack of time (:func:`planner_limit_hits`), whether or not the
-anytime planner had found a plan by then (the paper's SA has a length and a timeout).
+planner calls stopped for lack of time by the planner's own limit and exit code
+(:func:`planner_limit_hits`), whether or not the anytime planner had found a plan by then
+(the paper's SA has a length and a timeout). A call the wall-clock guard stopped first
+(:func:`guard_stops`: a machine too loaded for the limit) is no timeout: its run's
+planning time is left out of the cell and counted beside it (``n guard stops``).
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ from typing import Any
 import pandas as pd
 import yaml
 
+from twostep.benchmark import TITLES_FILE, BenchmarkError, parse_task_titles
 from twostep.planner import returncodes
 from twostep.report.aggregation import sample_std
 
@@ -31,8 +35,6 @@ TABLE2_DOMAIN = "alfworld"
 TABLE2_TASKS: tuple[int, ...] = (1, 2, 3, 4)
 TABLE2_AGENTS = 2
 PAPER_TIME_LIMIT_S = 3600.0
-#: Optional file of a kitchen domain's data folder with a short description per task.
-TITLES_FILE = "titles.yaml"
 
 #: The paper's Table II: per series, per task then macro, (length mean, std or None) and
 #: planning time in seconds (None: timeout at 60 minutes).
@@ -53,29 +55,44 @@ LIMIT_CODES: frozenset[int] = returncodes.OUT_OF_TIME | {
 }
 
 
+def _calls(result: Mapping[str, Any]) -> list[Mapping[str, Any]]:
+    return [c for c in result.get("planner_calls") or [] if isinstance(c, Mapping)]
+
+
+def _guard_stopped(call: Mapping[str, Any]) -> bool:
+    """A call the wall-clock guard stopped (results before the flag: no exit code and the
+    guard's message)."""
+    if "guard_stopped" in call:
+        return bool(call["guard_stopped"])
+    return call.get("exit_code") is None and "wall-clock guard" in str(call.get("message") or "")
+
+
 def planner_limit_hits(result: Mapping[str, Any]) -> int:
-    """How many of a result.json's planner calls stopped at their time limit."""
+    """How many of a result.json's planner calls the planner's own time limit stopped
+    (its exit code; a call the wall-clock guard stopped is not one: :func:`guard_stops`)."""
     hits = 0
-    for call in result.get("planner_calls") or []:
-        if not isinstance(call, Mapping):
-            continue
+    for call in _calls(result):
         code = call.get("exit_code")
-        if (
-            call.get("status") == "timeout"
-            or (isinstance(code, int) and code in LIMIT_CODES)
-            or (code is None and "wall-clock guard" in str(call.get("message") or ""))
+        if not _guard_stopped(call) and (
+            (isinstance(code, int) and code in LIMIT_CODES) or call.get("status") == "timeout"
         ):
             hits += 1
-    if not hits and result.get("status") == "timeout":
+    if not hits and result.get("status") == "timeout" and not guard_stops(result):
         hits = 1
     return hits
+
+
+def guard_stops(result: Mapping[str, Any]) -> int:
+    """How many of a result.json's planner calls the wall-clock guard stopped."""
+    return sum(1 for call in _calls(result) if _guard_stopped(call))
 
 
 def _cell(runs: pd.DataFrame, length: str) -> dict[str, Any]:
     ok = runs[(runs["status"] == "success") & runs[length].notna()]
     per_seed = ok.groupby("seed")[length].mean()
     limited = runs["planner_timeouts"].fillna(0) > 0
-    timed = runs[~limited & runs["planning_time_s"].notna()]
+    guarded = runs["planner_guard_stops"].fillna(0) > 0
+    timed = runs[~limited & ~guarded & runs["planning_time_s"].notna()]
     times = timed.groupby("seed")["planning_time_s"].mean()
     return {
         "length_mean": float(per_seed.mean()) if len(per_seed) else math.nan,
@@ -85,6 +102,7 @@ def _cell(runs: pd.DataFrame, length: str) -> dict[str, Any]:
         "time_std": sample_std(times),
         "n_runs": len(runs),
         "n_timeouts": int(limited.sum()),
+        "n_guard_stops": int(guarded.sum()),
         "n_failed": int((runs["status"] != "success").sum()),
         # planned but not executed to the goal on the floor plan (embodied length only)
         "n_not_executed": int(((runs["status"] == "success") & runs[length].isna()).sum()),
@@ -104,8 +122,9 @@ def table_two(
     columns = ["series", "source", "task", "title", "length", *_cell(runs.head(0), "exec_length")]
     if runs.empty:
         return pd.DataFrame(columns=columns)
-    if "planner_timeouts" not in runs:  # a run table made before the metric existed
-        runs = runs.assign(planner_timeouts=math.nan)
+    for metric in ("planner_timeouts", "planner_guard_stops"):
+        if metric not in runs:  # a run table made before the metric existed
+            runs = runs.assign(**{metric: math.nan})
     embodied = "embodied_length" in runs and bool(runs["embodied_length"].notna().any())
     length = "embodied_length" if embodied else "exec_length"
     rows: list[dict[str, Any]] = []
@@ -139,6 +158,7 @@ def table_two(
                 "time_std": math.nan,
                 "n_runs": sum(c["n_runs"] for c in cells),
                 "n_timeouts": timeouts,  # macro: task cells that timed out, as the paper
+                "n_guard_stops": sum(c["n_guard_stops"] for c in cells),
                 "n_failed": sum(c["n_failed"] for c in cells),
                 "n_not_executed": sum(c["n_not_executed"] for c in cells),
             }
@@ -160,6 +180,7 @@ def table_two(
                     "time_std": math.nan,
                     "n_runs": math.nan,
                     "n_timeouts": timeouts if column == "macro" else int(time is None),
+                    "n_guard_stops": math.nan,
                     "n_failed": math.nan,
                     "n_not_executed": math.nan,
                 }
@@ -172,23 +193,16 @@ def table_two(
 
 
 def read_task_titles(domain_dir: Path) -> dict[int, str]:
-    """Task number -> short description from ``<domain_dir>/titles.yaml`` (a mapping such
-    as ``1: Put an apple, a heated egg and a clean fork on the dining table``); empty when
-    the file is absent or not such a mapping."""
+    """Task number -> short description from ``<domain_dir>/titles.yaml``
+    (:func:`twostep.benchmark.parse_task_titles` reads its lines); empty when the file is
+    absent or not such a mapping."""
     path = domain_dir / TITLES_FILE
     if not path.is_file():
         return {}
     try:
-        loaded = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return parse_task_titles(yaml.safe_load(path.read_text(encoding="utf-8")) or {}, path)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError, BenchmarkError):
         return {}
-    if not isinstance(loaded, Mapping):
-        return {}
-    titles: dict[int, str] = {}
-    for key, value in loaded.items():
-        if isinstance(key, int) and isinstance(value, str) and value.strip():
-            titles[key] = " ".join(value.split())
-    return titles
 
 
 def _number(value: float, digits: int = 1) -> str:
@@ -198,8 +212,9 @@ def _number(value: float, digits: int = 1) -> str:
 def length_cell(row: Mapping[str, Any]) -> str:
     mean, std = row["length_mean"], row["length_std"]
     if pd.isna(mean):
-        return "n/a"
-    text = _number(mean) if pd.isna(std) else f"{_number(mean)} ± {_number(std)}"
+        text = "n/a"
+    else:
+        text = _number(mean) if pd.isna(std) else f"{_number(mean)} ± {_number(std)}"
     if row["source"] == "ours":
         failed, unexecuted = row.get("n_failed"), row.get("n_not_executed")
         notes = [f"{int(failed)} failed"] if not pd.isna(failed) and failed else []
@@ -210,10 +225,16 @@ def length_cell(row: Mapping[str, Any]) -> str:
     return text
 
 
+def _count(row: Mapping[str, Any], column: str) -> int:
+    value = row.get(column)
+    return 0 if value is None or pd.isna(value) else int(value)
+
+
 def time_cell(row: Mapping[str, Any]) -> str:
-    timeouts = int(row["n_timeouts"]) if not pd.isna(row["n_timeouts"]) else 0
+    timeouts, guarded = _count(row, "n_timeouts"), _count(row, "n_guard_stops")
+    guard_note = f" ({guarded} guard stop{'s' if guarded != 1 else ''})" if guarded else ""
     if row["task"] == "macro":
-        return f"{timeouts} timeout{'s' if timeouts != 1 else ''}"
+        return f"{timeouts} timeout{'s' if timeouts != 1 else ''}{guard_note}"
     if row["source"] == "paper":
         return "timeout" if timeouts else _number(row["time_mean"])
     runs = int(row["n_runs"])
@@ -225,7 +246,7 @@ def time_cell(row: Mapping[str, Any]) -> str:
         text += f" ± {_number(std, 2)}"
     if timeouts:
         text += f" ({timeouts}/{runs} timeout)"
-    return text
+    return text + guard_note
 
 
 def table_two_rows(frame: pd.DataFrame) -> tuple[list[str], list[list[str]]]:
