@@ -106,25 +106,30 @@ def test_termes_agents_walk_to_their_pieces(tmp_path: Path, data_root: Path) -> 
     run = run_plan_deal(MethodRequest(task, 2, FAST, TERMES, sa_plan=sa_result(TERMES_PLAN)))
     _check(task.problem, run, TERMES)
     assert run.exec_length == 7 and run.exact
-    assert {(r["cut"], r["order"]) for r in run.extra["deal"]} == {
-        ("free", "critical"),
-        ("free", "plan"),
-        ("holding", "critical"),
-        ("holding", "plan"),
+    assert run.extra["deal"][0] == {  # the one-agent deal: the cleaned SA plan
+        "agents": 1, "pieces": 1, "walks": 4, "cleaned_sa_length": 12, "agents_used": 1,
+        "exec_length": 12,
+    }  # fmt: skip
+    assert {(r["cut"], r["order"], r["steal"]) for r in run.extra["deal"] if r["agents"] == 2} == {
+        ("free", "critical", False),
+        ("holding", "critical", True),
+        ("holding", "plan", False),
     }
 
 
 def test_no_walk_means_the_sa_plan(
     tmp_path: Path, data_root: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    # With the walking search allowed no state, agent 0 cannot walk to p3: no deal, the SA
-    # plan is the result and ``fallback`` says why.
+    # With the walking search allowed no state, agent 0 cannot walk to p3: no deal to two
+    # agents, so the one-agent deal is the result (the cleaned SA plan, here the SA plan
+    # itself: nothing to drop) and ``fallback`` says why.
     monkeypatch.setattr(walks, "WALK_LIMIT", 0)
     task = _copy_task(tmp_path, data_root, "termes", TERMES_TOWER)
     run = run_plan_deal(MethodRequest(task, 2, FAST, TERMES, sa_plan=sa_result(TERMES_PLAN)))
     assert run.success and run.exec_length == len(TERMES_PLAN)
     assert run.fallback is not None and "walk" in run.fallback
-    assert all("error" in row for row in run.extra["deal"])
+    assert run.agent_order == ["agent0"] and run.plans["agent0"] == list(TERMES_PLAN)
+    assert all("error" in row for row in run.extra["deal"] if row["agents"] > 1)
 
 
 def test_longer_than_sa_falls_back(tmp_path: Path) -> None:

@@ -34,16 +34,20 @@ order and keeps the shortest schedule is :mod:`twostep.methods.plan_deal`.
 """
 
 from twostep.dealing.cleanup import clean_plan, eliminate_actions, eliminate_joint
-from twostep.dealing.deal import CUTS, ORDERS, deal_plan
+from twostep.dealing.deal import CUTS, ORDERS, PHASES, Dealer, Way, deal_plan, ways
 from twostep.dealing.model import Deal, DealError
 
 __all__ = [
     "CUTS",
     "ORDERS",
+    "PHASES",
     "Deal",
     "DealError",
+    "Dealer",
+    "Way",
     "clean_plan",
     "deal_plan",
     "eliminate_actions",
     "eliminate_joint",
+    "ways",
 ]

@@ -19,3 +19,4 @@ class Deal:
     estimate: int  # the list schedule's makespan, in actions
     walks: int  # walking actions the agents' plans have (SA's own were dropped)
     cleaned: int  # the SA plan's length after action elimination
+    schedule: list[list[tuple[int, str]]]  # per time step: (agent, action), a valid joint schedule

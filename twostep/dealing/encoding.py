@@ -1,0 +1,145 @@
+"""Facts as bits for plan-deal: a state of N agents is an environment int and one int per
+agent, so applying an action, comparing states and testing the goal are a few integer
+operations (the dealing steps simulate the same few hundred actions thousands of times).
+
+Environment facts and an agent's own facts are numbered apart: every agent's copy of its
+facts uses the same numbers, in its own int. :class:`FactSpace` numbers facts as it meets
+them and is the only place plan-deal reads a :class:`~twostep.strips.GroundAction`'s sets.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Iterable, Sequence
+from dataclasses import dataclass
+
+from twostep.pddl import Fact, Goal
+from twostep.strips import GroundAction
+
+Owns = tuple[int, ...]
+"""Per agent: the bits of its own facts."""
+
+
+@dataclass(frozen=True, eq=False, slots=True)
+class Step:
+    """One ground action as bits: what it needs, forbids, adds and deletes, in the
+    environment and in the acting agent's own facts."""
+
+    action: GroundAction
+    pre_env: int
+    neg_env: int
+    add_env: int
+    del_env: int
+    pre_own: int
+    neg_own: int
+    add_own: int
+    del_own: int
+
+    def __str__(self) -> str:
+        return str(self.action)
+
+    def applicable(self, env: int, own: int) -> bool:
+        return (
+            env & self.pre_env == self.pre_env
+            and own & self.pre_own == self.pre_own
+            and not (env & self.neg_env or own & self.neg_own)
+        )
+
+    def apply(self, env: int, own: int) -> tuple[int, int]:
+        """The successor (delete before add, as in PDDL)."""
+        return (env & ~self.del_env) | self.add_env, (own & ~self.del_own) | self.add_own
+
+    @property
+    def writes_env(self) -> int:
+        return self.add_env | self.del_env
+
+    @property
+    def touches_env(self) -> int:
+        return self.pre_env | self.neg_env | self.add_env | self.del_env
+
+
+@dataclass(frozen=True, slots=True)
+class GoalBits:
+    """A goal as bits: environment literals once, agent literals in every agent's copy."""
+
+    pos_env: int
+    neg_env: int
+    pos_own: int
+    neg_own: int
+
+    def holds(self, env: int, owns: Iterable[int]) -> bool:
+        if env & self.pos_env != self.pos_env or env & self.neg_env:
+            return False
+        return all(own & self.pos_own == self.pos_own and not own & self.neg_own for own in owns)
+
+
+class FactSpace:
+    """The numbering of one task's facts (module docstring), and its actions as steps."""
+
+    def __init__(
+        self,
+        agent_predicates: Collection[str],
+        positional: Collection[str],
+        harmless: Collection[str] = (),
+    ) -> None:
+        self.agent_predicates = frozenset(agent_predicates)
+        self.positional = frozenset(positional)
+        self.harmless = frozenset(harmless)
+        self.where = 0
+        """The own bits that say where an agent stands (positional predicates)."""
+        self.where_env = 0
+        """The environment bits of positional predicates (``clear`` where hoists move)."""
+        self.harmless_env = 0
+        """The environment bits of ``harmless`` predicates (facts only ever added, such as
+        a cell ``visited``: more of them never stops an action)."""
+        self._env: dict[Fact, int] = {}
+        self._own: dict[Fact, int] = {}
+        self._own_facts: list[Fact] = []
+        self._steps: dict[GroundAction, Step] = {}
+
+    def bits(self, facts: Iterable[Fact]) -> tuple[int, int]:
+        """The environment bits and the own bits of ``facts``."""
+        env = own = 0
+        for fact in facts:
+            if fact[0] in self.agent_predicates:
+                bit = self._own.get(fact)
+                if bit is None:
+                    bit = self._own[fact] = 1 << len(self._own)
+                    self._own_facts.append(fact)
+                    if fact[0] in self.positional:
+                        self.where |= bit
+                own |= bit
+            else:
+                bit = self._env.get(fact)
+                if bit is None:
+                    bit = self._env[fact] = 1 << len(self._env)
+                    if fact[0] in self.positional:
+                        self.where_env |= bit
+                    if fact[0] in self.harmless:
+                        self.harmless_env |= bit
+                env |= bit
+        return env, own
+
+    def step(self, action: GroundAction) -> Step:
+        found = self._steps.get(action)
+        if found is None:
+            pre_env, pre_own = self.bits(action.pre_positive)
+            neg_env, neg_own = self.bits(action.pre_negative)
+            add_env, add_own = self.bits(action.add)
+            del_env, del_own = self.bits(action.delete)
+            found = Step(
+                action, pre_env, neg_env, add_env, del_env, pre_own, neg_own, add_own, del_own
+            )
+            self._steps[action] = found
+        return found
+
+    def steps(self, actions: Sequence[GroundAction]) -> list[Step]:
+        return [self.step(a) for a in actions]
+
+    def goal(self, goal: Goal) -> GoalBits:
+        pos_env, pos_own = self.bits(goal.positive)
+        neg_env, neg_own = self.bits(goal.negative)
+        return GoalBits(pos_env, neg_env, pos_own, neg_own)
+
+    def own_facts(self, own: int) -> frozenset[Fact]:
+        """The own facts whose bits are set in ``own``."""
+        return frozenset(f for k, f in enumerate(self._own_facts) if own >> k & 1)
