@@ -53,9 +53,9 @@ class Way:
 
 
 def ways(cut: str | None = None) -> tuple[Way, ...]:
-    """The ways :mod:`twostep.methods.plan_deal` tries, of one cut or (None) of both:
-    each wins on some of the 100 tasks and no other way adds to them
-    (``bench/bench_methods.py --ways``)."""
+    """The ways :mod:`twostep.methods.plan_deal` tries, of one cut or (None) of both: on
+    the 100 tasks these three do as well as all eight cuts x orders x stealing together
+    (``bench/bench_dealing.py``)."""
     return (
         Way(cut or "free", "critical", False),
         Way(cut or "holding", "critical", True),
