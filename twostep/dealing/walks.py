@@ -236,10 +236,13 @@ def _unify(term: str, value: str, binding: Binding) -> bool:
 def _free_variables(
     schema: ActionSchema, binding: Binding, objects: Mapping[str, str], problem: Problem
 ) -> Iterator[Binding]:
-    """Bind parameters no precondition mentions to every object of their type (rare)."""
+    """Bind parameters no precondition mentions to every object of their type (rare); a
+    binding with an object of another type is no action of the domain (storage's
+    ``go-out`` from the transit area would match ``go-in``'s preconditions)."""
     free = [(v, t) for v, t in schema.parameters if v not in binding]
     if not free:
-        yield binding
+        if all(problem.domain.is_subtype(objects[binding[v]], t) for v, t in schema.parameters):
+            yield binding
         return
     variable, kind = free[0]
     for name, its_type in objects.items():
