@@ -1,12 +1,13 @@
-"""The agents' plans in plan-deal (step 3): the dealt pieces replayed, each by an agent.
+"""The agents' plans in plan-deal when the time steps fail (step 3's fallback,
+:mod:`~twostep.dealing.timeline`): the dealt pieces replayed one after the other.
 
 The pieces are replayed in the order of their start times (a linearisation the plan's
 order allows). Before each action its agent walks, where needed, to a place where the
 action applies (:class:`~twostep.dealing.walks.Walker`). A piece whose agent cannot get
 there yet *waits*: the next piece the order allows goes first. When no waiting piece can
 go, the first one is *handed* to another agent that can reach it (the least busy first).
-The replay is a sequential run of all agents' plans, checked step by step, so a valid
-joint schedule exists; the parallel scorer then finds the shortest.
+The replay is a sequential run of all agents' plans, checked step by step; its time steps
+come from :func:`~twostep.dealing.timeline.earliest_steps`.
 """
 
 from __future__ import annotations
