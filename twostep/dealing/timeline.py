@@ -93,6 +93,7 @@ class _Run:
         self.env, own = timeline.start
         self.owns = [own] * agents
         self.done: dict[int, int] = {}  # acting action -> the time step it was taken in
+        self._paths: dict[tuple[int, int, int], list[Step] | None] = {}
 
     def run(self) -> tuple[JointSteps, list[int]]:
         crew = self.crew
@@ -163,12 +164,19 @@ class _Run:
             agent.path = []
             return step if self._ready(i) else None
         if not (agent.path and agent.path[0].applicable(env, own)):
-            try:
-                agent.path = self.walker.walk_to(env, own, step)
-            except DealError:
-                agent.path = []
-                return None
+            agent.path = list(self._path(own, i) or ())
         return agent.path[0] if agent.path else None
+
+    def _path(self, own: int, i: int) -> list[Step] | None:
+        """The shortest walk from ``own`` to where action ``i`` applies in the current
+        environment (None: none now); remembered, since waiting agents ask every step."""
+        key = (self.env, own, i)
+        if key not in self._paths:
+            try:
+                self._paths[key] = self.walker.walk_to(self.env, own, self.steps[i])
+            except DealError:
+                self._paths[key] = None
+        return self._paths[key]
 
     def _free(self, a: int) -> bool:
         """Agent ``a`` holds nothing of a piece: none, or one not begun."""
@@ -177,13 +185,10 @@ class _Run:
 
     def _walk(self, a: int, i: int) -> int | None:
         """Agent ``a``'s walk to where action ``i`` applies (None: no way there now)."""
-        step = self.steps[i]
-        if step.applicable(self.env, self.owns[a]):
+        if self.steps[i].applicable(self.env, self.owns[a]):
             return 0
-        try:
-            return len(self.walker.walk_to(self.env, self.owns[a], step))
-        except DealError:
-            return None
+        path = self._path(self.owns[a], i)
+        return None if path is None else len(path)
 
     def _give(self, p: int, b: int) -> None:
         """Piece ``p`` (not begun) becomes agent ``b``'s current piece."""

@@ -70,13 +70,21 @@ def move_schemas(problem: Problem, agent_predicates: frozenset[str]) -> list[Act
     return [s for s in domain.actions.values() if moves(s)]
 
 
+def slot(fact: Fact) -> Fact:
+    """What an agent fact is about, leaving out where: ``(robot-at robot1 t3)`` is about
+    ``robot-at robot1``, termes' ``(at p3)`` about ``at``."""
+    return fact[:-1] if len(fact) > 1 else fact
+
+
 class Walker:
     """Shortest walks of one agent: breadth-first over the domain's moves.
 
     ``universe`` holds every environment fact a walk may meet (the facts of the SA plan's
-    states). The moves that could apply where an agent stands are found once per own
-    state, by joining their preconditions against it; which of them apply is cached per
-    own state and the environment facts they read.
+    states). The moves that could apply where an agent stands are found by joining their
+    preconditions against it, once per agent fact they read (per :func:`slot`: a floortile
+    agent's two robots are grounded apart, not once per pair of cells); which of them apply
+    is cached per own state and the environment facts they read. A walk moves only what
+    the target action needs of the agent (robot1 walks for robot1's painting).
     """
 
     def __init__(self, problem: Problem, space: FactSpace, universe: frozenset[Fact]):
@@ -90,11 +98,12 @@ class Walker:
         for fact in sorted(self.universe):
             self._by_predicate[fact[0]].append(fact)
         self._candidates: dict[int, tuple[list[Step], int]] = {}
-        self._grounded: dict[frozenset[Fact], list[Step]] = {}
+        self._grounded: dict[frozenset[Fact], dict[str, Step]] = {}
         # the agent facts the moves read: moves are grounded once per such facts
         self.reads_own = {a.predicate for s in self.schemas
                           for a in (*s.pre_positive, *s.pre_negative)} & space.agent_predicates  # fmt: skip
         self._successors: dict[tuple[int, int], list[Step]] = {}
+        self._moved: dict[Step, frozenset[Fact]] = {}  # per move: the slots it changes
         self.search_s = 0.0
         """Seconds spent in :meth:`walk_to` so far."""
 
@@ -103,18 +112,24 @@ class Walker:
         environment bits they read."""
         found = self._candidates.get(own)
         if found is None:
-            mine = frozenset(f for f in self.space.own_facts(own) if f[0] in self.reads_own)
-            steps = self._grounded.get(mine)
-            if steps is None:
-                steps = self._grounded[mine] = self._ground(mine)
+            by_slot: dict[Fact, set[Fact]] = defaultdict(set)
+            for fact in self.space.own_facts(own):
+                if fact[0] in self.reads_own:
+                    by_slot[slot(fact)].add(fact)
+            moves: dict[str, Step] = {}
+            for facts in map(frozenset, by_slot.values()):
+                if facts not in self._grounded:
+                    self._grounded[facts] = self._ground(facts)
+                moves.update(self._grounded[facts])
+            steps = [moves[t] for t in sorted(moves)]  # set order varies: walks must not
             reads = 0
             for step in steps:
                 reads |= step.pre_env | step.neg_env
             found = self._candidates[own] = (steps, reads)
         return found
 
-    def _ground(self, mine: frozenset[Fact]) -> list[Step]:
-        """The moves whose preconditions hold in the universe plus ``mine``."""
+    def _ground(self, mine: frozenset[Fact]) -> dict[str, Step]:
+        """The moves whose preconditions hold in the universe plus ``mine``, by name."""
         state = self.universe | mine
         by_predicate = dict(self._by_predicate)
         for fact in sorted(mine):
@@ -135,7 +150,17 @@ class Walker:
                     continue
                 if action.applicable(state):
                     moves[text] = self.space.step(action)
-        return [moves[t] for t in sorted(moves)]  # set order varies: walks must not
+        return moves
+
+    def moved(self, move: Step) -> frozenset[Fact]:
+        """The slots of the agent facts ``move`` changes."""
+        found = self._moved.get(move)
+        if found is None:
+            changed = move.action.add | move.action.delete
+            found = self._moved[move] = frozenset(
+                slot(f) for f in changed if f[0] in self.space.agent_predicates
+            )
+        return found
 
     def successors(self, env: int, own: int) -> list[Step]:
         """The moves that apply in ``env`` for an agent with ``own``."""
@@ -149,12 +174,19 @@ class Walker:
     def walk_to(self, env: int, own: int, target: Step) -> list[Step]:
         """The shortest walk after which ``target`` applies (raise :class:`DealError`)."""
         began = time.perf_counter()
+        agent = self.space.agent_predicates
+        needed = {slot(f) for f in target.action.pre_positive if f[0] in agent}
         try:
-            return self._search(env, own, target)
+            return self._search(env, own, target, needed)
+        except DealError:
+            if all(needed >= self.moved(s) for s in self.candidates(own)[0]):
+                raise  # every move was tried already
+            return self._search(env, own, target, None)
         finally:
             self.search_s += time.perf_counter() - began
 
-    def _search(self, env: int, own: int, target: Step) -> list[Step]:
+    def _search(self, env: int, own: int, target: Step, needed: set[Fact] | None) -> list[Step]:
+        """Breadth-first search over the moves that change ``needed`` slots (None: all)."""
         # states that differ in harmless facts alone count as one (a walk that visits
         # cells would otherwise make every path a state of its own)
         relevant = ~self.space.harmless_env
@@ -175,6 +207,8 @@ class Walker:
             if len(parents) > WALK_LIMIT:
                 break
             for step in self.successors(*node):
+                if needed is not None and not self.moved(step) & needed:
+                    continue
                 child = step.apply(*node)
                 key = (child[0] & relevant, child[1])
                 if key not in parents:
