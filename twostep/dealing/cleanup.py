@@ -105,7 +105,12 @@ class Elimination:
             entry = steps[j]
             a, step = entry
             own = owns[a]
-            if (
+            if step.space is not None:  # not exact as bits: the grounded model decides
+                if step.applicable(env, own):
+                    env, own = step.apply(env, own)
+                    owns = (*owns[:a], own, *owns[a + 1 :])
+                    kept.append(entry)
+            elif (
                 env & step.pre_env == step.pre_env
                 and own & step.pre_own == step.pre_own
                 and not (env & step.neg_env or own & step.neg_own)
@@ -123,10 +128,10 @@ def eliminate_joint(
     agent_predicates: Collection[str],
 ) -> list[tuple[int, GroundAction]]:
     """Greedy action elimination over a valid run of several agents (module docstring)."""
-    space = FactSpace(agent_predicates, ())
+    space = FactSpace(problem, agent_predicates, ())
     env, own = space.bits(problem.init)
     run = [(a, space.step(action)) for a, action in joint]
-    kept = Elimination(space.goal(problem.goal), env, (own,) * agents, run).run()
+    kept = Elimination(space.goal(), env, (own,) * agents, run).run()
     return [(a, step.action) for a, step in kept]
 
 

@@ -136,13 +136,14 @@ class Dealer:
         start = time.perf_counter()
         domain = problem.domain
         self.space = FactSpace(
+            problem,
             agent_predicates,
             positional_predicates(domain),
             harmless_predicates(domain, agent_predicates),
         )
         grounded = Grounder(problem).ground_plan(plan)
         self.init = self.space.bits(problem.init)
-        self.goal = self.space.goal(problem.goal)
+        self.goal = self.space.goal()
         if cleaned is None:
             single = [(0, s) for s in self.space.steps(grounded)]
             run = Elimination(self.goal, self.init[0], (self.init[1],), single).run()
@@ -154,7 +155,7 @@ class Dealer:
         self.states = [self.init]
         for step in self.steps:
             self.states.append(step.apply(*self.states[-1]))
-        universe = problem.init.union(*(a.add for a in grounded))
+        universe = problem.init.union(*(a.possible_add for a in grounded))
         self.walker = Walker(problem, self.space, universe)
         self.estimate = WalkEstimate(self.walker, self.steps, self.states)
         self._orders: dict[tuple[str, bool], tuple[list[list[int]], PieceOrder]] = {}

@@ -5,30 +5,27 @@ An action *walks* when its agent effects only say where the agent stands (positi
 predicates: some action both adds and deletes them) and its environment effects, if any,
 only touch positional facts too (a hoist that leaves an area makes it ``clear``). The SA
 plan's walks are not dealt: before each action it replays, an agent walks by
-breadth-first search over the domain's moves, grounded here by joining their
-preconditions against the state (a grounder of its own, since walks go where the SA plan
+breadth-first search over the task's moves, taken from its grounding (Fast Downward
+grounds every action reachable from the initial state, so walks may go where the SA plan
 never went). A move is a walking action, or one whose other environment effects can harm
-nobody: facts it adds that no action deletes or needs false (a cell ``visited``).
+nobody: facts it adds that no action deletes or needs false (a cell ``visited``). An
+action's possible effects count, conditional ones included.
 """
 
 from __future__ import annotations
 
 import time
 from collections import defaultdict, deque
-from collections.abc import Collection, Iterator, Mapping
-from typing import TypeAlias
+from collections.abc import Collection
 
 from twostep.dealing.encoding import FactSpace, Step
 from twostep.dealing.model import DealError
-from twostep.decomposers.goal_split import positional_predicates
 from twostep.pddl import Domain, Fact, Problem
-from twostep.pddl.model import ActionSchema, Atom
-from twostep.strips import Grounder, PlanError
+from twostep.pddl.model import ActionSchema
+from twostep.strips import GroundAction
 
 WALK_LIMIT = 20_000
 """States the walking search may visit for one action before the deal gives up."""
-
-Binding: TypeAlias = dict[str, str]
 
 
 def is_walking(step: Step, space: FactSpace) -> bool:
@@ -44,30 +41,47 @@ def harmless_predicates(domain: Domain, agent_predicates: Collection[str]) -> se
     added = {a.predicate for s in actions for a in s.add}
     deleted = {a.predicate for s in actions for a in s.delete}
     forbidden = {a.predicate for s in actions for a in s.pre_negative}
-    return added - deleted - forbidden - set(agent_predicates)
+    conditional = {
+        p for s in actions if not s.is_strips for p in _negated([s.precondition, s.effect])
+    }
+    return added - deleted - forbidden - conditional - set(agent_predicates)
 
 
-def move_schemas(problem: Problem, agent_predicates: frozenset[str]) -> list[ActionSchema]:
-    """The domain's moves (module docstring)."""
-    domain = problem.domain
-    positional = positional_predicates(domain)
-    harmless = harmless_predicates(domain, agent_predicates)
+def _negated(formula: object) -> set[str]:
+    """Predicates under a ``not`` anywhere in an s-expression (a precondition or an effect
+    condition beyond the top-level conjunction)."""
+    found: set[str] = set()
+    if isinstance(formula, list):
+        if formula[:1] == ["not"] and len(formula) == 2 and isinstance(formula[1], list):
+            inner = formula[1]
+            if inner and isinstance(inner[0], str):
+                found.add(inner[0])
+        for part in formula:
+            found |= _negated(part)
+    return found
 
-    def moves(schema: ActionSchema) -> bool:
-        own = [
-            a.predicate for a in (*schema.add, *schema.delete) if a.predicate in agent_predicates
-        ]
-        env = [a for a in (*schema.add, *schema.delete) if a.predicate not in agent_predicates]
-        return (
-            bool(own)
-            and all(p in positional for p in own)
-            and all(
-                a.predicate in positional or (a in schema.add and a.predicate in harmless)
-                for a in env
-            )
-        )
 
-    return [s for s in domain.actions.values() if moves(s)]
+def _may_move(schema: ActionSchema, space: FactSpace) -> bool:
+    """Whether some grounding of ``schema`` may be a move (its effects, as written, change
+    positional agent facts): the grounded actions of other schemas are not looked at."""
+    agent, positional = space.agent_predicates, space.positional
+    own = [a.predicate for a in (*schema.add, *schema.delete) if a.predicate in agent]
+    return bool(own) and all(p in positional for p in own)
+
+
+def is_move(action: GroundAction, space: FactSpace) -> bool:
+    """A walking action, or one whose other environment effects are harmless additions
+    (module docstring)."""
+    agent, positional = space.agent_predicates, space.positional
+    own = [f[0] for f in action.possible_add | action.possible_delete if f[0] in agent]
+    env_add = [f[0] for f in action.possible_add if f[0] not in agent]
+    env_del = [f[0] for f in action.possible_delete if f[0] not in agent]
+    return (
+        bool(own)
+        and all(p in positional for p in own)
+        and all(p in positional for p in env_del)
+        and all(p in positional or p in space.harmless for p in env_add)
+    )
 
 
 def slot(fact: Fact) -> Fact:
@@ -77,86 +91,72 @@ def slot(fact: Fact) -> Fact:
 
 
 class Walker:
-    """Shortest walks of one agent: breadth-first over the domain's moves.
+    """Shortest walks of one agent: breadth-first over the task's moves.
 
     ``universe`` holds every environment fact a walk may meet (the facts of the SA plan's
-    states). The moves that could apply where an agent stands are found by joining their
-    preconditions against it, once per agent fact they read (per :func:`slot`: a floortile
-    agent's two robots are grounded apart, not once per pair of cells); which of them apply
-    is cached per own state and the environment facts they read. A walk moves only what
-    the target action needs of the agent (robot1 walks for robot1's painting).
+    states, and what moves may add). The moves that could apply where an agent stands are
+    indexed by an agent fact they need (one per slot, :func:`slot`, in a floortile agent's
+    two robots); which of them apply is cached per own state and the environment facts
+    they read. A walk moves only what the target action needs of the agent (robot1 walks
+    for robot1's painting).
     """
 
     def __init__(self, problem: Problem, space: FactSpace, universe: frozenset[Fact]):
         self.problem = problem
         self.space = space
-        self.grounder = Grounder(problem)
-        self.schemas = move_schemas(problem, space.agent_predicates)
-        self.objects = problem.all_objects
-        self.universe = frozenset(f for f in universe if f[0] not in space.agent_predicates)
-        self._by_predicate: dict[str, list[Fact]] = defaultdict(list)
-        for fact in sorted(self.universe):
-            self._by_predicate[fact[0]].append(fact)
+        agent = space.agent_predicates
+        schemas = {s.name for s in problem.domain.actions.values() if _may_move(s, space)}
+        moves = sorted(  # set order varies per process: walks must not
+            (
+                a
+                for a in problem.grounded.actions.values()
+                if a.name in schemas and is_move(a, space)
+            ),
+            key=str,
+        )
+        universe = universe.union(*(a.possible_add for a in moves))
+        self.universe_env, _ = space.bits(f for f in universe if f[0] not in agent)
+        # index: an agent fact a move needs -> the move (moves that need none: anywhere)
+        self._needing: dict[Fact, list[GroundAction]] = defaultdict(list)
+        self._anywhere: list[GroundAction] = []
+        for action in moves:
+            needs = sorted(f for f in action.pre_positive if f[0] in agent)
+            (self._needing[needs[0]] if needs else self._anywhere).append(action)
         self._candidates: dict[int, tuple[list[Step], int]] = {}
-        self._grounded: dict[frozenset[Fact], dict[str, Step]] = {}
-        # the agent facts the moves read: moves are grounded once per such facts
-        self.reads_own = {a.predicate for s in self.schemas
-                          for a in (*s.pre_positive, *s.pre_negative)} & space.agent_predicates  # fmt: skip
         self._successors: dict[tuple[int, int], list[Step]] = {}
         self._moved: dict[Step, frozenset[Fact]] = {}  # per move: the slots it changes
         self.search_s = 0.0
         """Seconds spent in :meth:`walk_to` so far."""
 
     def candidates(self, own: int) -> tuple[list[Step], int]:
-        """The moves whose preconditions hold in the universe plus ``own``, and the
-        environment bits they read."""
+        """The moves whose positive preconditions hold in the universe plus ``own``, and
+        the environment bits they read."""
         found = self._candidates.get(own)
         if found is None:
-            by_slot: dict[Fact, set[Fact]] = defaultdict(set)
-            for fact in self.space.own_facts(own):
-                if fact[0] in self.reads_own:
-                    by_slot[slot(fact)].add(fact)
-            moves: dict[str, Step] = {}
-            for facts in map(frozenset, by_slot.values()):
-                if facts not in self._grounded:
-                    self._grounded[facts] = self._ground(facts)
-                moves.update(self._grounded[facts])
-            steps = [moves[t] for t in sorted(moves)]  # set order varies: walks must not
+            space, universe = self.space, self.universe_env
+            pool = [*self._anywhere]
+            for fact in space.own_facts(own):
+                pool += self._needing.get(fact, ())
+            # a move not exact as bits reads more than it needs: the state decides
+            steps = sorted(
+                (
+                    step
+                    for step in map(space.step, pool)
+                    if not step.exact or not (step.pre_own & ~own or step.pre_env & ~universe)
+                ),
+                key=str,
+            )
             reads = 0
             for step in steps:
                 reads |= step.pre_env | step.neg_env
             found = self._candidates[own] = (steps, reads)
         return found
 
-    def _ground(self, mine: frozenset[Fact]) -> dict[str, Step]:
-        """The moves whose preconditions hold in the universe plus ``mine``, by name."""
-        state = self.universe | mine
-        by_predicate = dict(self._by_predicate)
-        for fact in sorted(mine):
-            by_predicate[fact[0]] = [*by_predicate.get(fact[0], ()), fact]
-        by_first: dict[tuple[str, str], list[Fact]] = defaultdict(list)
-        for facts in by_predicate.values():
-            for fact in facts:
-                if len(fact) > 1:
-                    by_first[(fact[0], fact[1])].append(fact)
-        moves: dict[str, Step] = {}
-        for schema in self.schemas:
-            for binding in _bindings(schema, by_predicate, by_first, self.objects, self.problem):
-                names = (binding[v] for v, _ in schema.parameters)
-                text = "(" + " ".join((schema.name, *names)) + ")"
-                try:
-                    action = self.grounder.ground(text)
-                except PlanError:
-                    continue
-                if action.applicable(state):
-                    moves[text] = self.space.step(action)
-        return moves
-
     def moved(self, move: Step) -> frozenset[Fact]:
         """The slots of the agent facts ``move`` changes."""
         found = self._moved.get(move)
         if found is None:
-            changed = move.action.add | move.action.delete
+            changed = move.action.possible_add | move.action.possible_delete
             found = self._moved[move] = frozenset(
                 slot(f) for f in changed if f[0] in self.space.agent_predicates
             )
@@ -215,70 +215,3 @@ class Walker:
                     parents[key] = ((node[0] & relevant, node[1]), step)
                     queue.append(child)
         raise DealError(f"no walk to where {target} applies")
-
-
-def _bindings(
-    schema: ActionSchema,
-    by_predicate: Mapping[str, list[Fact]],
-    by_first: Mapping[tuple[str, str], list[Fact]],
-    objects: Mapping[str, str],
-    problem: Problem,
-) -> Iterator[Binding]:
-    """Variable bindings under which every positive precondition is in the state (a join:
-    next the atom with the most terms bound, its facts looked up by their first term)."""
-
-    def bound(term: str, binding: Binding) -> str | None:
-        return binding.get(term) if term.startswith("?") else term
-
-    def cost(atom: Atom, binding: Binding) -> tuple[int, int]:
-        known = sum(bound(t, binding) is not None for t in atom.terms)
-        return (-known, len(by_predicate.get(atom.predicate, ())))
-
-    def extend(atoms: list[Atom], binding: Binding) -> Iterator[Binding]:
-        if not atoms:
-            yield from _free_variables(schema, binding, objects, problem)
-            return
-        atom = min(atoms, key=lambda a: cost(a, binding))
-        rest = [a for a in atoms if a is not atom]
-        first = bound(atom.terms[0], binding) if atom.terms else None
-        facts = (
-            by_first.get((atom.predicate, first), ())
-            if first is not None
-            else (by_predicate.get(atom.predicate, ()))
-        )
-        for fact in facts:
-            if len(fact) != len(atom.terms) + 1:
-                continue
-            new = dict(binding)
-            if all(
-                _unify(term, value, new) for term, value in zip(atom.terms, fact[1:], strict=True)
-            ):
-                yield from extend(rest, new)
-
-    yield from extend(sorted(schema.pre_positive, key=str), {})
-
-
-def _unify(term: str, value: str, binding: Binding) -> bool:
-    if not term.startswith("?"):
-        return term == value
-    if term in binding:
-        return binding[term] == value
-    binding[term] = value
-    return True
-
-
-def _free_variables(
-    schema: ActionSchema, binding: Binding, objects: Mapping[str, str], problem: Problem
-) -> Iterator[Binding]:
-    """Bind parameters no precondition mentions to every object of their type (rare); a
-    binding with an object of another type is no action of the domain (storage's
-    ``go-out`` from the transit area would match ``go-in``'s preconditions)."""
-    free = [(v, t) for v, t in schema.parameters if v not in binding]
-    if not free:
-        if all(problem.domain.is_subtype(objects[binding[v]], t) for v, t in schema.parameters):
-            yield binding
-        return
-    variable, kind = free[0]
-    for name, its_type in objects.items():
-        if problem.domain.is_subtype(its_type, kind):
-            yield from _free_variables(schema, {**binding, variable: name}, objects, problem)
