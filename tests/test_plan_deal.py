@@ -486,8 +486,12 @@ def test_ipc_sample_domains_deal_to_two_agents(tmp_path: Path) -> None:
     # Every sample domain with one acting agent (agents.yaml), storage (agent facts: at,
     # available, lifting; moving changes the shared ``clear``) and floortile (two robots,
     # each agent a copy of both; moving changes ``clear`` too): plan-deal with two agents
-    # deals, its schedule is shorter than the SA plan and valid for both validators.
+    # deals, its schedule is shorter than the SA plan, re-validates (check_run) and is valid
+    # for the independent checkers on the original files (Fast Downward's translator with
+    # a simulator of its own, and unified-planning in an N-agent formulation of its own).
     import yaml
+
+    from bench.independent import IndependentValidator
 
     cases = dict(yaml.safe_load((SAMPLE / "agents.yaml").read_text()))
     cases["floortile-sat11-strips"] = ["robot-at", "robot-has"]
@@ -505,4 +509,8 @@ def test_ipc_sample_domains_deal_to_two_agents(tmp_path: Path) -> None:
         assert sa.exec_length is not None and run.exec_length is not None, name
         assert run.fallback is None and run.extra["agents_used"] == 2, (name, run.fallback)
         assert run.exec_length < sa.exec_length, name
-        _check(task.problem, run, list(cases[name]))
+        check_run(task.problem, run, list(cases[name]))
+        verdict = IndependentValidator(task.domain_path, task.problem_path).check_schedule(
+            run.agent_order, run.plans, run.schedule, list(cases[name])
+        )
+        assert verdict.valid and "+ unified-planning" in verdict.checkers, (name, verdict)
