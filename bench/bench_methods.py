@@ -541,7 +541,8 @@ def deal_report(rows: Iterable[Row], ns: Sequence[int], method: str) -> list[str
                  "pairs (N, N-1)" + "".join(f"; {d} p{t:02d} N={n}: {a} > {b}"
                                             for d, t, n, a, b in worse))  # fmt: skip
     lines += ["", "Dealing time (everything after the SA plan: phases of the dealing, and "
-              "scoring), seconds; SA: its planner time:", ""]  # fmt: skip
+              "scoring), CPU seconds; SA: its planner time (Fast Downward's, CPU time too):",
+              ""]  # fmt: skip
     head = ["domain", "N", "SA median", "dealing median", "<= SA", "dealing max",
             f"<= {DEAL_LIMIT_S:g}", *PHASES]  # fmt: skip
     lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]

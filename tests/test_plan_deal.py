@@ -440,6 +440,7 @@ def test_never_longer_with_more_agents(data_root: Path, domain: str, task_id: in
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(3600)  # 100 SA plans and 300 runs: minutes, more on a busy machine
 def test_never_longer_with_more_agents_on_all_100_tasks(data_root: Path) -> None:
     # Every task of the five domains, N = 1..4; every schedule re-validated by check_run.
     # The largest termes tasks take lama-first 10-20 s alone, so the SA plan has 120 s.

@@ -11,7 +11,6 @@ replays them (:mod:`~twostep.dealing.replay`) and cleans the joint run again.
 from __future__ import annotations
 
 import bisect
-import time
 from collections import defaultdict
 from collections.abc import Collection, Iterator, Sequence
 from contextlib import contextmanager
@@ -19,7 +18,7 @@ from dataclasses import dataclass
 
 from twostep.dealing.cleanup import Elimination
 from twostep.dealing.encoding import FactSpace
-from twostep.dealing.model import Deal, DealError
+from twostep.dealing.model import Deal, DealError, cpu_seconds
 from twostep.dealing.replay import Replay
 from twostep.dealing.schedule import ListScheduler, PieceOrder, WalkEstimate
 from twostep.dealing.timeline import Timeline, earliest_steps
@@ -133,7 +132,7 @@ class Dealer:
         self.problem = problem
         self.agent_predicates = tuple(agent_predicates)
         self.seconds: defaultdict[str, float] = defaultdict(float)
-        start = time.perf_counter()
+        start = cpu_seconds()
         domain = problem.domain
         self.space = FactSpace(
             problem,
@@ -150,7 +149,7 @@ class Dealer:
             cleaned = [step.action for _, step in run]
         self.cleaned = list(cleaned)
         self.steps = self.space.steps(self.cleaned)
-        self.seconds["clean-up"] = time.perf_counter() - start
+        self.seconds["clean-up"] = cpu_seconds() - start
         self.walking = [is_walking(s, self.space) for s in self.steps]
         self.states = [self.init]
         for step in self.steps:
@@ -163,13 +162,13 @@ class Dealer:
 
     @contextmanager
     def _phase(self, name: str) -> Iterator[None]:
-        start = time.perf_counter()
+        start = cpu_seconds()
         walking = self.walker.search_s
         try:
             yield
         finally:  # the walks searched meanwhile count as walks, not as this phase
             walked = self.walker.search_s - walking
-            self.seconds[name] += time.perf_counter() - start - walked
+            self.seconds[name] += cpu_seconds() - start - walked
             self.seconds["walks"] += walked
 
     def pieces(self, cut: str, keep_walks: bool) -> tuple[list[list[int]], PieceOrder]:

@@ -14,12 +14,11 @@ action's possible effects count, conditional ones included.
 
 from __future__ import annotations
 
-import time
 from collections import defaultdict, deque
 from collections.abc import Collection
 
 from twostep.dealing.encoding import FactSpace, Step
-from twostep.dealing.model import DealError
+from twostep.dealing.model import DealError, cpu_seconds
 from twostep.pddl import Domain, Fact, Problem
 from twostep.pddl.model import ActionSchema
 from twostep.strips import GroundAction
@@ -173,7 +172,7 @@ class Walker:
 
     def walk_to(self, env: int, own: int, target: Step) -> list[Step]:
         """The shortest walk after which ``target`` applies (raise :class:`DealError`)."""
-        began = time.perf_counter()
+        began = cpu_seconds()
         agent = self.space.agent_predicates
         needed = {slot(f) for f in target.action.pre_positive if f[0] in agent}
         try:
@@ -183,7 +182,7 @@ class Walker:
                 raise  # every move was tried already
             return self._search(env, own, target, None)
         finally:
-            self.search_s += time.perf_counter() - began
+            self.search_s += cpu_seconds() - began
 
     def _search(self, env: int, own: int, target: Step, needed: set[Fact] | None) -> list[Step]:
         """Breadth-first search over the moves that change ``needed`` slots (None: all)."""

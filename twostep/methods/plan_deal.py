@@ -8,7 +8,7 @@ when no deal to two or more agents works or none is shorter, and ``fallback`` sa
 The SA plan itself is the outcome only when there is none to deal or one agent.
 
 No planner call beyond the SA plan: the run's planning time is the SA plan's planner time
-and the time spent dealing. Deals that give the same plans are scored once. result.json
+and the time spent dealing (CPU time, both: :func:`~twostep.dealing.model.cpu_seconds`). Deals that give the same plans are scored once. result.json
 ``deal`` records every deal tried (its agents, cut and order, pieces, walks, the cleaned
 SA plan's length, the agents used, its length or its error), ``deal_seconds`` where the
 dealing time went and ``agents_used`` how many agents the outcome has.
@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from twostep.dealing import CUTS, Dealer, DealError, Way, ways
+from twostep.dealing.model import cpu_seconds
 from twostep.execution import ParallelExecution, ScheduleError, check_schedule
 from twostep.methods.request import MethodRequest
 from twostep.methods.result import (
@@ -176,7 +177,7 @@ def choose_deal(
     the earlier deal). Each deal comes with its own joint schedule (dealt in time steps,
     each action as early as the run allows); the parallel scorer scores instead when the
     request's mode is not ``exact``."""
-    start = time.perf_counter()
+    start = cpu_seconds()
     grounder = Grounder(request.problem)
     problem, predicates = request.problem, request.agent_predicates
     ranked: list[tuple[int, int, int, ParallelExecution, list[list[str]], dict[str, Any]]] = []
@@ -202,7 +203,7 @@ def choose_deal(
         row["chosen"] = True
         trials.best = (execution, plans)
         break
-    trials.seconds["scoring"] = trials.seconds.get("scoring", 0.0) + time.perf_counter() - start
+    trials.seconds["scoring"] = trials.seconds.get("scoring", 0.0) + cpu_seconds() - start
 
 
 def one_agent(rows: Sequence[dict[str, Any]]) -> Fallback:
