@@ -521,3 +521,37 @@ def test_ipc_sample_domains_deal_to_two_agents(tmp_path: Path) -> None:
             run.agent_order, run.plans, run.schedule, list(cases[name])
         )
         assert verdict.valid and "+ unified-planning" in verdict.checkers, (name, verdict)
+
+
+# ------------------------------------------------ bits against the grounded model itself
+
+
+def test_bits_agree_with_the_grounded_model_on_axioms_and_conditional_effects() -> None:
+    # shelf: ``take`` needs the derived (not (busy)), ``drop-all`` has conditional effects
+    # under a forall; the bits must say what the grounded model says in every state either
+    # agent can reach (breadth-first over all of them, from the task's own actions).
+    from tests.test_multiagent import SHELF, SHELF_PROBLEM
+    from twostep.dealing.encoding import FactSpace
+    from twostep.pddl import parse_problem
+
+    problem = parse_problem(SHELF, SHELF_PROBLEM)
+    space = FactSpace(problem, ["holding"], ())
+    actions = sorted(problem.grounded.actions.values(), key=str)
+    steps = [space.step(a) for a in actions]
+    assert {str(s) for s in steps if not s.exact} >= {"(take a)", "(drop-all)"}
+    goal = space.goal()
+    start = problem.close(problem.init)  # the states themselves, run by the grounded model
+    seen, queue = {start}, [start]
+    while queue:
+        state = queue.pop()
+        env, own = space.bits(state)
+        assert goal.holds(env, [own]) == problem.goal.holds(state)
+        for action, step in zip(actions, steps, strict=True):
+            assert step.applicable(env, own) == action.applicable(state), (action, state)
+            if action.applicable(state):
+                after = action.apply(state)
+                assert step.apply(env, own) == space.bits(after), (action, state)
+                if after not in seen:
+                    seen.add(after)
+                    queue.append(after)
+    assert len(seen) > 8  # objects on the shelf, held, in the bin: many states were checked

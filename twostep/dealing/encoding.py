@@ -4,7 +4,8 @@ operations (the dealing steps simulate the same few hundred actions thousands of
 
 Environment facts and an agent's own facts are numbered apart: every agent's copy of its
 facts uses the same numbers, in its own int. :class:`FactSpace` numbers facts as it meets
-them and is the only place plan-deal reads a :class:`~twostep.strips.GroundAction`'s sets.
+them and is where plan-deal turns a :class:`~twostep.strips.GroundAction`'s sets into bits
+(:mod:`~twostep.dealing.walks` reads them too, to pick the task's moves).
 
 Only basic facts are bits. A STRIPS action that reads no derived fact is *exact* as bits:
 its precondition, adds and deletes. Any other action (conditional effects, precondition
@@ -79,21 +80,22 @@ class Step:
 @dataclass(frozen=True, slots=True)
 class GoalBits:
     """A goal as bits: environment literals once, agent literals in every agent's copy.
-    A goal that reads derived facts is checked by ``problem`` on every agent's view, and
-    its bits are its basic literals alone (those the clean-up's shortcut may rely on)."""
+    A goal that reads derived facts is checked by the problem on every agent's view, and
+    its bits are its basic environment literals alone (those the clean-up's shortcut may
+    rely on)."""
 
     pos_env: int
     neg_env: int
     pos_own: int
     neg_own: int
     space: FactSpace | None = None
-    problem: Problem | None = None
+    """None when the bits are the whole goal; else the space whose problem checks it."""
 
     def holds(self, env: int, owns: Iterable[int]) -> bool:
         if env & self.pos_env != self.pos_env or env & self.neg_env:
             return False
-        if self.space is not None and self.problem is not None:
-            goal, view = self.problem.goal, self.space.view
+        if self.space is not None:
+            goal, view = self.space.problem.goal, self.space.view
             return all(goal.holds(view(env, own)) for own in owns)
         return all(own & self.pos_own == self.pos_own and not own & self.neg_own for own in owns)
 
@@ -201,7 +203,7 @@ class FactSpace:
         neg_env, neg_own = self.bits(goal.negative)
         literals = goal.positive | goal.negative | goal.formula_facts
         if goal.formula is not None or literals & self.derived:
-            return GoalBits(pos_env, neg_env, 0, 0, self, self.problem)
+            return GoalBits(pos_env, neg_env, 0, 0, self)
         return GoalBits(pos_env, neg_env, pos_own, neg_own)
 
     def own_facts(self, own: int) -> frozenset[Fact]:
