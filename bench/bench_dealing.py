@@ -9,7 +9,7 @@ plan (as plan-deal keeps them). Prints the macro exec/SA per N of each way alone
 plan-deal uses (:func:`twostep.dealing.ways`), of the whole grid, and of the best sets of
 each size, with the dealing seconds per task.
 
-    .venv/bin/python bench/bench_dealing.py --rows docs/bench/methods_faithful.json
+    .venv/bin/python bench/bench_dealing.py --rows docs/bench/methods_deal.json
     .venv/bin/python bench/bench_dealing.py --domains termes --tasks 1-5
 """
 

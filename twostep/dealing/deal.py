@@ -53,8 +53,8 @@ class Way:
 
 def ways(cut: str | None = None) -> tuple[Way, ...]:
     """The ways :mod:`twostep.methods.plan_deal` tries, of one cut or (None) of both: on
-    the 100 tasks these three do as well as all eight cuts x orders x stealing together
-    (``bench/bench_dealing.py``)."""
+    the 100 tasks these three do as well as all eight cuts x orders x stealing together,
+    but for 0.001 of the macro exec/SA at N = 4 (``bench/bench_dealing.py``)."""
     return (
         Way(cut or "free", "critical", False),
         Way(cut or "holding", "critical", True),
