@@ -520,7 +520,11 @@ def test_ipc_sample_domains_deal_to_two_agents(tmp_path: Path) -> None:
         verdict = IndependentValidator(task.domain_path, task.problem_path).check_schedule(
             run.agent_order, run.plans, run.schedule, list(cases[name])
         )
-        assert verdict.valid and "+ unified-planning" in verdict.checkers, (name, verdict)
+        assert verdict.valid, (name, verdict)
+        # unified-planning's reader rejects storage's ``either`` in a predicate declaration:
+        # there the grounded-task simulator alone checks, as in tests/test_conformance.py
+        readers = "grounded-task simulator" + ("" if name == "storage" else " + unified-planning")
+        assert verdict.checkers.startswith(readers), (name, verdict.checkers)
 
 
 # ------------------------------------------------ bits against the grounded model itself
