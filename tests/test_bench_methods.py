@@ -87,15 +87,15 @@ def test_single_agent_rows_are_the_sa_plan_for_every_method() -> None:
     assert bm.macro_ratio(table, "goal-split", 1) == 1.0
     text = bm.report(ROWS, ["ma", "goal-split"], [1, 2], targets={2: 0.7})
     lines = {tuple(c.strip() for c in line.strip("|").split("|")) for line in text.splitlines()}
-    # domain, N, tasks, SA len, lengths, ratios, SA time, times, goal-split/MA time, longer,
-    # inexact, failed
-    assert ("A", "1", "2", "15.0", "15.0", "15.0", "1.000", "1.000", "2.00", "2.00", "2.00",
+    # domain, N, tasks, SA len, SA (cleaned) len (no plan-deal rows: none), lengths, ratios,
+    # SA time, times, goal-split/MA time, longer, inexact, failed
+    assert ("A", "1", "2", "15.0", "", "15.0", "15.0", "1.000", "1.000", "2.00", "2.00", "2.00",
             "1.000", "0", "0", "0") in lines  # fmt: skip
-    assert ("A", "2", "2", "15.0", "12.5", "10.0", "0.750", "0.750", "2.00", "4.00", "1.00",
+    assert ("A", "2", "2", "15.0", "", "12.5", "10.0", "0.750", "0.750", "2.00", "4.00", "1.00",
             "0.250", "0", "0", "0") in lines  # fmt: skip
-    # macro: N, target, ma, goal-split, goal-split domains <= MA
-    assert ("2", "0.70", "0.775", "0.825", "1/2") in lines
-    assert ("1", "", "1.000", "1.000", "2/2") in lines
+    # macro: N, target, ma, goal-split, goal-split / cleaned (none), goal-split domains <= MA
+    assert ("2", "0.70", "0.775", "0.825", "", "1/2") in lines
+    assert ("1", "", "1.000", "1.000", "", "2/2") in lines
 
 
 def test_a_task_without_its_sa_row_is_left_out() -> None:
@@ -179,12 +179,13 @@ def test_resume_keeps_the_rows_of_tasks_outside_the_run(tmp_path: Path) -> None:
 def test_overview_has_a_row_per_method_and_n_with_the_domains_across() -> None:
     text = bm.report(ROWS, ["ma", "goal-split"], [1, 2])
     lines = {tuple(c.strip() for c in line.strip("|").split("|")) for line in text.splitlines()}
-    # method, N, A, B, macro, macro planning time, its ratio to MA's
+    # method, N, A, B, macro, macro / cleaned SA (no plan-deal rows: none), macro planning
+    # time, its ratio to MA's
     # goal-split times: A (1 + 1) / 2 = 1, B 2 -> 1.5; MA: A (2 + 6) / 2 = 4, B 4 -> 4
-    assert ("goal-split", "2", "0.750", "0.900", "0.825", "1.50", "0.375") in lines
-    assert ("ma", "2", "0.750", "0.800", "0.775", "4.00", "") in lines
+    assert ("goal-split", "2", "0.750", "0.900", "0.825", "", "1.50", "0.375") in lines
+    assert ("ma", "2", "0.750", "0.800", "0.775", "", "4.00", "") in lines
     # SA: A (1 + 3) / 2 = 2, B 2
-    assert ("sa", "1", "1.000", "1.000", "1.000", "2.00", "") in lines
+    assert ("sa", "1", "1.000", "1.000", "1.000", "", "2.00", "") in lines
 
 
 @pytest.mark.parametrize(("domain", "size", "count"), LARGE)
@@ -195,3 +196,47 @@ def test_large_tasks_are_what_the_documented_command_writes(
     folder = DATA / "large" / domain
     assert compare_files(folder, scale_files(domain, size, count)) == []
     assert bm.list_tasks(domain, DATA / "large") == list(range(1, count + 1))
+
+
+# plan-deal rows of domain A (SA 10 and 20): the cleaned SA plans are 8 and 20 long.
+DEAL_ROWS = [
+    row("A", 1, "sa", 1, 10, 10, time_s=0.5, total_actions=10),
+    row("A", 2, "sa", 1, 20, 20, time_s=1.5, total_actions=20),
+    *(row("A", 1, "plan-deal", n, length, 10, cleaned_sa_length=8, total_actions=total,
+          agents_used=used, fallback=None, deal_seconds={"walks": 0.25, "scoring": 0.05 * n})
+      for n, length, total, used in ((2, 5, 9, 2), (3, 4, 10, 3), (4, 5, 10, 3))),
+    *(row("A", 2, "plan-deal", n, length, 20, cleaned_sa_length=20, total_actions=20,
+          agents_used=used, deal_seconds={"walks": 2.0 * n, "scoring": 1.0}, fallback=why,
+          fallback_reason=why)
+      for n, length, used, why in ((2, 20, 1, "no deal shorter than the cleaned SA plan"),
+                                   (3, 10, 2, None), (4, 10, 2, None))),
+]  # fmt: skip
+
+
+def test_the_cleaned_sa_plan_and_the_lower_bound() -> None:
+    table = bm.summarise(DEAL_ROWS, ["plan-deal"], [1, 2, 3])
+    # SA (cleaned): 8/10 and 20/20, mean 0.9
+    cleaned = table[("A", 1, "sa-cleaned")]
+    assert (cleaned.length, cleaned.ratio) == (14.0, pytest.approx(0.9))
+    # N = 2: ⌈9 / 2⌉ = 5 and ⌈20 / 2⌉ = 10; exec / cleaned (5/8 + 20/20) / 2
+    two = table[("A", 2, "plan-deal")]
+    assert two.bound == 7.5 and two.ratio_cleaned == pytest.approx((5 / 8 + 1) / 2)
+    assert bm.macro_ratio(table, "plan-deal", 2, cleaned=True) == pytest.approx(0.8125)
+    text = bm.report(DEAL_ROWS, ["plan-deal"], [1, 2, 3], default="plan-deal")
+    lines = {tuple(c.strip() for c in line.strip("|").split("|")) for line in text.splitlines()}
+    assert ("sa (cleaned)", "1", "0.900", "0.900", "1.000", "1.00", "") in lines
+    # plan-deal at N = 3: lengths 4 and 10 ([⌈10/3⌉ = 4, ⌈20/3⌉ = 7])
+    assert any(line[:6] == ("A", "3", "2", "15.0", "14.0", "7.0 [5.5]") for line in lines)
+
+
+def test_plan_deal_in_detail() -> None:
+    lines = bm.deal_report(DEAL_ROWS, [2, 3, 4], "plan-deal")
+    text = "\n".join(lines)
+    # one fallback (task 2, N = 2: one agent), three runs with an idle agent
+    assert "(fallback): 1 of 6; no deal shorter than the cleaned SA plan: 1" in text
+    assert "fewer agents than N (an agent idle): 3" in text  # task 1 N=4, task 2 N=3 and N=4
+    # task 1: 10 (SA), 5, 4, 5: N = 4 is longer than N = 3
+    assert "1 violations in 6 pairs (N, N-1); A p01 N=4: 5 > 4" in text
+    table = {tuple(c.strip() for c in line.strip("|").split("|")) for line in lines}
+    # N = 3: dealing 0.25 + 0.15 = 0.40 s and 6 + 1 = 7 s; median 3.7 > SA's median 1.0
+    assert ("A", "3", "1.000", "3.700", "no", "7.00", "no") in {row[:7] for row in table}

@@ -33,10 +33,13 @@ JOBS = {  # name: (overrides, result.json keys beyond COMMON)
     "sa": (["method=sa"], set()),
     "ma": (["method=ma"], {"sa_planning_time_s", "sequential_length"}),
     "goal-split": (["method=twostep", "decomposer=goal-split"], TWOSTEP),
-    "plan-deal": (["method=twostep", "decomposer=plan-deal"], TWOSTEP | {"deal"}),
+    "plan-deal": (
+        ["method=twostep", "decomposer=plan-deal"],
+        TWOSTEP | {"deal", "deal_seconds", "agents_used"},
+    ),
     "portfolio": (
         ["method=twostep", "decomposer=portfolio"],
-        TWOSTEP | {"deal", "candidate", "candidates", "agents_used"},
+        TWOSTEP | {"deal", "deal_seconds", "candidate", "candidates", "agents_used"},
     ),
 }
 ORCHESTRATION = {

@@ -1,21 +1,28 @@
-"""One deal of an SA plan to N agents: steps 0-4 of :mod:`twostep.dealing`, in order.
+"""Deals of one SA plan to N agents: steps 0-4 of :mod:`twostep.dealing`, in order.
 
-:func:`deal_plan` cleans the plan (:mod:`~twostep.dealing.cleanup`), finds the order it
-needs and its pieces (:func:`order_edges`, :func:`pieces_of`), deals the pieces
-(:mod:`~twostep.dealing.schedule`), replays them (:mod:`~twostep.dealing.replay`) and
-cleans the joint run again.
+A :class:`Dealer` does once what every deal of the plan shares: it cleans the plan
+(:mod:`~twostep.dealing.cleanup`), finds the order the plan needs and its pieces per cut
+(:func:`order_edges`, :func:`pieces_of`), and keeps the walks it has searched. Each
+:meth:`Dealer.deal` then deals the pieces to k agents (:mod:`~twostep.dealing.schedule`),
+replays them (:mod:`~twostep.dealing.replay`) and cleans the joint run again.
+:attr:`Dealer.seconds` says where the time went.
 """
 
 from __future__ import annotations
 
 import bisect
-from collections.abc import Collection, Sequence
+from collections import defaultdict
+from collections.abc import Collection, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
 
-from twostep.dealing.cleanup import clean_plan, eliminate_joint
-from twostep.dealing.model import Deal, DealError
-from twostep.dealing.replay import replay
+from twostep.dealing.cleanup import Elimination
+from twostep.dealing.encoding import FactSpace
+from twostep.dealing.model import Deal, DealError, cpu_seconds
+from twostep.dealing.replay import Replay
 from twostep.dealing.schedule import ListScheduler, PieceOrder, WalkEstimate
-from twostep.dealing.walks import Walker, is_walking
+from twostep.dealing.timeline import Timeline, earliest_steps
+from twostep.dealing.walks import Walker, harmless_predicates, is_walking
 from twostep.decomposers.goal_split import positional_predicates
 from twostep.decomposers.plan_split import (
     free_pieces,
@@ -25,13 +32,39 @@ from twostep.decomposers.plan_split import (
     plan_order,
     topological_pieces,
 )
-from twostep.pddl import Fact, Problem
-from twostep.strips import GroundAction
+from twostep.pddl import Problem
+from twostep.strips import GroundAction, Grounder
 
 CUTS = ("free", "holding")
 """Where the plan is cut into pieces: at free agent states, or by what the agent holds."""
 ORDERS = ("critical", "plan")
 """Which ready piece is dealt next: the longest path to the end first, or the plan's order."""
+
+
+@dataclass(frozen=True)
+class Way:
+    """One way to deal: the cut, the order, and whether idle agents take pieces dealt to
+    others while the agents act (:mod:`~twostep.dealing.timeline`)."""
+
+    cut: str
+    order: str
+    steal: bool
+
+
+def ways(cut: str | None = None) -> tuple[Way, ...]:
+    """The ways :mod:`twostep.methods.plan_deal` tries, of one cut or (None) of both: on
+    the 100 tasks these three do as well as all eight cuts x orders x stealing together,
+    but for 0.001 of the macro exec/SA at N = 4 (``bench/bench_dealing.py``)."""
+    return (
+        Way(cut or "free", "critical", False),
+        Way(cut or "holding", "critical", True),
+        Way(cut or "holding", "plan", False),
+    )
+
+
+PHASES = ("clean-up", "order", "dealing", "walks", "replay", "joint clean-up")
+"""Where :class:`Dealer` spends its time (:attr:`Dealer.seconds`); walks are the walking
+searches of dealing and replay, counted apart from them."""
 
 
 def order_edges(
@@ -85,6 +118,153 @@ def walks_before(walking: Sequence[bool]) -> dict[int, int]:
     return counts
 
 
+class Dealer:
+    """Every deal of one SA plan (module docstring); ``cleaned`` is step 0's result when
+    the caller has it."""
+
+    def __init__(
+        self,
+        problem: Problem,
+        plan: Sequence[str],
+        agent_predicates: Collection[str],
+        cleaned: Sequence[GroundAction] | None = None,
+    ) -> None:
+        self.problem = problem
+        self.agent_predicates = tuple(agent_predicates)
+        self.seconds: defaultdict[str, float] = defaultdict(float)
+        start = cpu_seconds()
+        domain = problem.domain
+        self.space = FactSpace(
+            problem,
+            agent_predicates,
+            positional_predicates(domain),
+            harmless_predicates(domain, agent_predicates),
+        )
+        grounded = Grounder(problem).ground_plan(plan)
+        self.init = self.space.bits(problem.init)
+        self.goal = self.space.goal()
+        if cleaned is None:
+            single = [(0, s) for s in self.space.steps(grounded)]
+            run = Elimination(self.goal, self.init[0], (self.init[1],), single).run()
+            cleaned = [step.action for _, step in run]
+        self.cleaned = list(cleaned)
+        self.steps = self.space.steps(self.cleaned)
+        self.seconds["clean-up"] = cpu_seconds() - start
+        self.walking = [is_walking(s, self.space) for s in self.steps]
+        self.states = [self.init]
+        for step in self.steps:
+            self.states.append(step.apply(*self.states[-1]))
+        universe = problem.init.union(*(a.possible_add for a in grounded))
+        self.walker = Walker(problem, self.space, universe)
+        self.estimate = WalkEstimate(self.walker, self.steps, self.states)
+        self._orders: dict[tuple[str, bool], tuple[list[list[int]], PieceOrder]] = {}
+        self._deals: dict[tuple[object, ...], Deal | DealError] = {}
+
+    @contextmanager
+    def _phase(self, name: str) -> Iterator[None]:
+        start = cpu_seconds()
+        walking = self.walker.search_s
+        try:
+            yield
+        finally:  # the walks searched meanwhile count as walks, not as this phase
+            walked = self.walker.search_s - walking
+            self.seconds[name] += cpu_seconds() - start - walked
+            self.seconds["walks"] += walked
+
+    def pieces(self, cut: str, keep_walks: bool) -> tuple[list[list[int]], PieceOrder]:
+        """Step 1 for one cut: the acting pieces and their order (cached)."""
+        key = (cut, keep_walks)
+        if key not in self._orders:
+            with self._phase("order"):
+                preds = self.agent_predicates
+                edges = order_edges(self.problem, self.cleaned, self.walking, preds, keep_walks)
+                pieces = [[i for i in p if not self.walking[i]]
+                          for p in pieces_of(self.problem, self.cleaned, preds, edges, cut)]  # fmt: skip
+                pieces = [p for p in pieces if p]
+                self._orders[key] = (pieces, PieceOrder.of(pieces, edges))
+        return self._orders[key]
+
+    def deal(
+        self, agents: int, cut: str = "free", order: str = "critical", steal: bool = True
+    ) -> Deal:
+        """Steps 1-4 for ``agents`` agents. The order of step 1 leaves walking out; when
+        the agents then find no way on (a ramp taken away before an agent crossed it), the
+        deal is made again with the walks' own causal links kept (:func:`order_edges`); when
+        that fails too, the pieces are replayed one after the other instead of in time steps
+        (:mod:`~twostep.dealing.replay`), where a piece may wait for any other."""
+        error = DealError("not dealt")
+        for timed in (True, False):
+            for keep_walks in (False, True):
+                try:
+                    return self._deal(agents, cut, order, keep_walks, timed and steal, timed)
+                except DealError as failed:
+                    error = failed
+        raise error
+
+    def _deal(
+        self, agents: int, cut: str, order: str, keep_walks: bool, steal: bool, timed: bool
+    ) -> Deal:
+        """One attempt of :meth:`deal`; cuts that give the same pieces give the same deal,
+        made once."""
+        pieces, piece_order = self.pieces(cut, keep_walks)
+        key = (agents, order, keep_walks, steal, timed, tuple(map(tuple, pieces)))
+        if key not in self._deals:
+            try:
+                self._deals[key] = self._deal_pieces(
+                    agents, order, pieces, piece_order, steal, timed
+                )
+            except DealError as error:
+                self._deals[key] = error
+        found = self._deals[key]
+        if isinstance(found, DealError):
+            raise found
+        return found
+
+    def _deal_pieces(
+        self,
+        agents: int,
+        order: str,
+        pieces: list[list[int]],
+        piece_order: PieceOrder,
+        steal: bool,
+        timed: bool,
+    ) -> Deal:
+        with self._phase("dealing"):
+            before = walks_before(self.walking)
+            scheduler = ListScheduler(pieces, piece_order, before, self.estimate, agents)
+            schedule = scheduler.run(order)
+        with self._phase("replay"):
+            if timed:
+                timeline = Timeline(self.walker, self.steps, pieces, piece_order.action_preds,
+                                    self.goal, self.init)  # fmt: skip
+                steps, owner = timeline.run(
+                    schedule.owner, schedule.start, schedule.level, agents, steal
+                )
+                run = [pair for step in steps for pair in step]
+            else:
+                replay = Replay(self.walker, self.steps, pieces, piece_order.preds, self.goal,
+                                self.init)  # fmt: skip
+                run, owner = replay.run(schedule.owner, schedule.start, agents)
+        with self._phase("joint clean-up"):
+            # what several agents no longer need (a block parked for want of a second hand)
+            env, own = self.init
+            joint = Elimination(self.goal, env, (own,) * agents, run).run()
+            steps = earliest_steps(joint, agents)
+        plans: list[list[str]] = [[] for _ in range(agents)]
+        for a, step in joint:
+            plans[a].append(str(step))
+        started = sorted(range(len(pieces)), key=lambda p: (schedule.start[p], p))
+        return Deal(
+            [pieces[p] for p in started],
+            [owner[p] for p in started],
+            plans,
+            schedule.makespan,
+            sum(is_walking(step, self.space) for _, step in joint),
+            len(self.cleaned),
+            [[(a, str(step)) for a, step in pairs] for pairs in steps],
+        )
+
+
 def deal_plan(
     problem: Problem,
     plan: Sequence[str],
@@ -94,58 +274,5 @@ def deal_plan(
     order: str = "critical",
     cleaned: Sequence[GroundAction] | None = None,
 ) -> Deal:
-    """Steps 0-4 of :mod:`twostep.dealing` for one SA plan and ``agents`` agents;
-    ``cleaned`` is step 0's result when the caller has it (:func:`clean_plan`: one
-    clean-up serves every cut and order).
-
-    The order of step 1 leaves walking out; when the replay then finds no walk (a ramp
-    taken away before an agent crossed it), the deal is made again with the walks' own
-    causal links kept (:func:`order_edges`).
-    """
-    grounded = list(cleaned) if cleaned is not None else clean_plan(problem, plan)
-    try:
-        return deal_once(problem, grounded, agents, agent_predicates, cut, order, False)
-    except DealError:
-        return deal_once(problem, grounded, agents, agent_predicates, cut, order, True)
-
-
-def deal_once(
-    problem: Problem,
-    grounded: list[GroundAction],
-    agents: int,
-    agent_predicates: Collection[str],
-    cut: str,
-    order: str,
-    keep_walks: bool,
-) -> Deal:
-    """Steps 1-4 for a cleaned plan (raise :class:`DealError` when the replay fails)."""
-    positional = positional_predicates(problem.domain)
-    walking = [is_walking(a, agent_predicates, positional) for a in grounded]
-    edges = order_edges(problem, grounded, walking, agent_predicates, keep_walks)
-    pieces = [[i for i in p if not walking[i]]
-              for p in pieces_of(problem, grounded, agent_predicates, edges, cut)]  # fmt: skip
-    pieces = [p for p in pieces if p]
-    piece_order = PieceOrder.of(pieces, edges)
-    sa_states: list[frozenset[Fact]] = [problem.init]
-    for action in grounded:
-        sa_states.append(action.apply(sa_states[-1]))
-    walker = Walker(problem, agent_predicates, frozenset().union(*sa_states))
-    walks = WalkEstimate(walker, grounded, sa_states, positional)
-    scheduler = ListScheduler(pieces, piece_order, walks_before(walking), walks, agents)
-    schedule = scheduler.run(order)
-    joint, replayed = replay(
-        problem, walker, grounded, pieces, piece_order.preds, schedule.owner, schedule.start, agents
-    )
-    # 4. what several agents no longer need (a block parked for want of a second hand)
-    joint = eliminate_joint(problem, joint, agents, agent_predicates)
-    plans: list[list[str]] = [[] for _ in range(agents)]
-    for a, step in joint:
-        plans[a].append(str(step))
-    return Deal(
-        [pieces[p] for p in replayed],
-        [schedule.owner[p] for p in replayed],
-        plans,
-        schedule.makespan,
-        sum(is_walking(step, agent_predicates, positional) for _, step in joint),
-        len(grounded),
-    )
+    """One deal of an SA plan to ``agents`` agents (:meth:`Dealer.deal`)."""
+    return Dealer(problem, plan, agent_predicates, cleaned).deal(agents, cut, order)

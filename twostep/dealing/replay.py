@@ -1,90 +1,114 @@
-"""The agents' plans in plan-deal (step 3): the dealt pieces replayed, each by its agent.
+"""The agents' plans in plan-deal when the time steps fail (step 3's fallback,
+:mod:`~twostep.dealing.timeline`): the dealt pieces replayed one after the other.
 
 The pieces are replayed in the order of their start times (a linearisation the plan's
-order allows; a piece whose walk does not exist yet waits for the next one the order
-allows). Before each action its agent walks, where needed, to a place where the action
-applies (:class:`~twostep.dealing.walks.Walker`). The replay is a sequential run of all
-agents' plans, checked step by step, so a valid joint schedule exists; the parallel
-scorer then finds the shortest.
+order allows). Before each action its agent walks, where needed, to a place where the
+action applies (:class:`~twostep.dealing.walks.Walker`). A piece whose agent cannot get
+there yet *waits*: the next piece the order allows goes first. When no waiting piece can
+go, the first one is *handed* to another agent that can reach it (the least busy first).
+The replay is a sequential run of all agents' plans, checked step by step; its time steps
+come from :func:`~twostep.dealing.timeline.earliest_steps`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
-from twostep.dealing.cleanup import JointRun, joint_goal_holds
+from twostep.dealing.cleanup import JointRun
+from twostep.dealing.encoding import GoalBits, Owns, Step
 from twostep.dealing.model import DealError
 from twostep.dealing.walks import Walker
-from twostep.pddl import Fact, Problem
-from twostep.progression import agent_part, environment_part
-from twostep.strips import GroundAction
 
 
 def replay_piece(
-    walker: Walker,
-    piece: Sequence[int],
-    grounded: Sequence[GroundAction],
-    environment: frozenset[Fact],
-    own: frozenset[Fact],
-) -> tuple[list[GroundAction], frozenset[Fact]]:
-    """One agent runs one piece, walking before an action where needed: its actions and
-    the state after them (raise :class:`DealError`)."""
-    state = walker.problem.close(environment | own)
-    steps: list[GroundAction] = []
+    walker: Walker, piece: Sequence[int], steps: Sequence[Step], env: int, own: int
+) -> tuple[list[Step], int, int]:
+    """One agent runs one piece, walking before an action where needed: its steps and the
+    state after them (raise :class:`DealError`)."""
+    done: list[Step] = []
     for i in piece:
-        action = grounded[i]
-        if not action.applicable(state):
-            agent = agent_part(state, walker.agent_predicates)
-            for step in walker.walk_to(
-                environment_part(state, walker.agent_predicates), agent, action
-            ):
-                state = step.apply(state)
-                steps.append(step)
-            if not action.applicable(state):
-                raise DealError(f"{action} does not apply")
-        state = action.apply(state)
-        steps.append(action)
-    return steps, state
+        step = steps[i]
+        if not step.applicable(env, own):
+            for move in walker.walk_to(env, own, step):
+                env, own = move.apply(env, own)
+                done.append(move)
+        env, own = step.apply(env, own)
+        done.append(step)
+    return done, env, own
 
 
-def replay(
-    problem: Problem,
-    walker: Walker,
-    grounded: Sequence[GroundAction],
-    pieces: Sequence[Sequence[int]],
-    preds: Sequence[set[int]],
-    owner: Sequence[int],
-    start: Sequence[int],
-    agents: int,
-) -> tuple[JointRun, list[int]]:
-    """The joint run of the dealt pieces and the order they were replayed in (module
-    docstring); :class:`DealError` when a piece cannot be replayed or the goal is missed."""
-    predicates = walker.agent_predicates
-    pending = sorted(range(len(pieces)), key=lambda p: (start[p], p))
-    environment = environment_part(problem.init, predicates)
-    own_state = [agent_part(problem.init, predicates)] * agents
-    replayed: list[int] = []
-    done: set[int] = set()
-    joint: JointRun = []
-    while pending:
-        for p in pending:
-            if not preds[p] <= done:
-                continue
-            try:
-                path, state = replay_piece(
-                    walker, pieces[p], grounded, environment, own_state[owner[p]]
-                )
-            except DealError:
-                continue
-            break
-        else:
-            raise DealError(f"piece {pending[0]}: no agent can walk to where it applies")
-        joint.extend((owner[p], step) for step in path)
-        environment = environment_part(state, predicates)
-        own_state[owner[p]] = agent_part(state, predicates)
-        pending.remove(p)
-        done.add(p)
-        replayed.append(p)
-    if not joint_goal_holds(problem, environment, own_state):
-        raise DealError("the dealt plans do not reach the goal")
-    return joint, replayed
+class Replay:
+    """Step 3 for one deal: pieces, their order and owners in, the joint run out."""
+
+    def __init__(
+        self,
+        walker: Walker,
+        steps: Sequence[Step],
+        pieces: Sequence[Sequence[int]],
+        preds: Sequence[set[int]],
+        goal: GoalBits,
+        start: tuple[int, int],
+    ) -> None:
+        self.walker, self.steps, self.pieces, self.preds = walker, steps, pieces, preds
+        self.goal = goal
+        self.start = start
+
+    def run(
+        self, owner: Sequence[int], start: Sequence[int], agents: int
+    ) -> tuple[JointRun, list[int]]:
+        """The joint run of the dealt pieces (module docstring); :class:`DealError` when no
+        piece can go on or the goal is missed."""
+        owner = list(owner)
+        pending = sorted(range(len(self.pieces)), key=lambda p: (start[p], p))
+        env, own0 = self.start
+        owns: Owns = (own0,) * agents
+        load = [0] * agents  # actions each agent has so far
+        done: set[int] = set()
+        joint: JointRun = []
+        while pending:
+            ready = [p for p in pending if self.preds[p] <= done]
+            found = self._first(ready, owner, env, owns) or self._handed(ready, load, env, owns)
+            if found is None:
+                raise DealError(f"piece {ready[0] if ready else pending[0]}: no agent can "
+                                "walk to where it applies")  # fmt: skip
+            p, agent, path, env, own = found
+            owner[p] = agent
+            joint.extend((agent, step) for step in path)
+            owns = (*owns[:agent], own, *owns[agent + 1 :])
+            load[agent] += len(path)
+            pending.remove(p)
+            done.add(p)
+        if not self.goal.holds(env, owns):
+            raise DealError("the dealt plans do not reach the goal")
+        return joint, owner
+
+    def _try(
+        self, p: int, agent: int, env: int, owns: Owns
+    ) -> tuple[int, int, list[Step], int, int] | None:
+        try:
+            path, env, own = replay_piece(self.walker, self.pieces[p], self.steps, env, owns[agent])
+        except DealError:
+            return None
+        return p, agent, path, env, own
+
+    def _first(
+        self, ready: Sequence[int], owner: Sequence[int], env: int, owns: Owns
+    ) -> tuple[int, int, list[Step], int, int] | None:
+        """The first ready piece its own agent can replay (the others wait)."""
+        for p in ready:
+            found = self._try(p, owner[p], env, owns)
+            if found is not None:
+                return found
+        return None
+
+    def _handed(
+        self, ready: Sequence[int], load: Sequence[int], env: int, owns: Owns
+    ) -> tuple[int, int, list[Step], int, int] | None:
+        """The first ready piece another agent can replay, the least busy agent first."""
+        agents = sorted(range(len(load)), key=lambda a: (load[a], a))
+        for p in ready:
+            for agent in agents:
+                found = self._try(p, agent, env, owns)
+                if found is not None:
+                    return found
+        return None

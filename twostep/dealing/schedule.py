@@ -15,14 +15,14 @@ for another to be *planned*.
 from __future__ import annotations
 
 from collections import defaultdict
-from collections.abc import Collection, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
+from twostep.dealing.encoding import Step
 from twostep.dealing.model import DealError
 from twostep.dealing.walks import Walker
-from twostep.pddl import Fact
-from twostep.progression import agent_part, environment_part
-from twostep.strips import GroundAction
+
+State = tuple[int, int]  # one agent's state: environment bits, own bits
 
 
 @dataclass
@@ -53,34 +53,28 @@ class WalkEstimate:
     """How far an agent walks to an action of the SA plan: from where it will stand, in
     the environment the SA plan has there (cached per place and action)."""
 
-    def __init__(
-        self,
-        walker: Walker,
-        grounded: Sequence[GroundAction],
-        sa_states: Sequence[frozenset[Fact]],
-        positional: Collection[str],
-    ) -> None:
+    def __init__(self, walker: Walker, steps: Sequence[Step], states: Sequence[State]) -> None:
         self.walker = walker
-        self.grounded = grounded
-        self.sa_states = sa_states
-        predicates = walker.agent_predicates
-        where = predicates & frozenset(positional)
+        self.steps = steps
+        self.envs = [env for env, _ in states]
+        where = walker.space.where
         # where the agent stands in each state of the SA plan, and what else it has
-        self.standing = [agent_part(state, where) for state in sa_states]
-        self.resting = agent_part(walker.problem.init, predicates) - self.standing[0]
-        self._lengths: dict[tuple[frozenset[Fact], int], int] = {}
+        self.standing = [own & where for _, own in states]
+        self.resting = states[0][1] & ~where
+        self._lengths: dict[tuple[int, int], int] = {}
 
-    def length(self, position: frozenset[Fact], i: int, default: int) -> int:
+    def length(self, position: int, i: int, default: int) -> int:
         """Walking steps from ``position`` to where action ``i`` applies (``default``: none)."""
         key = (position, i)
-        if key not in self._lengths:
+        found = self._lengths.get(key)
+        if found is None:
             try:
-                env = environment_part(self.sa_states[i], self.walker.agent_predicates)
-                walk = self.walker.walk_to(env, position | self.resting, self.grounded[i])
-                self._lengths[key] = len(walk)
+                walk = self.walker.walk_to(self.envs[i], position | self.resting, self.steps[i])
+                found = len(walk)
             except DealError:
-                self._lengths[key] = default
-        return self._lengths[key]
+                found = default
+            self._lengths[key] = found
+        return found
 
 
 @dataclass
@@ -90,6 +84,7 @@ class Schedule:
     owner: list[int]
     start: list[int]
     makespan: int
+    level: list[int]  # per piece: its longest path to the end of the plan, itself included
 
 
 class ListScheduler:
@@ -138,7 +133,8 @@ class ListScheduler:
 
     def place(self, p: int) -> None:
         """Give piece ``p`` to the agent on which it ends earliest (ties: an agent that made
-        a predecessor piece, then the idlest, then the first)."""
+        a predecessor piece, then the one with the shortest walk to it, then the idlest,
+        then the first)."""
         piece = self.pieces[p]
         timings = [self.timing(a, piece) for a in range(len(self.free_at))]
         best = min(
@@ -146,6 +142,7 @@ class ListScheduler:
             key=lambda a: (
                 timings[a][0] + timings[a][1][-1],
                 -sum(self.owner[q] == a for q in self.order.preds[p]),
+                timings[a][1][0],
                 self.free_at[a],
                 a,
             ),
@@ -170,4 +167,4 @@ class ListScheduler:
                 waiting[q] -= 1
                 if not waiting[q]:
                     ready.append(q)
-        return Schedule(self.owner, self.start, max(self.free_at, default=0))
+        return Schedule(self.owner, self.start, max(self.free_at, default=0), level)

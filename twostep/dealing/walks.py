@@ -1,108 +1,216 @@
 """Walking in plan-deal: which actions are walks, and an agent's shortest walk to where an
 action applies.
 
-An action *walks* when it has no environment effect and its agent effects only say where
-the agent stands (positional predicates: some action both adds and deletes them); its
-possible effects count, conditional ones included. The SA plan's walks are not dealt:
-before each action it replays, an agent walks by breadth-first search over the task's
-walking actions, taken from its grounding (Fast Downward grounds every action reachable
-from the initial state, so walks may go where the SA plan never went).
+An action *walks* when its agent effects only say where the agent stands (positional
+predicates: some action both adds and deletes them) and its environment effects, if any,
+only touch positional facts too (a hoist that leaves an area makes it ``clear``). The SA
+plan's walks are not dealt: before each action it replays, an agent walks by
+breadth-first search over the task's moves, taken from its grounding (Fast Downward
+grounds every action reachable from the initial state, so walks may go where the SA plan
+never went). A move is a walking action, or one whose other environment effects can harm
+nobody: facts it adds that no action deletes or needs false (a cell ``visited``). An
+action's possible effects count, conditional ones included.
 """
 
 from __future__ import annotations
 
 from collections import defaultdict, deque
-from collections.abc import Collection, Iterator
+from collections.abc import Collection
 
-from twostep.dealing.model import DealError
-from twostep.decomposers.goal_split import positional_predicates
-from twostep.pddl import Fact, Problem
-from twostep.progression import agent_part, environment_part
+from twostep.dealing.encoding import FactSpace, Step
+from twostep.dealing.model import DealError, cpu_seconds
+from twostep.pddl import Domain, Fact, Problem
+from twostep.pddl.model import ActionSchema
 from twostep.strips import GroundAction
 
 WALK_LIMIT = 20_000
 """States the walking search may visit for one action before the deal gives up."""
 
 
-def is_walking(
-    action: GroundAction, agent_predicates: Collection[str], positional: Collection[str]
-) -> bool:
-    """No environment effect, and the agent effects only say where the agent stands."""
-    effects = action.possible_add | action.possible_delete
-    return bool(effects) and all(f[0] in agent_predicates and f[0] in positional for f in effects)
+def is_walking(step: Step, space: FactSpace) -> bool:
+    """Agent effects only where the agent stands, environment effects only positional."""
+    own = step.add_own | step.del_own
+    return bool(own) and not own & ~space.where and not step.writes_env & ~space.where_env
+
+
+def harmless_predicates(domain: Domain, agent_predicates: Collection[str]) -> set[str]:
+    """Environment predicates that actions only add: no action deletes them or needs them
+    false, so having more of them never stops an action."""
+    actions = domain.actions.values()
+    added = {a.predicate for s in actions for a in s.add}
+    deleted = {a.predicate for s in actions for a in s.delete}
+    forbidden = {a.predicate for s in actions for a in s.pre_negative}
+    conditional = {
+        p for s in actions if not s.is_strips for p in _negated([s.precondition, s.effect])
+    }
+    return added - deleted - forbidden - conditional - set(agent_predicates)
+
+
+def _negated(formula: object) -> set[str]:
+    """Predicates under a ``not`` anywhere in an s-expression (a precondition or an effect
+    condition beyond the top-level conjunction)."""
+    found: set[str] = set()
+    if isinstance(formula, list):
+        if formula[:1] == ["not"] and len(formula) == 2 and isinstance(formula[1], list):
+            inner = formula[1]
+            if inner and isinstance(inner[0], str):
+                found.add(inner[0])
+        for part in formula:
+            found |= _negated(part)
+    return found
+
+
+def _may_move(schema: ActionSchema, space: FactSpace) -> bool:
+    """Whether some grounding of ``schema`` may be a move (its effects, as written, change
+    positional agent facts): the grounded actions of other schemas are not looked at."""
+    agent, positional = space.agent_predicates, space.positional
+    own = [a.predicate for a in (*schema.add, *schema.delete) if a.predicate in agent]
+    return bool(own) and all(p in positional for p in own)
+
+
+def is_move(action: GroundAction, space: FactSpace) -> bool:
+    """A walking action, or one whose other environment effects are harmless additions
+    (module docstring)."""
+    agent, positional = space.agent_predicates, space.positional
+    own = [f[0] for f in action.possible_add | action.possible_delete if f[0] in agent]
+    env_add = [f[0] for f in action.possible_add if f[0] not in agent]
+    env_del = [f[0] for f in action.possible_delete if f[0] not in agent]
+    return (
+        bool(own)
+        and all(p in positional for p in own)
+        and all(p in positional for p in env_del)
+        and all(p in positional or p in space.harmless for p in env_add)
+    )
+
+
+def slot(fact: Fact) -> Fact:
+    """What an agent fact is about, leaving out where: ``(robot-at robot1 t3)`` is about
+    ``robot-at robot1``, termes' ``(at p3)`` about ``at``."""
+    return fact[:-1] if len(fact) > 1 else fact
 
 
 class Walker:
-    """Shortest walks of one agent: breadth-first over the task's walking actions.
+    """Shortest walks of one agent: breadth-first over the task's moves.
 
     ``universe`` holds every environment fact a walk may meet (the facts of the SA plan's
-    states: a replay only runs that plan's actions, and walks change no environment
-    fact). The walking actions that could apply where an agent stands are found once per
-    place (indexed by the agent facts they need) and filtered by the current state.
+    states, and what moves may add). The moves that could apply where an agent stands are
+    indexed by an agent fact they need (one per slot, :func:`slot`, in a floortile agent's
+    two robots); which of them apply is cached per own state and the environment facts
+    they read. A walk moves only what the target action needs of the agent (robot1 walks
+    for robot1's painting).
     """
 
-    def __init__(
-        self, problem: Problem, agent_predicates: Collection[str], universe: frozenset[Fact]
-    ):
+    def __init__(self, problem: Problem, space: FactSpace, universe: frozenset[Fact]):
         self.problem = problem
-        self.agent_predicates = frozenset(agent_predicates)
-        positional = positional_predicates(problem.domain)
-        walking = sorted(
+        self.space = space
+        agent = space.agent_predicates
+        schemas = {s.name for s in problem.domain.actions.values() if _may_move(s, space)}
+        moves = sorted(  # set order varies per process: walks must not
             (
                 a
                 for a in problem.grounded.actions.values()
-                if (a.possible_add or a.possible_delete)
-                and is_walking(a, self.agent_predicates, positional)
+                if a.name in schemas and is_move(a, space)
             ),
-            key=str,  # set order varies per process: walks must not
+            key=str,
         )
-        # index: an agent fact a walking action needs -> the action (actions that need
-        # none are always candidates)
+        universe = universe.union(*(a.possible_add for a in moves))
+        self.universe_env, _ = space.bits(f for f in universe if f[0] not in agent)
+        # index: an agent fact a move needs -> the move (moves that need none: anywhere)
         self._needing: dict[Fact, list[GroundAction]] = defaultdict(list)
         self._anywhere: list[GroundAction] = []
-        for action in walking:
-            needs = sorted(f for f in action.pre_positive if f[0] in self.agent_predicates)
+        for action in moves:
+            needs = sorted(f for f in action.pre_positive if f[0] in agent)
             (self._needing[needs[0]] if needs else self._anywhere).append(action)
-        self.universe = environment_part(universe, agent_predicates)
-        self._candidates: dict[frozenset[Fact], list[GroundAction]] = {}
+        self._candidates: dict[int, tuple[list[Step], int]] = {}
+        self._successors: dict[tuple[int, int], list[Step]] = {}
+        self._moved: dict[Step, frozenset[Fact]] = {}  # per move: the slots it changes
+        self.search_s = 0.0
+        """Seconds spent in :meth:`walk_to` so far."""
 
-    def candidates(self, own: frozenset[Fact]) -> list[GroundAction]:
-        """Walking actions whose preconditions hold in the universe plus ``own``."""
+    def candidates(self, own: int) -> tuple[list[Step], int]:
+        """The moves whose positive preconditions hold in the universe plus ``own``, and
+        the environment bits they read."""
         found = self._candidates.get(own)
         if found is None:
-            state = self.problem.close(self.universe | own)
-            pool = [*self._anywhere, *(a for f in own for a in self._needing.get(f, ()))]
-            found = sorted((a for a in pool if a.applicable(state)), key=str)
-            self._candidates[own] = found
+            space, universe = self.space, self.universe_env
+            pool = [*self._anywhere]
+            for fact in space.own_facts(own):
+                pool += self._needing.get(fact, ())
+            # a move not exact as bits reads more than it needs: the state decides
+            steps = sorted(
+                (
+                    step
+                    for step in map(space.step, pool)
+                    if not step.exact or not (step.pre_own & ~own or step.pre_env & ~universe)
+                ),
+                key=str,
+            )
+            reads = 0
+            for step in steps:
+                reads |= step.pre_env | step.neg_env
+            found = self._candidates[own] = (steps, reads)
         return found
 
-    def successors(
-        self, environment: frozenset[Fact], own: frozenset[Fact]
-    ) -> Iterator[GroundAction]:
-        state = self.problem.close(environment | own)
-        return (a for a in self.candidates(own) if a.applicable(state))
+    def moved(self, move: Step) -> frozenset[Fact]:
+        """The slots of the agent facts ``move`` changes."""
+        found = self._moved.get(move)
+        if found is None:
+            changed = move.action.possible_add | move.action.possible_delete
+            found = self._moved[move] = frozenset(
+                slot(f) for f in changed if f[0] in self.space.agent_predicates
+            )
+        return found
 
-    def walk_to(
-        self, environment: frozenset[Fact], own: frozenset[Fact], target: GroundAction
-    ) -> list[GroundAction]:
+    def successors(self, env: int, own: int) -> list[Step]:
+        """The moves that apply in ``env`` for an agent with ``own``."""
+        steps, reads = self.candidates(own)
+        key = (own, env & reads)
+        found = self._successors.get(key)
+        if found is None:
+            found = self._successors[key] = [s for s in steps if s.applicable(env, own)]
+        return found
+
+    def walk_to(self, env: int, own: int, target: Step) -> list[Step]:
         """The shortest walk after which ``target`` applies (raise :class:`DealError`)."""
-        start = own
-        parents: dict[frozenset[Fact], tuple[frozenset[Fact], GroundAction] | None] = {start: None}
+        began = cpu_seconds()
+        agent = self.space.agent_predicates
+        needed = {slot(f) for f in target.action.pre_positive if f[0] in agent}
+        try:
+            return self._search(env, own, target, needed)
+        except DealError:
+            if all(needed >= self.moved(s) for s in self.candidates(own)[0]):
+                raise  # every move was tried already
+            return self._search(env, own, target, None)
+        finally:
+            self.search_s += cpu_seconds() - began
+
+    def _search(self, env: int, own: int, target: Step, needed: set[Fact] | None) -> list[Step]:
+        """Breadth-first search over the moves that change ``needed`` slots (None: all)."""
+        # states that differ in harmless facts alone count as one (a walk that visits
+        # cells would otherwise make every path a state of its own)
+        relevant = ~self.space.harmless_env
+        start = (env, own)
+        parents: dict[tuple[int, int], tuple[tuple[int, int], Step] | None] = {
+            (env & relevant, own): None
+        }
         queue = deque([start])
         while queue:
             node = queue.popleft()
-            if target.applicable(self.problem.close(environment | node)):
-                path: list[GroundAction] = []
-                while (entry := parents[node]) is not None:
-                    node, step = entry
+            if target.applicable(*node):
+                path: list[Step] = []
+                key = (node[0] & relevant, node[1])
+                while (entry := parents[key]) is not None:
+                    key, step = entry
                     path.append(step)
                 return path[::-1]
             if len(parents) > WALK_LIMIT:
                 break
-            for action in self.successors(environment, node):
-                view = self.problem.close(environment | node)
-                child = agent_part(action.apply(view), self.agent_predicates)
-                if child not in parents:
-                    parents[child] = (node, action)
+            for step in self.successors(*node):
+                if needed is not None and not self.moved(step) & needed:
+                    continue
+                child = step.apply(*node)
+                key = (child[0] & relevant, child[1])
+                if key not in parents:
+                    parents[key] = ((node[0] & relevant, node[1]), step)
                     queue.append(child)
         raise DealError(f"no walk to where {target} applies")

@@ -1,11 +1,17 @@
-"""``plan-deal`` as a method: deal the SA plan to N agents with every cut and order of
-:mod:`twostep.dealing`, score each deal, and keep the shortest schedule.
+"""``plan-deal`` as a method: deal the SA plan to 1, 2, ..., N agents with every cut and
+order of :mod:`twostep.dealing`, score the deals, and keep the shortest schedule.
+
+The deals to fewer agents are candidates too (an agent may stay idle), so a run with N
+agents is never longer than one with N-1: by construction, not by luck. The one-agent
+deal is the cleaned SA plan (the SA plan after action elimination); it is the outcome
+when no deal to two or more agents works or none is shorter, and ``fallback`` says so.
+The SA plan itself is the outcome only when there is none to deal or one agent.
 
 No planner call beyond the SA plan: the run's planning time is the SA plan's planner time
-and the time spent dealing. Deals that give the same plans are scored once. The SA plan is
-the outcome when no deal works, with one agent, or (``fallback_if_longer``) when the
-shortest schedule is longer. result.json ``deal`` records every cut and order tried: its
-pieces, walks, the cleaned SA plan's length, the agents used, its length or its error.
+and the time spent dealing (CPU time, both: :func:`~twostep.dealing.model.cpu_seconds`). Deals that give the same plans are scored once. result.json
+``deal`` records every deal tried (its agents, cut and order, pieces, walks, the cleaned
+SA plan's length, the agents used, its length or its error), ``deal_seconds`` where the
+dealing time went and ``agents_used`` how many agents the outcome has.
 """
 
 from __future__ import annotations
@@ -15,8 +21,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from twostep.dealing import CUTS, ORDERS, DealError, clean_plan, deal_plan
-from twostep.execution import ParallelExecution, ScheduleError
+from twostep.dealing import CUTS, Dealer, DealError, Way, ways
+from twostep.dealing.model import cpu_seconds
+from twostep.execution import ParallelExecution, ScheduleError, check_schedule
 from twostep.methods.request import MethodRequest
 from twostep.methods.result import (
     AgentPlan,
@@ -32,7 +39,12 @@ from twostep.methods.result import (
     solved_steps,
 )
 from twostep.methods.single_agent import single_agent_plan
-from twostep.strips import GroundAction, PlanError
+from twostep.strips import Grounder, PlanError
+
+SCORED_UP_TO = 40
+"""Deals of at most this many actions in all are scored by the parallel scorer, which
+proves their shortest schedule in milliseconds; longer ones keep their own schedule (the
+scorer's search grows fast with agents and length: seconds for 4 agents and 200 actions)."""
 
 BEST = "best"
 """The default cut: every cut of :data:`twostep.dealing.CUTS`, the shorter schedule kept."""
@@ -49,8 +61,11 @@ class Trials:
 
     rows: list[dict[str, Any]] = field(default_factory=list)
     best: tuple[ParallelExecution, list[list[str]]] | None = None
-    deal_time_s: float = 0.0
-    score_time_s: float = 0.0
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def deal_time_s(self) -> float:
+        return sum(s for phase, s in self.seconds.items() if phase != "scoring")
 
 
 def check_cut(cut: str) -> None:
@@ -62,7 +77,7 @@ def check_cut(cut: str) -> None:
 
 def run_plan_deal(request: MethodRequest, cut: str = BEST) -> RunResult:
     """Deal the SA plan with ``cut`` (``free``, ``holding`` or ``best``: both) and each
-    order; the shortest schedule wins (module docstring)."""
+    order to every number of agents up to N; the shortest schedule wins (module docstring)."""
     check_cut(cut)
     start = time.perf_counter()
     run = new_run(request, MethodName.TWOSTEP)
@@ -73,19 +88,25 @@ def run_plan_deal(request: MethodRequest, cut: str = BEST) -> RunResult:
         run.sa_length = len(sa_steps)
     trials = Trials()
     if sa_steps is not None and request.agents > 1:
-        try_deals(request, sa_steps, CUTS if cut == BEST else (cut,), trials)
-    run.score_time_s = trials.score_time_s
+        try_deals(request, sa_steps, ways(None if cut == BEST else cut), trials)
+    run.score_time_s = trials.seconds.get("scoring", 0.0)
     run.extra["deal"] = trials.rows
+    run.extra["deal_seconds"] = {phase: round(s, 6) for phase, s in trials.seconds.items()}
+    run.planner_calls.append(AgentPlan("agent0", "single", request.problem.goal.to_pddl(), sa_plan))
     if trials.best is not None:
         run.fallback = longer_than_sa(request, trials.best[0].length, sa_steps)
-    run.planner_calls.append(AgentPlan("agent0", "single", request.problem.goal.to_pddl(), sa_plan))
     if trials.best is not None and run.fallback is None:
         execution, plans = trials.best
         adopt_schedule(run, execution, [f"agent{k}" for k in range(len(plans))], plans)
+        if len(plans) == 1:
+            run.fallback = one_agent(trials.rows)
     else:
         if run.fallback is None:
-            run.fallback = not_dealt(request, sa_steps, trials.rows)
+            run.fallback = Fallback(
+                FallbackReason.NO_SA_PLAN if sa_steps is None else FallbackReason.ONE_AGENT
+            )
         adopt_sa_plan(run, sa_plan)
+    run.extra["agents_used"] = len(run.agent_order) or 1
     run.state_editing_time_s = trials.deal_time_s
     run.planning_time_s = count_sa_time(run, sa_plan) + trials.deal_time_s
     run.wall_time_s = time.perf_counter() - start
@@ -93,68 +114,105 @@ def run_plan_deal(request: MethodRequest, cut: str = BEST) -> RunResult:
 
 
 def try_deals(
-    request: MethodRequest, sa_steps: Sequence[str], cuts: Sequence[str], trials: Trials
+    request: MethodRequest, sa_steps: Sequence[str], tried: Sequence[Way], trials: Trials
 ) -> None:
-    """Deal with every cut and order (the SA plan cleaned once for all), scoring each new
-    set of plans; the chosen row is marked."""
+    """The cleaned SA plan (one agent), then every way for 2..N agents; the shortest
+    schedule is kept, ties to fewer agents (its row is marked ``chosen``)."""
     problem = request.problem
-    scored: dict[tuple[tuple[str, ...], ...], int] = {}  # plans -> the row that scored them
-    cleaned: list[GroundAction] | None = None
-    for cut in cuts:
-        for order in ORDERS:
-            row: dict[str, Any] = {"cut": cut, "order": order}
+    try:
+        dealer = Dealer(problem, sa_steps, request.agent_predicates)
+    except PlanError as error:  # an SA plan that does not apply: nothing to deal
+        trials.rows.append({"agents": 1, "error": str(error)})
+        return
+    trials.seconds = dealer.seconds  # the dealer's phases, and scoring beside them
+    cleaned = [str(a) for a in dealer.cleaned]
+    first = {"agents": 1, "pieces": 1, "walks": sum(dealer.walking),
+             "cleaned_sa_length": len(cleaned), "agents_used": 1}  # fmt: skip
+    trials.rows.append(first)
+    candidates = [(first, [cleaned], [[(0, a)] for a in cleaned])]
+    for agents in range(2, request.agents + 1):
+        for way in tried:
+            row: dict[str, Any] = {"agents": agents, "cut": way.cut, "order": way.order,
+                                   "steal": way.steal}  # fmt: skip
             trials.rows.append(row)
-            deal_start = time.perf_counter()
             try:
-                if cleaned is None:
-                    cleaned = clean_plan(problem, sa_steps)
-                dealt = deal_plan(
-                    problem, sa_steps, request.agents, request.agent_predicates, cut, order, cleaned
-                )
-            except (DealError, PlanError) as error:
+                dealt = dealer.deal(agents, way.cut, way.order, way.steal)
+            except DealError as error:
                 row["error"] = str(error)
                 continue
-            finally:
-                trials.deal_time_s += time.perf_counter() - deal_start
-            plans = [p for p in dealt.plans if p]
+            plans, schedule = used_agents(dealt.plans, dealt.schedule)
             row.update(pieces=len(dealt.pieces), walks=dealt.walks,
                        cleaned_sa_length=dealt.cleaned, agents_used=len(plans))  # fmt: skip
-            key = tuple(map(tuple, plans))
-            if key in scored:  # another cut or order dealt the same plans
-                same = scored[key]
-                row.update(same_as=same, exec_length=trials.rows[same].get("exec_length"))
-                continue
-            scored[key] = len(trials.rows) - 1
-            score_deal(request, plans, row, trials)
+            candidates.append((row, plans, schedule))
+    choose_deal(request, candidates, trials)
 
 
-def score_deal(
-    request: MethodRequest, plans: list[list[str]], row: dict[str, Any], trials: Trials
+def used_agents(
+    plans: Sequence[list[str]], schedule: Sequence[Sequence[tuple[int, str]]]
+) -> tuple[list[list[str]], list[list[tuple[int, str]]]]:
+    """The plans of the agents that act, and the schedule with them numbered 0, 1, ...
+    (each time step in agent order)."""
+    number = {a: k for k, a in enumerate(a for a, plan in enumerate(plans) if plan)}
+    steps = [sorted((number[a], action) for a, action in step) for step in schedule]
+    return [plan for plan in plans if plan], steps
+
+
+def own_execution(
+    schedule: Sequence[Sequence[tuple[int, str]]], plans: Sequence[Sequence[str]]
+) -> ParallelExecution:
+    """A deal's own joint schedule, with the lower bound every schedule of its plans has:
+    the longest plan, and the actions shared out evenly (one per agent and time step)."""
+    steps = tuple(tuple(step) for step in schedule)
+    total = sum(map(len, plans))
+    bound = max(max(map(len, plans), default=0), -(-total // max(len(plans), 1)))
+    return ParallelExecution(len(steps), steps, "exact", 0, len(steps) == bound, bound)
+
+
+def choose_deal(
+    request: MethodRequest,
+    candidates: Sequence[tuple[dict[str, Any], list[list[str]], list[list[tuple[int, str]]]]],
+    trials: Trials,
 ) -> None:
-    """Score one deal's plans into its row; keep them when they are the shortest yet."""
-    score_start = time.perf_counter()
-    try:
-        execution = request.score(plans)
-    except (ScheduleError, PlanError) as error:
-        row["error"] = f"joint schedule invalid: {error}"
-    else:
+    """Score the deals and keep the shortest that re-validates (ties: fewer agents, then
+    the earlier deal). Each deal comes with its own joint schedule (dealt in time steps,
+    each action as early as the run allows); the parallel scorer scores instead when the
+    request's mode is not ``exact``."""
+    start = cpu_seconds()
+    grounder = Grounder(request.problem)
+    problem, predicates = request.problem, request.agent_predicates
+    ranked: list[tuple[int, int, int, ParallelExecution, list[list[str]], dict[str, Any]]] = []
+    for row, plans, schedule in candidates:
+        execution = own_execution(schedule, plans)
+        if request.score_mode != "exact" or sum(map(len, plans)) <= SCORED_UP_TO:
+            try:
+                scored = request.score(plans)
+            except (ScheduleError, PlanError) as error:
+                row["error"] = f"joint schedule invalid: {error}"
+                continue
+            if request.score_mode != "exact" or scored.length <= execution.length:
+                execution = scored
         row["exec_length"] = execution.length
-        if trials.best is None or execution.length < trials.best[0].length:
-            for other in trials.rows:
-                other.pop("chosen", None)
-            row["chosen"] = True
-            trials.best = (execution, plans)
-    trials.score_time_s += time.perf_counter() - score_start
+        ranked.append((execution.length, len(plans), len(ranked), execution, plans, row))
+    for *_, execution, plans, row in sorted(ranked, key=lambda entry: entry[:3]):
+        try:
+            check_schedule(execution.steps, [grounder.ground_plan(p) for p in plans],
+                           problem.init, problem.goal, predicates)  # fmt: skip
+        except (ScheduleError, PlanError) as error:
+            row["error"] = f"joint schedule invalid: {error}"
+            continue
+        row["chosen"] = True
+        trials.best = (execution, plans)
+        break
+    trials.seconds["scoring"] = trials.seconds.get("scoring", 0.0) + cpu_seconds() - start
 
 
-def not_dealt(
-    request: MethodRequest, sa_steps: Sequence[str] | None, rows: Sequence[dict[str, Any]]
-) -> Fallback:
-    """Why the run is the SA plan when no deal was kept."""
-    if sa_steps is None:
-        return Fallback(FallbackReason.NO_SA_PLAN)
-    if request.agents < 2:
-        return Fallback(FallbackReason.ONE_AGENT)
-    return Fallback(
-        FallbackReason.NO_DEAL, "; ".join(f"{r['cut']}: {r.get('error')}" for r in rows)
-    )
+def one_agent(rows: Sequence[dict[str, Any]]) -> Fallback:
+    """Why the run is the cleaned SA plan: every deal to more agents failed, or none was
+    shorter."""
+    failed = [r for r in rows if r["agents"] > 1 and "exec_length" not in r]
+    if failed and len(failed) == len(rows) - 1:
+        return Fallback(
+            FallbackReason.NO_DEAL,
+            "; ".join(f"N={r['agents']} {r['cut']}/{r['order']}: {r.get('error')}" for r in failed),
+        )
+    return Fallback(FallbackReason.NO_SHORTER_DEAL)

@@ -61,7 +61,8 @@ class RunStatus(StrEnum):
 
 
 class FallbackReason(StrEnum):
-    """Why a run's outcome is the single-agent plan (the kinds of result.json ``fallback``)."""
+    """Why a run's outcome is the single-agent plan (the kinds of result.json ``fallback``;
+    plan-deal's single-agent plan is the SA plan after action elimination)."""
 
     NO_SUBGOAL_PROPOSED = "no helper subgoal proposed"
     NO_SUBGOAL_ACCEPTED = "no helper subgoal accepted"
@@ -70,14 +71,13 @@ class FallbackReason(StrEnum):
     LONGER_THAN_SA = "joint schedule longer than SA"
     ONE_AGENT = "one agent"
     NO_SA_PLAN = "no SA plan to deal"
-    NO_DEAL = "no deal"  # recorded as the deals' errors alone
+    NO_DEAL = "no deal to two or more agents, the cleaned SA plan"  # plan-deal
+    NO_SHORTER_DEAL = "no deal shorter than the cleaned SA plan"  # plan-deal
     NO_CANDIDATE_SOLVED = "no candidate solved"
     NO_CANDIDATE = "no candidate (one agent)"
 
     def describe(self, detail: str = "") -> str:
         """The recorded text: the reason, and its details when there are any."""
-        if self is FallbackReason.NO_DEAL:
-            return detail
         if not detail:
             return self.value
         if self is FallbackReason.LONGER_THAN_SA:
