@@ -113,10 +113,22 @@ def _finish_single_run(outcome: JobOutcome, line: str, job_dir: Path) -> None:
 
 
 def _sweep_record(outcome: JobOutcome) -> dict[str, Any]:
-    """The job's record in its sweep (``.twostep/jobs/<num>.json``)."""
+    """The job's record in its sweep (``.twostep/jobs/<num>.json``): what it ran (the N
+    it ran: 1 for SA), how it ended, its results and timings."""
+    result = outcome.result
+    method = result.get("method")
     return {
         "num": HydraConfig.get().job.num,
         "name": outcome.name,
+        "domain": result.get("domain"),
+        "task": result.get("task"),
+        "method": method,
+        "decomposer": result.get("decomposer") if method == "twostep" else None,
+        "agents": 1 if method == "sa" else result.get("agents"),
+        "seed": result.get("seed"),
+        "success": result.get("success") is True,
+        "exec_length": result.get("exec_length"),
+        "planning_time_s": result.get("planning_time_s"),
         "job_key": outcome.key,
         "status": outcome.status,
         "error": outcome.error,

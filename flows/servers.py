@@ -302,6 +302,9 @@ def shared_server(info_path: Path, settings: ServerSettings, owner_pid: int) -> 
             return info
         info = spawn_server(settings, owner_pid)
         write_json_atomic(info_path, info.to_dict())
+        fresh = not any(Path(settings.home).glob("*.db"))
+        wait = " (a fresh database: its first start takes up to a minute)" if fresh else ""
+        print(f"starting Prefect server at {info.api_url}{wait} ...", flush=True)
         return info
 
 

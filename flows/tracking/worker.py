@@ -5,9 +5,7 @@ much as the rest of a short run. The ``twostep`` command therefore starts this p
 first: it imports MLflow and opens the store on the other core while the job reads its
 task and plans; the job then sends it the run's record (one JSON line on stdin) and
 waits for the run id (one JSON line on stdout). Nothing is logged if the job sends
-nothing (stdin closed): the process just exits. A warm SQLite store does not need it:
-:mod:`flows.tracking.sqlite` writes the run's rows directly; this process serves the
-first run of a store or experiment, and stores that are not SQLite files.
+nothing (stdin closed): the process just exits.
 
     python -m flows.tracking.worker <tracking uri> <artifact location or ""> <experiment>
 """
