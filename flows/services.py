@@ -41,6 +41,10 @@ from twostep.cli import console_main
 from twostep.files import write_json_atomic
 
 RECORD = "services.json"
+# MLflow 3.17's UI shows the GenAI pages (traces) unless its "Model training" switch is on:
+# the switch is the page's ``workflowType`` query (else the browser's saved choice); the
+# experiment's ``mlflow.experimentKind`` tag alone does not change it.
+MLFLOW_CLASSIC_UI = "workflowType=machine_learning"
 
 
 @dataclass(frozen=True)
@@ -64,7 +68,7 @@ class Service:
         """Where a person opens it: Prefect's flow-runs page, MLflow's experiments."""
         if self.name == "prefect":
             return self.url.removesuffix("/api") + "/runs"
-        return self.url + "/#/experiments"
+        return f"{self.url}/#/experiments?{MLFLOW_CLASSIC_UI}"
 
 
 def record_path(root: str | Path) -> Path:
@@ -194,8 +198,8 @@ def status_lines(root: Path) -> tuple[list[str], bool]:
 
 
 def experiment_page(mlflow_url: str, experiment_id: str) -> str:
-    """The MLflow UI's page of one experiment (its runs table)."""
-    return f"{mlflow_url.rstrip('/')}/#/experiments/{experiment_id}"
+    """The MLflow UI's page of one experiment, on its runs table."""
+    return f"{mlflow_url.rstrip('/')}/#/experiments/{experiment_id}?{MLFLOW_CLASSIC_UI}"
 
 
 def latest_experiment(mlflow_url: str, timeout_s: float = 5.0) -> tuple[str, str] | None:

@@ -71,7 +71,7 @@ def test_up_status_run_down_round_trip(tmp_path: Path, capsys: pytest.CaptureFix
             assert json.load(response)["api_url"] == prefect.url
         assert (
             f"prefect UI: {base}/runs" in lines
-            and f"mlflow UI: {mlflow.url}/#/experiments" in lines
+            and f"mlflow UI: {mlflow.url}/#/experiments?workflowType=machine_learning" in lines
         )
 
         # `up` again starts nothing new.
