@@ -13,16 +13,16 @@ For each scenario, on a warm install (compiled venv: ``make setup``) and a warm 
 * **breakdown**: the same job in a driver process timing its phases: Python start,
   imports of the ``twostep`` app, composing the config, reading the task (from the
   parsed-task cache ``<output.root>/cache/tasks`` once the warm-up run filled it), the planner,
-  MLflow (logging: rows written into the warm SQLite store, or waiting for the MLflow
-  helper process), Prefect (import, flow and task runs), the rest (job key, job store,
+  MLflow (logging: waiting for the helper process that imports MLflow and logs through
+  ``MlflowClient`` while the job runs), Prefect (import, flow and task runs), the rest (job key, job store,
   files, checks).
 * **CPU**: user + system seconds of the command (with the processes it waits for: the
   planner, an MLflow helper; not a server's) and of the driver's phases. On a shared
   machine wall time depends on the load; CPU time much less.
 
 (c) ``cold``: the first run on a fresh ``output.root`` each time, whose MLflow store does
-not exist yet (it is copied from the environment's template store, or, without one,
-created by MLflow).
+not exist yet (it is copied from the environment's template store, made by MLflow at
+``make setup``, or, without one, created and migrated by MLflow).
 
     .venv/bin/python bench/bench_startup.py                 # default and services, 3 runs each
     .venv/bin/python bench/bench_startup.py --repeat 5 --scenarios default,cold
