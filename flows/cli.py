@@ -148,17 +148,33 @@ def main() -> None:
 
         print(version_text())
         return
+    if _logs_a_single_run(sys.argv[1:]):
+        from flows.tracking.worker import TrackingWorker
+
+        TrackingWorker.prestart()  # imports MLflow on the other core meanwhile
     try:
         app()
     except SystemExit as stop:
         code = stop.code
     else:
         code = 0
+    if "flows.tracking.worker" in sys.modules:
+        from flows.tracking.worker import TrackingWorker
+
+        TrackingWorker.discard_prestarted()  # no job took it (bad input, MLflow off, ...)
     if code == 1 and not SweepCallback.composed:
         code = 2  # Hydra refused the command line (its message is printed): bad input
     if _SINGLE_RUN_DONE:
         _fast_exit(code if isinstance(code, int) else 1)
     sys.exit(code)
+
+
+def _logs_a_single_run(arguments: list[str]) -> bool:
+    """Whether the command line is a single run that logs to MLflow (no Hydra flag such as
+    ``-m`` or ``--help``, MLflow not turned off)."""
+    if any(a.startswith("-") for a in arguments):
+        return False
+    return not any(a.replace(" ", "").lower() == "mlflow.enabled=false" for a in arguments)
 
 
 def _fast_exit(code: int) -> None:
