@@ -15,7 +15,7 @@ export MLFLOW_DISABLE_TELEMETRY := true
 export PREFECT_SERVER_ANALYTICS_ENABLED := false
 export DO_NOT_TRACK := 1
 
-.PHONY: setup deps demo test test-slow lint local-llm alfworld-engine bench clean
+.PHONY: setup deps demo test test-slow ui-check lint local-llm alfworld-engine bench clean
 
 # --compile-bytecode: the machines set PYTHONDONTWRITEBYTECODE=1, so without .pyc files
 # every process recompiles every module it imports (halves a run's start-up).
@@ -46,6 +46,11 @@ test: setup
 
 test-slow: setup
 	$(VENV)/bin/pytest -q -m slow
+
+# Both UIs in headless Chromium (apt-get install -y chromium): services up, a 2-job sweep,
+# the Prefect flow runs and the MLflow runs table checked and screenshotted into docs/.
+ui-check: setup
+	TWOSTEP_UI_SCREENSHOTS=docs $(VENV)/bin/pytest -q -m slow tests/test_ui.py
 
 lint: setup
 	$(VENV)/bin/ruff check . && $(VENV)/bin/ruff format --check . && $(VENV)/bin/mypy

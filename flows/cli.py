@@ -113,10 +113,22 @@ def _finish_single_run(outcome: JobOutcome, line: str, job_dir: Path) -> None:
 
 
 def _sweep_record(outcome: JobOutcome) -> dict[str, Any]:
-    """The job's record in its sweep (``.twostep/jobs/<num>.json``)."""
+    """The job's record in its sweep (``.twostep/jobs/<num>.json``): what it ran (the N
+    it ran: 1 for SA), how it ended, its results and timings."""
+    result = outcome.result
+    method = result.get("method")
     return {
         "num": HydraConfig.get().job.num,
         "name": outcome.name,
+        "domain": result.get("domain"),
+        "task": result.get("task"),
+        "method": method,
+        "decomposer": result.get("decomposer") if method == "twostep" else None,
+        "agents": 1 if method == "sa" else result.get("agents"),
+        "seed": result.get("seed"),
+        "success": result.get("success") is True,
+        "exec_length": result.get("exec_length"),
+        "planning_time_s": result.get("planning_time_s"),
         "job_key": outcome.key,
         "status": outcome.status,
         "error": outcome.error,
@@ -136,17 +148,33 @@ def main() -> None:
 
         print(version_text())
         return
+    if _logs_a_single_run(sys.argv[1:]):
+        from flows.tracking.worker import TrackingWorker
+
+        TrackingWorker.prestart()  # imports MLflow on the other core meanwhile
     try:
         app()
     except SystemExit as stop:
         code = stop.code
     else:
         code = 0
+    if "flows.tracking.worker" in sys.modules:
+        from flows.tracking.worker import TrackingWorker
+
+        TrackingWorker.discard_prestarted()  # no job took it (bad input, MLflow off, ...)
     if code == 1 and not SweepCallback.composed:
         code = 2  # Hydra refused the command line (its message is printed): bad input
     if _SINGLE_RUN_DONE:
         _fast_exit(code if isinstance(code, int) else 1)
     sys.exit(code)
+
+
+def _logs_a_single_run(arguments: list[str]) -> bool:
+    """Whether the command line is a single run that logs to MLflow (no Hydra flag such as
+    ``-m`` or ``--help``, MLflow not turned off)."""
+    if any(a.startswith("-") for a in arguments):
+        return False
+    return not any(a.replace(" ", "").lower() == "mlflow.enabled=false" for a in arguments)
 
 
 def _fast_exit(code: int) -> None:

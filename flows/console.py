@@ -4,6 +4,7 @@ line, header and footer, any error on one line, and ``twostep --version``."""
 from __future__ import annotations
 
 import logging
+import math
 import platform
 import re
 import subprocess
@@ -130,6 +131,24 @@ def clock(seconds: float) -> str:
     return f"{hours}:{minutes:02d}:{secs:02d}" if hours else f"{minutes}:{secs:02d}"
 
 
+def eta_seconds(state: SweepState, records: list[dict[str, Any]], elapsed: float) -> float | None:
+    """Seconds left: the finished jobs' mean time (without waiting for the server) times
+    the jobs left, over the jobs that run at once (``state.parallel``: the launcher's);
+    throughput so far when that is unknown. None before any job finished."""
+    total, done = state.total_jobs, len(records)
+    if total is None or not 0 < done < total:
+        return None
+    times = [
+        float(r["job_wall_time_s"]) - float(r.get("server_wait_s") or 0.0)
+        for r in records
+        if isinstance(r.get("job_wall_time_s"), int | float)
+    ]
+    left = total - done
+    if not times or not state.parallel:
+        return elapsed / done * left
+    return sum(times) / len(times) * math.ceil(left / state.parallel)
+
+
 def progress_line(state: SweepState, now: float | None = None) -> str:
     """``[3/4 done | 0 failed | 1 reused | 0:41 elapsed, ~0:14 left]`` (``now``: the
     time to measure from, default the clock's)."""
@@ -145,9 +164,9 @@ def progress_line(state: SweepState, now: float | None = None) -> str:
     if reused:
         parts.append(f"{reused} reused")
     timing = f"{clock(elapsed)} elapsed"
-    if total is not None and 0 < done < total:
-        # Throughput so far, whatever the parallelism of the launcher.
-        timing += f", ~{clock(elapsed / done * (total - done))} left"
+    eta = eta_seconds(state, records, elapsed)
+    if eta is not None:
+        timing += f", ~{clock(eta)} left"
     parts.append(timing)
     return "[" + " | ".join(parts) + "]"
 
@@ -215,9 +234,9 @@ def fast_downward_version() -> str:
 SOURCE_ROOT = Path(__file__).resolve().parent.parent  # a checkout's top, or site-packages
 
 
-def git_commit(source: Path = SOURCE_ROOT) -> str | None:
-    """The commit of the checkout this code runs from (``+ changes`` when the tree has
-    uncommitted changes); None for an installed wheel (no checkout around the package)."""
+def git_state(source: Path = SOURCE_ROOT) -> tuple[str, bool] | None:
+    """(full commit, whether tracked files have uncommitted changes) of the checkout this
+    code runs from; None for an installed wheel (no checkout around the package)."""
 
     def git(*args: str) -> str | None:
         try:
@@ -231,11 +250,20 @@ def git_commit(source: Path = SOURCE_ROOT) -> str | None:
     top = git("rev-parse", "--show-toplevel")
     if top is None or Path(top).resolve() != source:
         return None  # not a checkout of this project (e.g. a venv inside another repository)
-    commit = git("rev-parse", "--short=12", "HEAD")
+    commit = git("rev-parse", "HEAD")
     if commit is None:
         return None
-    changed = git("status", "--porcelain", "--untracked-files=no")
-    return f"{commit} + changes" if changed else commit
+    return commit, bool(git("status", "--porcelain", "--untracked-files=no"))
+
+
+def git_commit(source: Path = SOURCE_ROOT) -> str | None:
+    """The short commit of the checkout this code runs from (``+ changes`` when the tree
+    has uncommitted changes); None for an installed wheel."""
+    state = git_state(source)
+    if state is None:
+        return None
+    commit, dirty = state[0][:12], state[1]
+    return f"{commit} + changes" if dirty else commit
 
 
 def version_text() -> str:

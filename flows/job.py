@@ -45,12 +45,14 @@ from flows.status import JobStatus, job_status
 from flows.step_stats import StepStats, counting_steps
 from flows.store import JobStore, job_config, job_inputs, job_key
 from flows.sweep_state import SweepState
+from flows.tracking.context import run_context_tags
 from flows.tracking.runs import (
     DEFAULT_EXPERIMENT,
     JobRunLog,
     check_store,
     job_record,
     run_exists,
+    run_name,
 )
 from twostep.benchmark import BenchmarkError
 from twostep.embodied.run import draws_pictures
@@ -222,7 +224,7 @@ def execute_job(
     job runs (:class:`~flows.tracking.runs.JobRunLog`); the job still returns after its run
     is logged.
     """
-    start = time.perf_counter()
+    start, started_at = time.perf_counter(), time.time()
     config = job_config(cfg)
     key = job_key(config, job_inputs(config))
     cfg = typed(cfg)
@@ -256,7 +258,8 @@ def execute_job(
             # Under the job's lock: two processes that both hold this job (two sweeps at
             # once) never both create its run.
             with store.locked(key):
-                _log_run(run_log, outcome, config, files, store, destination)
+                window = (started_at, time.time())
+                _log_run(run_log, outcome, config, files, store, destination, window)
     finally:
         store.release(key)  # a process waiting for this job reads its result and run now
         if run_log is not None:
@@ -377,8 +380,10 @@ def _log_run(
     files: list[tuple[Path, str | None]],
     store: JobStore,
     destination: MlflowDestination,
+    window: tuple[float, float],
 ) -> None:
-    """Log the job to its MLflow run and remember where and what; a failure is a warning
+    """Log the job to its MLflow run (``window``: when the job started and ended, the run's
+    start and end) and remember where and what; a failure is a warning
     (the result is stored: the next run logs it again).
 
     The job store is the source of truth and MLflow a view of it: a job logged here
@@ -395,7 +400,7 @@ def _log_run(
         if record is None:
             record = job_record(
                 key=outcome.key,
-                name=outcome.name,
+                name=run_name(outcome.name, config),
                 status=outcome.status.value,
                 error=outcome.error,
                 reused=outcome.reused,
@@ -403,6 +408,8 @@ def _log_run(
                 result=outcome.result,
                 timings=outcome.timings,
                 files=files,
+                tags=run_context_tags(),
+                window=window,
             )
         elif not all(Path(path).is_file() for path, _ in record["files"]):
             record["files"] = [[str(path), folder] for path, folder in files]

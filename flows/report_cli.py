@@ -25,6 +25,7 @@ For a test or a notebook, the building blocks are::
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 import os
 import re
@@ -64,6 +65,8 @@ KIND_TAG = "twostep.kind"
 STATUS_TAG = "twostep.status"
 ERROR_TAG = "twostep.error"
 JOB_KEY_TAG = "twostep.job_key"
+CONFIG_TAG = "twostep.config"
+GRID_TAG = "twostep.grid_agents"
 
 
 def _quiet_mlflow() -> None:
@@ -123,9 +126,23 @@ class MlflowRuns:
         return len(logged & recorded), len(recorded), folders
 
 
+def _run_params(tags: dict[str, str], params: dict[str, str]) -> dict[str, str]:
+    """A job run's params with the rest of its identity config (tag ``twostep.config``,
+    JSON; runs logged before it existed have every config key as a param)."""
+    try:
+        rest = json.loads(tags.get(CONFIG_TAG) or "{}")
+    except ValueError:
+        rest = {}
+    return (
+        {**{str(k): str(v) for k, v in rest.items()}, **params}
+        if isinstance(rest, dict)
+        else params
+    )
+
+
 def _run_row(run: Any) -> dict[str, Any] | None:
     tags: dict[str, str] = dict(run.data.tags)
-    params: dict[str, str] = dict(run.data.params)
+    params = _run_params(tags, dict(run.data.params))
     kind = tags.get(KIND_TAG)
     if kind is not None and kind != "job":
         return None
@@ -133,6 +150,8 @@ def _run_row(run: Any) -> dict[str, Any] | None:
         return None
     metrics: dict[str, float] = dict(run.data.metrics)
     row: dict[str, Any] = params_to_columns(params)
+    if GRID_TAG in tags:  # the grid's N; the param is the N the job ran (1 for SA)
+        row["agents_param"] = tags[GRID_TAG]
     row["run_id"] = run.info.run_id
     row["job_key"] = tags.get(JOB_KEY_TAG, "")
     row["start_time"] = run.info.start_time

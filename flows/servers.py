@@ -102,11 +102,18 @@ def free_port(host: str = "127.0.0.1") -> int:
         return int(sock.getsockname()[1])
 
 
-def server_environment(home: Path, ui: bool = False) -> dict[str, str]:
-    """Environment of the server process: its database under ``home``, no telemetry."""
+def server_environment(
+    home: Path, host: str = "127.0.0.1", port: int = 4200, ui: bool = False
+) -> dict[str, str]:
+    """Environment of the server process: its database under ``home``, no telemetry, and
+    its own address, which its UI hands to the browser (``/ui-settings``: without it the
+    UI calls Prefect's default port 4200 and shows no flow runs)."""
     env = dict(os.environ)
     env.update(
         PREFECT_HOME=str(home),
+        PREFECT_SERVER_API_HOST=host,
+        PREFECT_SERVER_API_PORT=str(port),
+        PREFECT_UI_API_URL=f"http://{url_host(host)}:{port}/api",
         PREFECT_SERVER_ANALYTICS_ENABLED="false",
         # The UI copies its files at start-up; a sweep's server is for its jobs. To watch
         # runs in the UI, start the long-lived services (``twostep-services up``).
@@ -167,7 +174,8 @@ def spawn_server(settings: ServerSettings, owner_pid: int | None, ui: bool = Fal
     log_path = home / f"server-{port}.log"
     command = [sys.executable, "-m", "prefect", "server", "start"]
     command += ["--host", settings.host, "--port", str(port)]
-    pid = spawn(command, server_environment(home, ui), log_path, owner_pid)
+    environment = server_environment(home, settings.host, port, ui)
+    pid = spawn(command, environment, log_path, owner_pid)
     return ServerInfo(
         api_url=f"http://{url_host(settings.host)}:{port}/api",
         pid=pid,
@@ -294,6 +302,9 @@ def shared_server(info_path: Path, settings: ServerSettings, owner_pid: int) -> 
             return info
         info = spawn_server(settings, owner_pid)
         write_json_atomic(info_path, info.to_dict())
+        fresh = not any(Path(settings.home).glob("*.db"))
+        wait = " (a fresh database: its first start takes up to a minute)" if fresh else ""
+        print(f"starting Prefect server at {info.api_url}{wait} ...", flush=True)
         return info
 
 

@@ -20,6 +20,7 @@ import json
 import os
 import sys
 import time
+import urllib.request
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -40,6 +41,10 @@ from twostep.cli import console_main
 from twostep.files import write_json_atomic
 
 RECORD = "services.json"
+# MLflow 3.17's UI shows the GenAI pages (traces) unless its "Model training" switch is on:
+# the switch is the page's ``workflowType`` query (else the browser's saved choice); the
+# experiment's ``mlflow.experimentKind`` tag alone does not change it.
+MLFLOW_CLASSIC_UI = "workflowType=machine_learning"
 
 
 @dataclass(frozen=True)
@@ -57,6 +62,13 @@ class Service:
 
     def healthy(self, timeout_s: float = 2.0) -> bool:
         return self.alive() and is_healthy(self.url, timeout_s)  # both answer GET <url>/health
+
+    @property
+    def ui_url(self) -> str:
+        """Where a person opens it: Prefect's flow-runs page, MLflow's experiments."""
+        if self.name == "prefect":
+            return self.url.removesuffix("/api") + "/runs"
+        return f"{self.url}/#/experiments?{MLFLOW_CLASSIC_UI}"
 
 
 def record_path(root: str | Path) -> Path:
@@ -178,7 +190,42 @@ def status_lines(root: Path) -> tuple[list[str], bool]:
         ok = ok and healthy
         state = "up" if healthy else "running, not answering"
         lines.append(f"{name}: {state} at {service.url} (PID {service.pid})")
+        lines.append(f"{name} UI: {service.ui_url}")
+        latest = latest_experiment(service.url) if healthy and name == "mlflow" else None
+        if latest is not None:
+            lines.append(f"mlflow latest experiment: '{latest[0]}' {latest[1]}")
     return lines, ok
+
+
+def experiment_page(mlflow_url: str, experiment_id: str) -> str:
+    """The MLflow UI's page of one experiment, on its runs table."""
+    return f"{mlflow_url.rstrip('/')}/#/experiments/{experiment_id}?{MLFLOW_CLASSIC_UI}"
+
+
+def latest_experiment(mlflow_url: str, timeout_s: float = 5.0) -> tuple[str, str] | None:
+    """(name, UI page) of the experiment updated last on an MLflow server, asked through
+    its REST API (MLflow is not imported); None when there is none or no answer."""
+    query = json.dumps(
+        {
+            "max_results": 1,
+            "filter": "name != 'Default'",  # MLflow's own, always there
+            "order_by": ["last_update_time DESC"],
+            "view_type": "ACTIVE_ONLY",
+        }
+    ).encode()
+    request = urllib.request.Request(
+        f"{mlflow_url}/api/2.0/mlflow/experiments/search",
+        data=query,
+        headers={"Content-Type": "application/json"},
+    )
+    try:
+        with urllib.request.urlopen(request, timeout=timeout_s) as response:
+            found = json.load(response).get("experiments") or []
+    except (OSError, ValueError):
+        return None
+    if not found:
+        return None
+    return str(found[0]["name"]), experiment_page(mlflow_url, str(found[0]["experiment_id"]))
 
 
 @console_main
@@ -204,6 +251,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 1
         for service in services.values():
             print(f"{service.name}: up at {service.url} (PID {service.pid})")
+            print(f"{service.name} UI: {service.ui_url}")
         print(f"record: {record_path(root)}")
         return 0
     if args.command == "down":

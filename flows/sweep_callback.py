@@ -25,6 +25,7 @@ from __future__ import annotations
 import atexit
 import contextlib
 import os
+import shlex
 import socket
 import sys
 import time
@@ -47,7 +48,15 @@ from flows.servers import (
     read_info,
     stop_sweep_server,
 )
-from flows.sweep_state import SweepState, count_jobs, job_records, sweep_key, sweep_overrides
+from flows.sweep_results import RESULTS_CSV, format_results, result_rows, write_results_csv
+from flows.sweep_state import (
+    SweepState,
+    count_jobs,
+    job_records,
+    launcher_parallelism,
+    sweep_key,
+    sweep_overrides,
+)
 from twostep.files import write_json_atomic, write_text_atomic
 from twostep.redaction import redact_text
 
@@ -107,6 +116,54 @@ def mask_credentials(files: list[Path]) -> None:
             write_text_atomic(path, masked)
 
 
+def _sweep_report(sweep_dir: Path) -> list[tuple[Path, str | None]]:
+    """The sweep's Fig. 3-style charts and summary tables (``twostep-report`` of its
+    result files, in ``<sweep dir>/report``) as (file, artifact folder) pairs for its
+    parent run; none (and a warning) when there is nothing to report."""
+    from twostep.report import (
+        ReportInputError,
+        build_report,
+        load_runs_from_sweep_dir,
+        write_report,
+    )
+
+    out = sweep_dir / "report"
+    try:
+        report = build_report(load_runs_from_sweep_dir(sweep_dir))
+        paths = write_report(report, out, f"TwoStep sweep {sweep_dir.name}", f"`{sweep_dir}`")
+    except ReportInputError:
+        return []
+    except Exception as error:  # the jobs are recorded; the report is extra
+        print(f"warning: no sweep report: {error}", file=sys.stderr)
+        return []
+    return [(path, "report") for path in paths if path.is_file()]
+
+
+def _ui_links(state: SweepState, output_root: str) -> list[str]:
+    """Where to watch the sweep: the Prefect UI's flow runs and the MLflow UI's experiment
+    page, when ``twostep-services`` serves them (a sweep's own server is stopped by now)."""
+    from flows.services import experiment_page, read_record
+    from flows.tracking.runs import sweep_run_ids
+
+    services = read_record(output_root)
+    lines = []
+    prefect = services.get("prefect")
+    if prefect is not None and state.prefect_api_url == prefect.url and prefect.healthy():
+        lines.append(f"prefect UI: {prefect.ui_url}")
+    mlflow = services.get("mlflow")
+    ids = sweep_run_ids(state)
+    served = f"sqlite:///{Path(output_root).resolve() / 'mlflow.db'}"  # the services' store
+    if ids is None or state.tracking_uri != served:
+        return lines
+    if mlflow is not None and mlflow.healthy():
+        lines.append(f"mlflow UI: {experiment_page(mlflow.url, ids[0])}")
+    else:
+        lines.append(
+            f"mlflow UI: twostep-services up --root {output_root}, then experiment {ids[0]}"
+        )
+    return lines
+
+
 class SweepCallback(Callback):
     """Sets up and tears down what the jobs of one multirun share (see module doc)."""
 
@@ -155,8 +212,10 @@ class SweepCallback(Callback):
             main_pid=os.getpid(),
             hostname=socket.gethostname(),
             total_jobs=count_jobs(config),
+            parallel=launcher_parallelism(config),
             sweep_key=sweep_key(overrides),
             overrides=overrides,
+            command=redact_text(shlex.join(["twostep", *sys.argv[1:]])),
         )
         if config.mlflow.enabled:
             from flows.tracking.runs import TrackingError, check_store, experiment_name_for
@@ -232,14 +291,27 @@ class SweepCallback(Callback):
         if self._cluster is not None:
             with contextlib.suppress(Exception):
                 self._cluster.close()
-        self._end_parent_run(state, summary, bool(failed))
+        rows = result_rows(records)
+        results = write_results_csv(rows, Path(state.sweep_dir) / RESULTS_CSV)
+        files = [(results, None), *_sweep_report(Path(state.sweep_dir))]
+        self._end_parent_run(state, summary, bool(failed), files)
         write_json_atomic(state.folder / "summary.json", summary)
         print(footer(state, summary, failed), flush=True)
+        table = format_results(rows)
+        if table:
+            print(f"{table}\nresults: {results}", flush=True)
+        for line in _ui_links(state, str(config.output.root)):
+            print(line, flush=True)
         if failed:
             sys.exit(1)
 
     @staticmethod
-    def _end_parent_run(state: SweepState, summary: Mapping[str, Any], failed: bool) -> None:
+    def _end_parent_run(
+        state: SweepState,
+        summary: Mapping[str, Any],
+        failed: bool,
+        files: list[tuple[Path, str | None]],
+    ) -> None:
         if state.tracking_uri is None:
             return
         from flows.tracking.runs import end_sweep_run
@@ -250,6 +322,6 @@ class SweepCallback(Callback):
             if isinstance(value, int | float) and not isinstance(value, bool)
         }
         try:
-            end_sweep_run(state, metrics, failed)
+            end_sweep_run(state, metrics, failed, files)
         except Exception as error:  # the jobs are recorded; the summary metrics are extra
             print(f"warning: could not end the MLflow parent run: {error}", file=sys.stderr)

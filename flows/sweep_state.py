@@ -12,6 +12,7 @@ import contextlib
 import hashlib
 import json
 import math
+import os
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -35,8 +36,10 @@ class SweepState:
     main_pid: int
     hostname: str = ""
     total_jobs: int | None = None
+    parallel: int | None = None  # jobs the launcher runs at once (None: not known)
     sweep_key: str = ""
     overrides: list[str] = field(default_factory=list)
+    command: str = ""  # the sweep's command line (credentials in URLs masked)
     tracking_uri: str | None = None  # None: MLflow off
     artifact_location: str | None = None
     experiment: str | None = None
@@ -116,6 +119,20 @@ def count_jobs(config: DictConfig) -> int | None:
         return math.prod(values.values())
     except Exception:  # another sweeper's syntax: progress shows "?"
         return None
+
+
+def launcher_parallelism(config: DictConfig) -> int | None:
+    """How many jobs the launcher runs at once: 1 for Hydra's basic launcher, joblib's
+    ``n_jobs`` (-1: every core); None when it cannot be told (e.g. SLURM)."""
+    launcher = config.hydra.launcher
+    target = str(launcher.get("_target_", ""))
+    if target.endswith("BasicLauncher"):
+        return 1
+    n_jobs = launcher.get("n_jobs") if "Joblib" in target else None
+    if not isinstance(n_jobs, int) or n_jobs == 0:
+        return None
+    cores = os.cpu_count() or 1
+    return n_jobs if n_jobs > 0 else max(1, cores + 1 + n_jobs)
 
 
 # ----------------------------------------------------------------- job records

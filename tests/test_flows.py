@@ -33,7 +33,7 @@ from flows.job import execute_job
 from flows.servers import pid_alive
 from flows.store import JobStore, job_config, job_key
 from flows.sweep_state import SweepState, record_job
-from flows.tracking.contents import job_metrics, job_params
+from flows.tracking.contents import config_tags, job_metrics, job_params, run_name
 from flows.tracking.runs import TrackingError
 from tests.conftest import blocks_problem
 from tests.test_prompts import make_blocksworld_data
@@ -300,7 +300,52 @@ def test_metrics_and_params_follow_the_contract() -> None:
     params = job_params(
         {"llm": {"api_key": "sk-secret", "api_key_env": "OPENAI_API_KEY", "model": "m"}, "task": 3}
     )
-    assert params == {"llm.api_key_env": "OPENAI_API_KEY", "llm.model": "m", "task": "3"}
+    # What defines the experiment only: the key's variable name says where it runs.
+    assert params == {"llm.model": "m", "task": "3"}
+    assert "sk-secret" not in json.dumps(config_tags({"llm": {"api_key": "sk-secret"}}))
+
+
+GRID_JOB = {
+    "domain": {"name": "grippers", "agent_predicates": ["at-robby"]},
+    "task": 1,
+    "agents": 3,
+    "seed": 0,
+    "method": {"name": "sa", "fallback_if_longer": True},
+    "decomposer": {"name": "llm", "cut": "best"},
+    "llm": {"model": "openai/gpt-4o", "mode": "live", "api_base": "https://u:pw@h/v1"},
+    "planner": {"alias": "lama-first", "time_limit_s": 60.0},
+    "score_mode": "exact",
+    "score_max_nodes": 2000,
+    "executor": {"name": "symbolic"},
+    "data": {"root": "/somewhere/data"},
+    "output": {"root": "/somewhere/outputs"},
+    "orchestration": {"prefect": None, "job_store": "/somewhere/outputs/jobs"},
+    "mlflow": {"tracking_uri": "sqlite:////somewhere/outputs/mlflow.db"},
+}
+
+
+def test_sa_logs_the_one_agent_it_ran_and_the_grid_n_as_a_tag() -> None:
+    params = job_params(GRID_JOB)
+    assert params["agents"] == "1" and params["method.name"] == "sa"
+    # SA reads neither the decomposer nor the LLM; nothing about where it ran is a param.
+    assert not any(k.startswith(("decomposer.", "llm.", "data.", "output.")) for k in params)
+    assert not any(k.startswith(("orchestration.", "mlflow.")) for k in params)
+    tags = config_tags(GRID_JOB)
+    assert tags["twostep.grid_agents"] == "3" and tags["twostep.data_root"] == "/somewhere/data"
+    rest = json.loads(tags["twostep.config"])
+    assert rest["score_max_nodes"] == "2000" and "decomposer.cut" not in rest
+    assert run_name("grippers-p01-sa-n3-s0", GRID_JOB) == "grippers-p01-sa-n1-s0 (grid N=3)"
+
+
+def test_twostep_with_the_llm_logs_at_most_15_params_and_no_credentials() -> None:
+    config = {**GRID_JOB, "method": {"name": "twostep", "fallback_if_longer": True}}
+    params = job_params(config)
+    assert len(params) <= 15
+    assert params["agents"] == "3" and params["decomposer.name"] == "llm"
+    assert params["llm.model"] == "openai/gpt-4o" and params["planner.alias"] == "lama-first"
+    rest = json.loads(config_tags(config)["twostep.config"])
+    assert rest["decomposer.cut"] == "best" and rest["llm.api_base"] == "https://***@h/v1"
+    assert run_name("grippers-p01-twostep-n3-s0", config) == "grippers-p01-twostep-n3-s0"
 
 
 def test_job_files_layout(tmp_path: Path) -> None:
@@ -350,6 +395,18 @@ def test_progress_line_counts_and_estimates(tmp_path: Path) -> None:
     now = state.started_at + 30  # a fixed clock: a busy machine cannot make it 0:31
     line = progress_line(state, now)
     assert line == "[3/4 done | 1 failed | 1 reused | 0:30 elapsed, ~0:10 left]"
+
+
+def test_eta_uses_the_finished_jobs_times_without_the_server_start(tmp_path: Path) -> None:
+    """The first job waited 35 s for the server: the throughput so far (50 s for 3 jobs)
+    would say ~0:50 for 3 more; the jobs' own times say (5 + 5 + 6) / 3 s per job, twice
+    (3 jobs left, 2 at once): 10.7 s."""
+    state = SweepState(str(tmp_path), time.time() - 50, os.getpid(), total_jobs=6, parallel=2)
+    record_job(tmp_path, 0, {"status": "success", "job_wall_time_s": 40.0, "server_wait_s": 35.0})
+    record_job(tmp_path, 1, {"status": "success", "job_wall_time_s": 5.0, "server_wait_s": 0.0})
+    record_job(tmp_path, 2, {"status": "success", "job_wall_time_s": 6.0})
+    line = progress_line(state, state.started_at + 50)
+    assert line == "[3/6 done | 0 failed | 0:50 elapsed, ~0:11 left]"
 
 
 def test_job_store_round_trip(tmp_path: Path) -> None:

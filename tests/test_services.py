@@ -65,6 +65,14 @@ def test_up_status_run_down_round_trip(tmp_path: Path, capsys: pytest.CaptureFix
             assert response.status == 200  # the MLflow server itself, not just a port
         lines, ok = services.status_lines(root)
         assert ok and f"prefect: up at {prefect.url} (PID {prefect.pid})" in lines
+        # The UI asks /ui-settings where the API is: this server's port, not Prefect's 4200.
+        base = prefect.url.removesuffix("/api")
+        with urllib.request.urlopen(f"{base}/ui-settings", timeout=10) as response:
+            assert json.load(response)["api_url"] == prefect.url
+        assert (
+            f"prefect UI: {base}/runs" in lines
+            and f"mlflow UI: {mlflow.url}/#/experiments?workflowType=machine_learning" in lines
+        )
 
         # `up` again starts nothing new.
         assert services.main(["up", "--root", str(root)]) == 0

@@ -146,3 +146,64 @@ def test_sweep_killed_with_sigkill_resumes_without_duplicates(tmp_path: Path) ->
     assert all(r.data.tags["twostep.status"] == "success" for r in jobs)
     assert {r.data.tags["mlflow.parentRunId"] for r in jobs} == {parents[0].info.run_id}
     assert os.environ.get("PREFECT_API_URL") is None  # nothing leaked into this process
+
+
+def test_two_by_two_sweep_logs_what_ran_with_system_tags_and_a_results_table(
+    tmp_path: Path,
+) -> None:
+    """Issue 21's check: ``method=sa,twostep agents=2,3``: SA logs the one agent it ran
+    (the grid's N as a tag), at most 15 params per job run, user/source/git commit tags,
+    runs as long as their jobs, and the sweep ends with a results table and results.csv
+    that agree with the runs' own metrics."""
+    import csv
+    import getpass
+
+    data, out = benchmark_data(tmp_path / "data"), tmp_path / "out"
+    command = [
+        "-m", "domain=grippers", "task=1", "method=sa,twostep", "agents=2,3",
+        "decomposer=goal-split", "hydra/launcher=joblib", f"data.root={data}", f"output.root={out}",
+    ]  # fmt: skip
+    done, _ = run(command)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "HTTP Request" not in done.stdout and "Joblib.Parallel" not in done.stdout
+    client, runs = mlflow_experiment(out)
+    experiment = client.get_experiment(runs[0].info.experiment_id)
+    assert experiment.tags["mlflow.experimentKind"] == "custom_model_development"
+    assert experiment.tags["mlflow.note.content"].startswith("twostep -m domain=grippers")
+    jobs = [r for r in runs if r.data.tags["twostep.kind"] == "job"]
+    assert len(jobs) == 4
+    commit = subprocess.run(
+        ["git", "-C", str(REPO), "rev-parse", "HEAD"], capture_output=True, text=True
+    ).stdout.strip()
+    for job in jobs:
+        params, tags = job.data.params, job.data.tags
+        assert len(params) <= 15
+        assert not any(k.startswith(("orchestration.", "mlflow.", "output.")) for k in params)
+        assert tags["mlflow.user"] == getpass.getuser()
+        assert Path(tags["mlflow.source.name"]).name == "twostep"
+        if commit:  # a checkout (not an installed wheel)
+            assert tags["mlflow.source.git.commit"] == commit
+        folder = tmp_path / job.info.run_id
+        folder.mkdir()
+        result = json.loads(
+            Path(client.download_artifacts(job.info.run_id, "result.json", str(folder))).read_text()
+        )
+        # The run lasts as long as its job, not the logging window.
+        duration_s = (job.info.end_time - job.info.start_time) / 1000
+        assert duration_s >= result["orchestration"]["job_wall_time_s"] - 0.5
+    sa = sorted((r for r in jobs if r.data.params["method.name"] == "sa"),
+                key=lambda r: r.data.tags["twostep.grid_agents"])  # fmt: skip
+    assert [r.data.params["agents"] for r in sa] == ["1", "1"]
+    assert [r.data.tags["twostep.grid_agents"] for r in sa] == ["2", "3"]
+
+    (sweep,) = sweep_dirs(out)
+    with open(sweep / "results.csv") as handle:
+        rows = {(r["method"], r["agents"]): r for r in csv.DictReader(handle)}
+    assert set(rows) == {("sa", "1"), ("twostep (goal-split)", "2"), ("twostep (goal-split)", "3")}
+    sa_lengths = [r.data.metrics["exec_length"] for r in sa]
+    assert rows[("sa", "1")]["jobs"] == "2"
+    assert float(rows[("sa", "1")]["mean_exec_length"]) == sum(sa_lengths) / 2
+    assert "domain    method" in done.stdout and f"results: {sweep / 'results.csv'}" in done.stdout
+    parent = next(r for r in runs if r.data.tags["twostep.kind"] == "sweep")
+    names = {a.path for a in client.list_artifacts(parent.info.run_id)}
+    assert {"results.csv", "report"} <= names

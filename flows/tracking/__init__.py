@@ -7,9 +7,9 @@ module          what it is for
 ==============  ================================================================
 ``runs``        the interface: :class:`JobRunLog` (a job's run), :func:`end_sweep_run`
 ``contents``    what a run holds: params, metrics, tags, the record of one job
+``context``     the system tags (user, source, git commit) MLflow's providers would set
 ``client``      MLflow's own client (:class:`~flows.tracking.client.Tracker`), the store check
 ``worker``      a single run's logging in a helper process that imports MLflow meanwhile
-``sqlite``      a single run's rows written directly into a warm SQLite store
-``template``    the environment's empty store, copied for every new store
+``template``    the environment's empty store, made by MLflow, copied for every new store
 ==============  ================================================================
 """

@@ -28,8 +28,11 @@ from urllib.parse import quote, urlparse
 from flows.console import one_line
 from flows.locations import sqlite_path, write_problem
 from flows.tracking.contents import (
+    CLASSIC_RUNS,
+    EXPERIMENT_KIND,
     JOB_KEY,
     KIND,
+    NOTE,
     PARENT,
     STATUS,
     SWEEP_KEY,
@@ -190,15 +193,23 @@ class Tracker:
 
     # ------------------------------------------------------------- experiments
 
-    def experiment_id(self, name: str) -> str:
+    def experiment_id(self, name: str, description: str | None = None) -> str:
+        """The experiment ``name`` (created, or restored if deleted), marked to open on
+        MLflow's runs table (:data:`EXPERIMENT_KIND`); ``description``: its note."""
+        tags = {EXPERIMENT_KIND: CLASSIC_RUNS}
+        if description:
+            tags[NOTE] = clip(description, TAG_LIMIT)
         found = self.client.get_experiment_by_name(name)
         if found is not None:
             if found.lifecycle_stage == "deleted":
                 self.client.restore_experiment(found.experiment_id)
+            for key, value in tags.items():  # an experiment made before the tags existed
+                if found.tags.get(key) != value:
+                    self.client.set_experiment_tag(found.experiment_id, key, value)
             return str(found.experiment_id)
         location = experiment_location(self.artifact_location, name)
         try:
-            return str(self.client.create_experiment(name, artifact_location=location))
+            return str(self.client.create_experiment(name, location, tags=tags))
         except Exception:
             # A parallel job created it first.
             found = self.client.get_experiment_by_name(name)
@@ -237,9 +248,18 @@ class Tracker:
         )
         return str(run.info.run_id)
 
-    def end_sweep(self, run_id: str, metrics: Mapping[str, float], failed: bool) -> None:
+    def end_sweep(
+        self,
+        run_id: str,
+        metrics: Mapping[str, float],
+        failed: bool,
+        files: Iterable[tuple[Path, str | None]] = (),
+    ) -> None:
+        """The sweep's summary metrics and its report files (``files``: (path, folder))."""
         from mlflow.entities import Metric, RunTag
 
+        for path, folder in files:
+            _retry(partial(self.client.log_artifact, run_id, str(path), folder))
         now = int(time.time() * 1000)
         _retry(
             lambda: self.client.log_batch(
@@ -253,16 +273,28 @@ class Tracker:
     # ------------------------------------------------------------- job runs
 
     def job_run(
-        self, experiment_id: str, job_key: str, name: str, parent_run_id: str | None
+        self,
+        experiment_id: str,
+        job_key: str,
+        name: str,
+        parent_run_id: str | None,
+        tags: Mapping[str, str] | None = None,
+        start_ms: int | None = None,
     ) -> tuple[str, Any | None]:
-        """The job's run (found by job key, else created) and the found run, if any."""
+        """The job's run (found by job key, else created with ``tags``, starting when the
+        job started) and the found run, if any."""
         found = self.find_run(experiment_id, JOB_KEY, job_key)
         if found is not None:
             return str(found.info.run_id), found
-        tags = {KIND: "job", JOB_KEY: job_key}
+        run_tags = {k: clip(v, TAG_LIMIT) for k, v in (tags or {}).items()}
+        run_tags.update({KIND: "job", JOB_KEY: job_key})
         if parent_run_id:
-            tags[PARENT] = parent_run_id
-        run = _retry(lambda: self.client.create_run(experiment_id, run_name=name, tags=tags))
+            run_tags[PARENT] = parent_run_id
+        run = _retry(
+            lambda: self.client.create_run(
+                experiment_id, start_time=start_ms, tags=run_tags, run_name=name
+            )
+        )
         return str(run.info.run_id), None
 
     def log_job(
@@ -274,30 +306,41 @@ class Tracker:
         files: Iterable[tuple[Path, str | None]],
         existing_params: Mapping[str, str] | None = None,
         terminated: str = "FINISHED",
+        end_ms: int | None = None,
     ) -> None:
-        """Params, metrics, artifacts, then the status tags and the run's end, in that order.
+        """Artifacts, then params, metrics and the status tags in one ``log_batch`` (one
+        transaction of the store; split only past MLflow's batch limits, the status tags
+        in the last part), then the run's end (``end_ms``: the job's).
 
-        The ``twostep.status`` tag is written after everything else: a run that has it is
-        complete. Params already on a reused run are not logged again (MLflow refuses a
-        changed value, and a re-run may differ in where it ran, e.g. the task runner).
+        The ``twostep.status`` tag comes with or after everything else: a run that has it
+        is complete. Params already on a reused run are not logged again (MLflow refuses a
+        changed value, and a re-run may differ in where it ran).
         """
         from mlflow.entities import Metric, Param, RunTag
 
-        existing = existing_params or {}
-        new_params = [Param(k, v) for k, v in params.items() if k not in existing]
-        for start in range(0, len(new_params), 100):
-            _retry(partial(self.client.log_batch, run_id, params=new_params[start : start + 100]))
-        now = int(time.time() * 1000)
-        metric_list = [Metric(*point) for point in metric_points(metrics, now)]
-        for start in range(0, len(metric_list), 1000):
-            _retry(
-                partial(self.client.log_batch, run_id, metrics=metric_list[start : start + 1000])
-            )
         for path, folder in files:
             _retry(partial(self.client.log_artifact, run_id, str(path), folder))
+        existing = existing_params or {}
+        new_params = [Param(k, v) for k, v in params.items() if k not in existing]
+        now = end_ms if end_ms is not None else int(time.time() * 1000)
+        metric_list = [Metric(*point) for point in metric_points(metrics, now)]
         run_tags = [RunTag(k, clip(v, TAG_LIMIT)) for k, v in tags.items()]
-        _retry(lambda: self.client.log_batch(run_id, tags=run_tags))
-        _retry(lambda: self.client.set_terminated(run_id, status=terminated))
+        for batch in batches(new_params, metric_list, run_tags):
+            _retry(partial(self.client.log_batch, run_id, **batch))
+        _retry(lambda: self.client.set_terminated(run_id, status=terminated, end_time=end_ms))
+
+
+def batches(params: list[Any], metrics: list[Any], tags: list[Any]) -> list[dict[str, list[Any]]]:
+    """``log_batch`` keyword sets within MLflow's limits (100 params, 1000 metrics, 1000
+    entries per call): one call for a job's run; past the limits, params and metrics first
+    and the tags in the last call."""
+    if len(params) <= 100 and len(tags) <= 100 and len(params) + len(metrics) + len(tags) <= 1000:
+        return [{"params": params, "metrics": metrics, "tags": tags}]
+    calls: list[dict[str, list[Any]]] = []
+    calls += [{"params": params[i : i + 100]} for i in range(0, len(params), 100)]
+    calls += [{"metrics": metrics[i : i + 1000]} for i in range(0, len(metrics), 1000)]
+    calls += [{"tags": tags[i : i + 100]} for i in range(0, len(tags), 100)]
+    return calls
 
 
 def log_job_run(
@@ -309,7 +352,14 @@ def log_job_run(
     A run recorded completely before (same job key: same result) is left as it is:
     logging again would only append a second point to every metric's history.
     """
-    run_id, found = tracker.job_run(experiment_id, record["key"], record["name"], parent)
+    run_id, found = tracker.job_run(
+        experiment_id,
+        record["key"],
+        record["name"],
+        parent,
+        tags=record.get("tags"),
+        start_ms=record.get("start_ms"),
+    )
     if found is not None and found.data.tags.get(STATUS) in ("success", "timeout"):
         return run_id
     tracker.log_job(
@@ -320,5 +370,6 @@ def log_job_run(
         [(Path(path), folder) for path, folder in record["files"]],
         existing_params=dict(found.data.params) if found is not None else None,
         terminated="FAILED" if record["status"] == "failed" else "FINISHED",
+        end_ms=record.get("end_ms"),
     )
     return run_id

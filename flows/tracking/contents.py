@@ -1,17 +1,19 @@
-"""What a job's MLflow run holds (docs/tracking.md): the tag names, params from the
-resolved config (nothing that looks like a secret), metrics from result.json, the status
-tags written last, and the record of one job that every writer takes
-(:func:`job_record`); also the experiment name of a sweep.
+"""What a job's MLflow run holds (docs/tracking.md): the tag names, params (what defines
+the experiment, at most 15; nothing that looks like a secret), the tags of where and how
+it ran, metrics from result.json, the status tags written last, and the record of one job
+that every writer takes (:func:`job_record`); also the experiment name of a sweep.
 """
 
 from __future__ import annotations
 
 import hashlib
+import json
 import re
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+from twostep.identity import identity_config, is_relevant
 from twostep.params import flatten_config
 from twostep.redaction import redact_config
 
@@ -24,6 +26,32 @@ SCRIPTED = "twostep.scripted_llm"
 REUSED = "twostep.reused"
 RESTORED = "twostep.restored_from_job_store"  # logged again: the store had lost the run
 PARENT = "mlflow.parentRunId"
+# Experiment tags: MLflow 3's UI opens an experiment of this kind on its runs table (not
+# the GenAI overview); the note is the experiment's description (the sweep's command).
+EXPERIMENT_KIND = "mlflow.experimentKind"
+CLASSIC_RUNS = "custom_model_development"
+NOTE = "mlflow.note.content"
+GRID_AGENTS = "twostep.grid_agents"  # the grid's N (an SA job runs one agent whatever it is)
+CONFIG = "twostep.config"  # the rest of the job's identity config, as JSON
+DATA_ROOT = "twostep.data_root"
+
+# The params of a job run: what defines the experiment (where it runs goes to tags). A
+# key the job's method never reads (``decomposer.*`` for SA, ``llm.*`` without the LLM
+# decomposer) is left out: twostep.identity.is_relevant.
+EXPERIMENT_PARAMS: tuple[str, ...] = (
+    "domain.name",
+    "task",
+    "method.name",
+    "agents",
+    "seed",
+    "decomposer.name",
+    "planner.alias",
+    "planner.time_limit_s",
+    "llm.model",
+    "llm.mode",
+    "score_mode",
+    "executor.name",
+)
 
 DEFAULT_EXPERIMENT = "twostep"
 _SECRET = re.compile(r"api_key|secret|token|password|authorization", re.IGNORECASE)
@@ -71,19 +99,56 @@ def experiment_name_for(overrides: Iterable[str]) -> str:
     return name
 
 
-def job_params(config: Mapping[str, Any]) -> dict[str, str]:
-    """The flattened resolved config as params; secret-looking keys are left out, and
-    credentials inside URLs masked (:func:`twostep.redaction.redact_config`).
+def _method_of(config: Mapping[str, Any]) -> tuple[str | None, str | None]:
+    flat = flatten_config(config)
+    return flat.get("method.name"), flat.get("decomposer.name")
 
-    ``*_env`` keys name an environment variable (``llm.api_key_env: OPENAI_API_KEY``),
-    never hold its value, so they are kept (a value that looks like a key: ``***``).
-    """
+
+def run_name(name: str, config: Mapping[str, Any]) -> str:
+    """The job run's name in MLflow: the job's name (:func:`twostep.identity.job_name`),
+    with the N it ran: an SA job of a grid's N=3 is ``grippers-p01-sa-n1-s0 (grid N=3)``."""
+    method, _ = _method_of(config)
+    agents = config.get("agents")
+    if method != "sa" or agents is None or str(agents) == "1":
+        return name
+    return name.replace(f"-n{agents}-", "-n1-", 1) + f" (grid N={agents})"
+
+
+def job_params(config: Mapping[str, Any]) -> dict[str, str]:
+    """What defines the job's experiment (:data:`EXPERIMENT_PARAMS`, those its method
+    reads); ``agents`` is the N the job ran: 1 for SA (the grid's N is a tag). Secret-looking
+    keys never are params; credentials inside URLs are masked
+    (:func:`twostep.redaction.redact_config`)."""
+    method, decomposer = _method_of(config)
+    flat = flatten_config(redact_config(config))
     params: dict[str, str] = {}
-    for key, text in flatten_config(redact_config(config)).items():
-        if key.startswith("hydra.") or (_SECRET.search(key) and not key.endswith("_env")):
-            continue
-        params[key] = clip(text, PARAM_LIMIT)
+    for key in EXPERIMENT_PARAMS:
+        if key in flat and is_relevant(key, method, decomposer) and not _SECRET.search(key):
+            params[key] = clip(flat[key], PARAM_LIMIT)
+    if method == "sa" and "agents" in params:
+        params["agents"] = "1"
     return params
+
+
+def config_tags(config: Mapping[str, Any]) -> dict[str, str]:
+    """Tags of a job run made from its config: the grid's N, the data root, and the rest
+    of what defines the job (its identity config without the params) as JSON, which the
+    report reads to tell series apart (``decomposer.cut=best`` vs ``first``)."""
+    flat = flatten_config(config)
+    tags: dict[str, str] = {}
+    if "agents" in flat:
+        tags[GRID_AGENTS] = flat["agents"]
+    if "data.root" in flat:
+        tags[DATA_ROOT] = flat["data.root"]
+    rest = {
+        key: value
+        for key, value in flatten_config(redact_config(identity_config(config))).items()
+        if key not in EXPERIMENT_PARAMS and key != "data.root" and not _SECRET.search(key)
+    }
+    text = json.dumps(rest, sort_keys=True)
+    if len(text) <= TAG_LIMIT:
+        tags[CONFIG] = text
+    return tags
 
 
 def _number(value: Any) -> float | None:
@@ -150,9 +215,14 @@ def job_record(
     result: Mapping[str, Any],
     timings: Mapping[str, float],
     files: Iterable[tuple[Path, str | None]],
+    tags: Mapping[str, str] | None = None,
+    window: tuple[float, float] | None = None,
 ) -> dict[str, Any]:
     """One job as plain data, as every writer logs it (:func:`flows.tracking.client.
-    log_job_run`, the helper process, the direct SQLite writer)."""
+    log_job_run`, the helper process). ``tags``: the run's system tags
+    (:func:`flows.tracking.context.run_context_tags`); ``window``: when the job started and
+    ended (``time.time()``), the run's start and end."""
+    start, end = window if window is not None else (None, None)
     return {
         "key": key,
         "name": name,
@@ -163,4 +233,7 @@ def job_record(
         "params": job_params(config),
         "metrics": job_metrics(result, timings),
         "files": [[str(path), folder] for path, folder in files],
+        "tags": {**(tags or {}), **config_tags(config)},
+        "start_ms": None if start is None else int(start * 1000),
+        "end_ms": None if end is None else int(end * 1000),
     }

@@ -3,14 +3,14 @@ any work, :func:`run_exists` for a run the job store remembers, :class:`JobRunLo
 job's run, :func:`end_sweep_run` for a sweep's parent run (and the names they need:
 :class:`TrackingError`, :func:`job_record`, :func:`experiment_name_for`).
 
-Behind :class:`JobRunLog` are three writers, chosen when the job starts so that the slow
-part (importing MLflow, opening its store: 2-4 s) overlaps the job or is skipped:
+Every write goes through MLflow's own client (``MlflowClient``: ``create_run``, one
+``log_batch`` per run, ``log_artifact``, ``set_terminated``; never its tables), in one of
+two places, chosen when the job starts so that the slow part (importing MLflow, opening
+its store: 2-4 s) overlaps the job:
 
-* a single run of the command into a warm SQLite store: the rows written directly
-  (:class:`~flows.tracking.sqlite.SqliteJobLog`, milliseconds);
-* a single run otherwise: a helper process that imports MLflow while the job runs
-  (:class:`~flows.tracking.worker.TrackingWorker`);
-* a job of a sweep (and whatever the first two cannot take): MLflow's client in this
+* a single run of the command: a helper process that imports MLflow and opens the store
+  while the job runs (:class:`~flows.tracking.worker.TrackingWorker`);
+* a job of a sweep (and a single run without the helper): MLflow's client in this
   process (:class:`~flows.tracking.client.Tracker`), under the sweep's parent run, which
   the first job that logs creates (:func:`sweep_parent`).
 """
@@ -19,15 +19,14 @@ from __future__ import annotations
 
 import contextlib
 import json
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from flows.locations import sqlite_path
 from flows.servers import file_lock
 from flows.tracking.client import Tracker, TrackingError, check_store, log_job_run, run_exists
-from flows.tracking.contents import DEFAULT_EXPERIMENT, experiment_name_for, job_record
-from flows.tracking.sqlite import SqliteJobLog
+from flows.tracking.contents import DEFAULT_EXPERIMENT, experiment_name_for, job_record, run_name
 from flows.tracking.worker import TrackingWorker
 from twostep.files import write_json_atomic
 
@@ -43,6 +42,8 @@ __all__ = [
     "experiment_name_for",
     "job_record",
     "run_exists",
+    "run_name",
+    "sweep_run_ids",
 ]
 
 
@@ -56,14 +57,12 @@ class JobRunLog:
         artifact_location: str | None,
         experiment: str,
         sweep: SweepState | None = None,
-        direct: SqliteJobLog | None = None,
         worker: TrackingWorker | None = None,
     ) -> None:
         self.tracking_uri = tracking_uri
         self.artifact_location = artifact_location
         self.experiment = experiment
         self.sweep = sweep
-        self.direct = direct
         self.worker = worker
 
     @classmethod
@@ -77,19 +76,13 @@ class JobRunLog:
     ) -> JobRunLog:
         """The job's log; a ``single_run`` of the command (no sweep) prepares the store now,
         while the job runs (module docstring)."""
-        direct, worker = None, None
+        worker = None
         if single_run and sweep is None:
-            direct = SqliteJobLog.open(tracking_uri, experiment, artifact_location)
-            if direct is None:
-                worker = TrackingWorker.start(tracking_uri, artifact_location, experiment)
-        return cls(tracking_uri, artifact_location, experiment, sweep, direct, worker)
+            worker = TrackingWorker.start(tracking_uri, artifact_location, experiment)
+        return cls(tracking_uri, artifact_location, experiment, sweep, worker)
 
     def log(self, record: Mapping[str, Any]) -> str:
         """Log the job (:func:`flows.tracking.contents.job_record`); return its run id."""
-        if self.direct is not None:
-            run_id = self.direct.log(record)
-            if run_id is not None:
-                return run_id
         if self.worker is not None:
             return self.worker.log(dict(record))
         sweep = self.sweep
@@ -118,10 +111,10 @@ def sweep_parent(state: SweepState) -> tuple[Tracker, str, str]:
     lock = state.folder / "mlflow.lock" if database is None else Path(f"{database}.lock")
     with file_lock(lock):
         tracker = Tracker(state.tracking_uri, state.artifact_location)
-        with contextlib.suppress(OSError, ValueError, KeyError):
-            data = json.loads(record.read_text())
-            return tracker, str(data["experiment_id"]), str(data["parent_run_id"])
-        experiment_id = tracker.experiment_id(state.experiment)
+        ids = sweep_run_ids(state)
+        if ids is not None:
+            return tracker, ids[0], ids[1]
+        experiment_id = tracker.experiment_id(state.experiment, state.command or None)
         folder = Path(state.sweep_dir)
         parent = tracker.sweep_run(
             experiment_id,
@@ -136,11 +129,24 @@ def sweep_parent(state: SweepState) -> tuple[Tracker, str, str]:
         return tracker, experiment_id, parent
 
 
-def end_sweep_run(state: SweepState, metrics: Mapping[str, float], failed: bool) -> bool:
-    """End the sweep's parent run with its summary metrics (False: no job logged one)."""
-    record = state.folder / "mlflow.json"
-    if state.tracking_uri is None or not record.is_file():
+def sweep_run_ids(state: SweepState) -> tuple[str, str] | None:
+    """(experiment id, parent run id) of the sweep, once a job has logged (else None)."""
+    with contextlib.suppress(OSError, ValueError, KeyError):
+        data = json.loads((state.folder / "mlflow.json").read_text())
+        return str(data["experiment_id"]), str(data["parent_run_id"])
+    return None
+
+
+def end_sweep_run(
+    state: SweepState,
+    metrics: Mapping[str, float],
+    failed: bool,
+    files: Iterable[tuple[Path, str | None]] = (),
+) -> bool:
+    """End the sweep's parent run with its summary metrics and the sweep's report files
+    (``files``: (path, artifact folder)); False: no job logged one."""
+    ids = sweep_run_ids(state)
+    if state.tracking_uri is None or ids is None:
         return False  # no job logged anything (all reused and recorded before)
-    parent = json.loads(record.read_text())["parent_run_id"]
-    Tracker(state.tracking_uri).end_sweep(parent, metrics, failed)
+    Tracker(state.tracking_uri).end_sweep(ids[1], metrics, failed, files)
     return True

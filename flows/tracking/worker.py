@@ -1,15 +1,16 @@
-"""A helper process that logs one single run to MLflow, started when the run starts.
+"""A helper process that logs one single run to MLflow through its client, started as
+early as the run.
 
-Importing MLflow and opening a SQLite store costs 2-3 s (SQLAlchemy's ORM set-up), as
-much as the rest of a short run. The ``twostep`` command therefore starts this process
-first: it imports MLflow and opens the store on the other core while the job reads its
-task and plans; the job then sends it the run's record (one JSON line on stdin) and
-waits for the run id (one JSON line on stdout). Nothing is logged if the job sends
-nothing (stdin closed): the process just exits. A warm SQLite store does not need it:
-:mod:`flows.tracking.sqlite` writes the run's rows directly; this process serves the
-first run of a store or experiment, and stores that are not SQLite files.
+Importing MLflow's client and its SQLite store (SQLAlchemy, alembic) costs 2-3 CPU
+seconds, as much as the rest of a short run. The ``twostep`` command therefore starts
+this process first thing (:meth:`TrackingWorker.prestart`, before Hydra composes the
+config): it imports MLflow on the other core while the job composes its config, reads its
+task and plans. The job then tells it the store and experiment (one JSON line on stdin:
+it opens them), later sends the run's record (a second line) and waits for the run id
+(one JSON line on stdout). A job with nothing to log (MLflow off, its run already in the
+store) stops the process.
 
-    python -m flows.tracking.worker <tracking uri> <artifact location or ""> <experiment>
+    python -m flows.tracking.worker
 """
 
 from __future__ import annotations
@@ -17,26 +18,54 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from collections.abc import Sequence
 from typing import IO, Any
 
 from flows.console import one_line
 
 
 class TrackingWorker:
-    """The job's side: start the process, send the record, read the run id."""
+    """The job's side: start the process, tell it the store, send the record, read the run id."""
+
+    _prestarted: TrackingWorker | None = None
 
     def __init__(self, process: subprocess.Popen[str]) -> None:
         self.process = process
 
     @classmethod
-    def start(cls, uri: str, artifact_location: str | None, experiment: str) -> TrackingWorker:
-        command = [sys.executable, "-m", "flows.tracking.worker", uri]
-        command += [artifact_location or "", experiment]
+    def spawn(cls) -> TrackingWorker:
         process = subprocess.Popen(
-            command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+            [sys.executable, "-m", "flows.tracking.worker"],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
         )  # stderr: the console's, for MLflow's own warnings
         return cls(process)
+
+    @classmethod
+    def prestart(cls) -> None:
+        """Start the process now, for the next :meth:`start` of this process to take."""
+        if cls._prestarted is None:
+            cls._prestarted = cls.spawn()
+
+    @classmethod
+    def discard_prestarted(cls) -> None:
+        """Stop a process started by :meth:`prestart` that no job took."""
+        worker, cls._prestarted = cls._prestarted, None
+        if worker is not None:
+            worker.close()
+
+    @classmethod
+    def start(cls, uri: str, artifact_location: str | None, experiment: str) -> TrackingWorker:
+        """The process (the prestarted one, else a new one), told the store and experiment."""
+        worker, cls._prestarted = cls._prestarted or cls.spawn(), None
+        assert worker.process.stdin is not None
+        setup = {"uri": uri, "artifact_location": artifact_location, "experiment": experiment}
+        try:
+            worker.process.stdin.write(json.dumps(setup) + "\n")
+            worker.process.stdin.flush()
+        except OSError:  # it died: log() reports it
+            pass
+        return worker
 
     def log(self, record: dict[str, Any], timeout_s: float = 120.0) -> str:
         """Send the record; return the run id (raise with the worker's error)."""
@@ -50,22 +79,28 @@ class TrackingWorker:
         return str(answer["run_id"])
 
     def close(self) -> None:
-        """Let the process go (after :meth:`log`, or with nothing to log)."""
+        """Let the process go: after :meth:`log` it has ended; with nothing logged it is
+        stopped (it may still be importing MLflow: nobody waits for that)."""
         if self.process.poll() is None:
-            try:
-                self.process.communicate("", timeout=30)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-                self.process.wait()
+            self.process.kill()
+        self.process.wait()
 
 
-def serve(argv: Sequence[str], stdin: IO[str], stdout: IO[str]) -> int:
-    uri, artifact_location, experiment = argv
+def serve(stdin: IO[str], stdout: IO[str]) -> int:
+    try:  # the slow part, done while the job composes its config and runs
+        import mlflow.store.tracking.sqlalchemy_store
+        import mlflow.tracking  # noqa: F401
+    except Exception:  # said again below, where it matters
+        pass
+    line = stdin.readline()
+    if not line.strip():
+        return 0  # nothing to log
     try:
         from flows.tracking.client import Tracker, log_job_run
 
-        tracker = Tracker(uri, artifact_location or None)  # the slow part: done meanwhile
-        experiment_id = tracker.experiment_id(experiment)
+        setup = json.loads(line)
+        tracker = Tracker(setup["uri"], setup["artifact_location"])
+        experiment_id = tracker.experiment_id(setup["experiment"])
     except Exception as error:
         setup_error: Exception | None = error
     else:
@@ -89,4 +124,4 @@ if __name__ == "__main__":
     from flows.environment import quiet_defaults
 
     quiet_defaults()
-    sys.exit(serve(sys.argv[1:], sys.stdin, sys.stdout))
+    sys.exit(serve(sys.stdin, sys.stdout))
