@@ -32,6 +32,7 @@ REQUIREMENTS = frozenset(
      ":action-costs"}
 )  # fmt: skip
 NOT_CLASSICAL = "Fast Downward plans classical tasks with action costs"
+METRIC = "(:metric minimize (total-cost))"
 UNSUPPORTED_SECTIONS = {
     ":durative-action": "durative actions (temporal planning)",
     ":process": "processes (PDDL+)",
@@ -217,6 +218,13 @@ def read_domain(body: list[SExp], text: str | None, source: str | None) -> Domai
     for type_, parent in typed_list((section(body, ":types") or [":t"])[1:]):
         if type_ == "object":
             continue  # the root; AlfWorld lists it among its types
+        if type_ == "number":
+            raise where.error(
+                'the type "number" is reserved for numeric values and cannot be declared '
+                "(Fast Downward rejects it)",
+                r"(?<![\w?-])number(?![\w-])",
+                r"\(:types",
+            )
         types[type_] = parent if isinstance(parent, str) and parent != "object" else None
     if not types:
         types["object"] = None
@@ -438,6 +446,13 @@ def read_problem(
             continue  # closed world: a negative initial fact says nothing new
         _check_ground_atom(entry, domain, known_objects, where, ":init")
         init.add(tuple(str(t) for t in entry))
+    metric = section(body, ":metric")
+    if metric is not None and write_sexp(metric).lower() != METRIC:
+        raise where.error(
+            f"{write_sexp(metric)} is not supported ({NOT_CLASSICAL}: it accepts only "
+            f"{METRIC}, or no metric)",
+            r"\(:metric",
+        )
     goal_entry = section(body, ":goal")
     formula: SExp = goal_entry[1] if goal_entry is not None and len(goal_entry) > 1 else []
     for _, atom in condition_atoms(formula):
