@@ -10,8 +10,8 @@ task 1 ... tasks: 1..20``), a BOM (``a ')' too many``), ``twostep-data check`` o
 file (a traceback), ``expert.yaml`` or ``kitchen.yaml`` that is not YAML (``ParserError``
 naming no file).
 
-The cases the PDDL reader itself decides (a BOM in a PDDL file) are marked xfail until
-the new reader (issue 17) lands.
+The cases the PDDL reader itself decides (a BOM in a PDDL file, a wrong arity, an
+undeclared type, an action defined twice) are the lifted reader's (issue 17).
 """
 
 from __future__ import annotations
@@ -37,7 +37,6 @@ from tests.bad_files import (
 from tests.conftest import DATA
 
 BIN = Path(sys.executable).parent
-NEW_READER = pytest.mark.xfail(strict=True, reason="new reader, issue 17")
 
 
 def run(script: str, *args: str | Path, cwd: Path) -> subprocess.CompletedProcess[str]:
@@ -208,7 +207,6 @@ def test_score_reads_a_plan_with_a_byte_order_mark_as_without(
     assert score(score_files, tmp_path).stdout == plain.stdout
 
 
-@NEW_READER
 @pytest.mark.parametrize("role", ["domain", "problem"])
 def test_score_reads_pddl_with_a_byte_order_mark_as_without(
     score_files: dict[str, Path], tmp_path: Path, role: str
@@ -285,7 +283,6 @@ def test_services_read_a_record_that_is_not_text_as_no_services(tmp_path: Path) 
     assert done.stdout.splitlines() == ["prefect: down", "mlflow: down"]
 
 
-@NEW_READER
 @pytest.mark.parametrize(
     ("role", "spoil", "line", "words"),
     [

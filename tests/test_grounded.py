@@ -454,6 +454,7 @@ def test_the_scorer_agrees_with_brute_force_on_conditional_effects(
             5,
             "numeric effects other than (increase (total-cost) ...)",
         ),
+        (":strips :typing", "(:types block\n   number)", 5, 'the type "number" is reserved'),
     ],
 )
 def test_what_fast_downward_cannot_plan_is_named_with_file_and_line(
@@ -468,6 +469,28 @@ def test_what_fast_downward_cannot_plan_is_named_with_file_and_line(
         parse_problem(domain, task, "dom.pddl", "prob.pddl")
     assert (info.value.source, info.value.line) == ("dom.pddl", line)
     assert fragment in str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("metric", "accepted"),
+    [
+        ("(:metric minimize (total-cost))", True),
+        ("(:metric  MINIMIZE\n   (total-cost ))", True),
+        ("(:metric minimize (total-time))", False),  # a temporal metric (IPC parking)
+        ("(:metric maximize (total-cost))", False),
+        ("(:metric minimize (fuel))", False),
+    ],
+)
+def test_only_the_total_cost_metric_is_accepted(metric: str, accepted: bool) -> None:
+    domain = "(define (domain d) (:requirements :strips) (:predicates (p)) (:action a :effect (p)))"
+    task = f"(define (problem x) (:domain d) (:init)\n (:goal (p))\n {metric})"
+    if accepted:
+        assert parse_problem(domain, task, "dom.pddl", "prob.pddl").grounded.actions
+        return
+    with pytest.raises(PDDLError) as info:
+        parse_problem(domain, task, "dom.pddl", "prob.pddl")
+    assert (info.value.source, info.value.line) == ("prob.pddl", 3)
+    assert "(:metric minimize (total-cost))" in str(info.value)
 
 
 def test_the_cached_problem_holds_the_grounding(tmp_path: Path) -> None:

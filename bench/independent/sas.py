@@ -361,8 +361,11 @@ def multi_agent_task(task: SASTask, agent_predicates: Iterable[str], agents: int
     with invariant synthesis off, so that every atom is a variable of its own). Every agent
     starts with the initial state's copy; agent-specific goal conditions must hold for every
     agent; environment variables are shared. Agent ``i``'s operators are the task's operators
-    on its own copy, named by :func:`agent_operator_name`. Raises ``ValueError`` when an
-    agent-specific variable is not binary or is read by an axiom.
+    on its own copy, named by :func:`agent_operator_name`. A derived variable whose axioms
+    read an agent-specific variable (directly or through other derived ones) is agent-specific
+    too: each agent derives its own copy from its view (the shared variables and its own
+    copies), with its own copy of those axioms. Raises ``ValueError`` when an agent-specific
+    state variable is not binary.
     """
     wanted = {p.lower() for p in agent_predicates}
     own = [
@@ -378,9 +381,14 @@ def multi_agent_task(task: SASTask, agent_predicates: Iterable[str], agents: int
                 "translate with --invariant-generation-max-candidates 0"
             )
     own_set = set(own)
-    for axiom in task.axioms:
-        if any(var in own_set for var, _ in axiom.conditions):
-            raise ValueError("an axiom reads an agent-specific fact: not supported")
+    changed = True
+    while changed:  # derived variables that read agent-specific ones, transitively
+        changed = False
+        for axiom in task.axioms:
+            if axiom.variable not in own_set and any(v in own_set for v, _ in axiom.conditions):
+                own_set.add(axiom.variable)
+                own.append(axiom.variable)
+                changed = True
     copy: list[dict[int, int]] = [{i: i for i in own}]
     variables = list(task.variables)
     init = list(task.init)
@@ -409,9 +417,16 @@ def multi_agent_task(task: SASTask, agent_predicates: Iterable[str], agents: int
             )
             name = agent_operator_name(agent, op.name)
             operators.append(Operator(name, moved(op.prevail, agent), effects, op.cost))
+    axioms = [a for a in task.axioms if a.variable not in own_set]
+    for agent in range(agents):
+        axioms += [
+            Axiom(moved(a.conditions, agent), copy[agent][a.variable], a.post)
+            for a in task.axioms
+            if a.variable in own_set
+        ]
     goal = [c for c in task.goal if c[0] not in own_set]
     for agent in range(agents):
         goal += [c for c in moved(task.goal, agent) if c not in goal]
     return SASTask(
-        tuple(variables), tuple(init), tuple(goal), tuple(operators), task.axioms, task.use_costs
+        tuple(variables), tuple(init), tuple(goal), tuple(operators), tuple(axioms), task.use_costs
     )

@@ -42,10 +42,23 @@ def read_problem(domain: Path, problem: Path) -> Any:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            return PDDLReader(environment=env).parse_problem(str(domain), str(problem))
+            up_problem = PDDLReader(environment=env).parse_problem(str(domain), str(problem))
     except Exception as error:
         text = " ".join(str(error).split())[:200]
         raise ReaderRejected(f"{type(error).__name__}: {text}") from None
+    _total_cost_starts_at_zero(up_problem)
+    return up_problem
+
+
+def _total_cost_starts_at_zero(up_problem: Any) -> None:
+    """A problem that does not set ``(total-cost)`` starts it at 0 (PDDL's action costs;
+    Fast Downward reads it so); unified-planning's validator needs the value to evaluate
+    the metric, and stops with an error without it."""
+    if not up_problem.has_fluent("total-cost"):
+        return
+    cost = up_problem.fluent("total-cost")
+    if cost.arity == 0 and cost() not in up_problem.explicit_initial_values:
+        up_problem.set_initial_value(cost(), 0)
 
 
 def _lookup(items: Iterable[Any]) -> dict[str, Any]:

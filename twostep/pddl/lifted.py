@@ -11,6 +11,7 @@ meaning: the translator grounds the task (:mod:`twostep.pddl.translator`).
 
 from __future__ import annotations
 
+import itertools
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -32,6 +33,7 @@ REQUIREMENTS = frozenset(
      ":action-costs"}
 )  # fmt: skip
 NOT_CLASSICAL = "Fast Downward plans classical tasks with action costs"
+METRIC = "(:metric minimize (total-cost))"
 UNSUPPORTED_SECTIONS = {
     ":durative-action": "durative actions (temporal planning)",
     ":process": "processes (PDDL+)",
@@ -48,9 +50,11 @@ def typed_pairs(items: list[SExp]) -> tuple[tuple[str, str], ...]:
     return tuple((name, type_name(spec)) for name, spec in typed_list(items))
 
 
-def line_of(text: str | None, pattern: str, after: str | None = None) -> int | None:
-    """The line (comments ignored) of the first match of ``pattern``, after the first
-    match of ``after`` when given."""
+def line_of(
+    text: str | None, pattern: str, after: str | None = None, occurrence: int = 1
+) -> int | None:
+    """The line (comments ignored) of the first (``occurrence``-th) match of ``pattern``,
+    after the first match of ``after`` when given."""
     if not text:
         return None
     start = 0
@@ -58,7 +62,8 @@ def line_of(text: str | None, pattern: str, after: str | None = None) -> int | N
     if after is not None:
         found = re.search(after, clean, re.IGNORECASE)
         start = found.start() if found else 0
-    match = re.compile(pattern, re.IGNORECASE).search(clean, start)
+    matches = re.compile(pattern, re.IGNORECASE).finditer(clean, start)
+    match = next(itertools.islice(matches, occurrence - 1, None), None)
     return clean.count("\n", 0, match.start()) + 1 if match else None
 
 
@@ -72,11 +77,14 @@ class _Source:
     name: str | None
 
     def error(
-        self, message: str, pattern: str | None = None, after: str | None = None
+        self,
+        message: str,
+        pattern: str | None = None,
+        after: str | None = None,
+        occurrence: int = 1,
     ) -> PDDLError:
-        return PDDLError(
-            message, self.name, line_of(self.text, pattern, after) if pattern else None
-        )
+        line = line_of(self.text, pattern, after, occurrence) if pattern else None
+        return PDDLError(message, self.name, line)
 
 
 # ----------------------------------------------------------------- formulas
@@ -217,6 +225,13 @@ def read_domain(body: list[SExp], text: str | None, source: str | None) -> Domai
     for type_, parent in typed_list((section(body, ":types") or [":t"])[1:]):
         if type_ == "object":
             continue  # the root; AlfWorld lists it among its types
+        if type_ == "number":
+            raise where.error(
+                'the type "number" is reserved for numeric values and cannot be declared '
+                "(Fast Downward rejects it)",
+                r"(?<![\w?-])number(?![\w-])",
+                r"\(:types",
+            )
         types[type_] = parent if isinstance(parent, str) and parent != "object" else None
     if not types:
         types["object"] = None
@@ -242,6 +257,12 @@ def read_domain(body: list[SExp], text: str | None, source: str | None) -> Domai
     for item in body[2:]:
         if isinstance(item, list) and item[:1] == [":action"]:
             action = _read_action(item, known, set(functions), where)
+            if action.name in actions:
+                raise where.error(
+                    f"action '{action.name}' is defined twice",
+                    rf"\(:action\s+{re.escape(action.name)}(?![\w-])",
+                    occurrence=2,
+                )
             for atom in (*action.add, *action.delete):
                 if atom.predicate in derived_names:
                     raise where.error(
@@ -425,6 +446,16 @@ def read_problem(
     header = body[1] if len(body) > 1 else None
     name = str(header[1]) if isinstance(header, list) and len(header) > 1 else "problem"
     objects = dict(typed_pairs((section(body, ":objects") or [":o"])[1:]))
+    for obj, obj_type in objects.items():
+        known_type = obj_type in domain.types or obj_type in domain.types.values()
+        if obj_type != "object" and not known_type and "(" not in obj_type:
+            declared = ", ".join(sorted(domain.types)) or "none"
+            raise where.error(
+                f"object '{obj}' has type '{obj_type}', which the domain does not declare "
+                f"(types: {declared})",
+                rf"-\s*{re.escape(obj_type)}(?![\w-])",
+                r"\(:objects",
+            )
     known_objects = {**domain.constants, **objects}
     init: set[Fact] = set()
     numeric: list[SExp] = []
@@ -438,6 +469,13 @@ def read_problem(
             continue  # closed world: a negative initial fact says nothing new
         _check_ground_atom(entry, domain, known_objects, where, ":init")
         init.add(tuple(str(t) for t in entry))
+    metric = section(body, ":metric")
+    if metric is not None and write_sexp(metric).lower() != METRIC:
+        raise where.error(
+            f"{write_sexp(metric)} is not supported ({NOT_CLASSICAL}: it accepts only "
+            f"{METRIC}, or no metric)",
+            r"\(:metric",
+        )
     goal_entry = section(body, ":goal")
     formula: SExp = goal_entry[1] if goal_entry is not None and len(goal_entry) > 1 else []
     for _, atom in condition_atoms(formula):
@@ -481,6 +519,13 @@ def _check_ground_atom(
         raise where.error(
             f"unknown predicate '{head}' in {part} (declared: {listing or 'none'}{more})",
             _head_pattern(head),
+            rf"\(\s*{re.escape(part)}\b",
+        )
+    if head != "=" and len(atom) - 1 != len(domain.predicates[head]):
+        raise where.error(
+            f"predicate '{head}' takes {len(domain.predicates[head])} arguments, "
+            f"{len(atom) - 1} given in {part}: {write_sexp(atom)}",
+            r"\(\s*" + r"\s+".join(re.escape(str(t)) for t in atom) + r"\s*\)",
             rf"\(\s*{re.escape(part)}\b",
         )
     for term in atom[1:]:

@@ -42,7 +42,10 @@ def parse_problem(
     domain_source: str | None = None,
     problem_source: str | None = None,
 ) -> Problem:
-    """Parse a domain and a problem given as PDDL text."""
+    """Parse a domain and a problem given as PDDL text (a UTF-8 byte-order mark is no part
+    of the text)."""
+    domain_text = domain_text.removeprefix("\ufeff")
+    problem_text = problem_text.removeprefix("\ufeff")
     read_sexp(domain_text, domain_source, single=True)  # unbalanced parentheses: file and line
     read_sexp(problem_text, problem_source, single=True)
     domain_body, problem_body, repaired = repair_task(
