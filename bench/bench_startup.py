@@ -204,6 +204,23 @@ def report(result: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def runs_against_goal(
+    name: str, title: str, runs: list[tuple[float, float, float]]
+) -> dict[str, Any]:
+    """Print a scenario's median wall - planner time against the default goal; its row."""
+    overhead = statistics.median(w - p for w, p, _ in runs)
+    met = "met" if overhead <= GOALS["default"] else "MISSED"
+    print(
+        f"== {name}: {title}\n"
+        f"   wall - planner = {overhead:.2f} s (goal <= {GOALS['default']:.0f} s: {met});"
+        " runs: "
+        + ", ".join(f"{w:.2f} s wall, {p:.2f} s planner, {c:.2f} s CPU" for w, p, c in runs)
+        + f" | load average {os.getloadavg()[0]:.1f}",
+        flush=True,
+    )
+    return {"scenario": name, "overhead_s": overhead, "runs": runs}
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeat", type=int, default=3)
@@ -223,30 +240,12 @@ def main() -> int:
         logged_root = root / "default"
         run_command(logged_root, [])  # the store exists (as after (a))
         runs = [run_command(logged_root, [f"seed={1000 + i}"]) for i in range(args.repeat)]
-        overhead = statistics.median(w - p for w, p, _ in runs)
-        met = "met" if overhead <= GOALS["default"] else "MISSED"
-        print(
-            "== logged: a job new to the warm store (its MLflow run created and logged)\n"
-            f"   wall - planner = {overhead:.2f} s (goal <= {GOALS['default']:.0f} s: {met});"
-            " runs: "
-            + ", ".join(f"{w:.2f} s wall, {p:.2f} s planner, {c:.2f} s CPU" for w, p, c in runs)
-            + f" | load average {os.getloadavg()[0]:.1f}",
-            flush=True,
-        )
-        results.append({"scenario": "logged", "overhead_s": overhead, "runs": runs})
+        title = "a job new to the warm store (its MLflow run created and logged)"
+        results.append(runs_against_goal("logged", title, runs))
     if "cold" in wanted:
         runs = [run_command(root / f"cold-{i}", []) for i in range(args.repeat)]
-        overhead = statistics.median(w - p for w, p, _ in runs)
-        met = "met" if overhead <= GOALS["default"] else "MISSED"
-        print(
-            "== cold: the first run on a fresh output.root (the MLflow store is new)\n"
-            f"   wall - planner = {overhead:.2f} s (goal <= {GOALS['default']:.0f} s: {met});"
-            " runs: "
-            + ", ".join(f"{w:.2f} s wall, {p:.2f} s planner, {c:.2f} s CPU" for w, p, c in runs)
-            + f" | load average {os.getloadavg()[0]:.1f}",
-            flush=True,
-        )
-        results.append({"scenario": "cold", "overhead_s": overhead, "runs": runs})
+        title = "the first run on a fresh output.root (the MLflow store is new)"
+        results.append(runs_against_goal("cold", title, runs))
     if "services" in wanted:
         services_root = root / "services"
         start = time.perf_counter()
