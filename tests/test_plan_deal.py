@@ -322,6 +322,59 @@ def test_walks_that_change_shared_facts_deal(tmp_path: Path) -> None:
         assert run.exec_length == 5 and run.extra["agents_used"] == 2 and run.fallback is None
 
 
+# lift: our own elevator. ``halt`` has only conditional effects (riders whose target this
+# is get off and are done, riders waiting here who are not done get in); a rider inside
+# is what the lift carries, not where it is, though ``halt`` both adds and deletes it.
+LIFT = """(define (domain lift)
+  (:requirements :typing :conditional-effects :negative-preconditions)
+  (:types rider level)
+  (:predicates (at ?l - level) (next ?a ?b - level) (inside ?r - rider)
+               (start ?r - rider ?l - level) (target ?r - rider ?l - level) (done ?r - rider))
+  (:action move
+    :parameters (?a ?b - level)
+    :precondition (and (at ?a) (next ?a ?b))
+    :effect (and (at ?b) (not (at ?a))))
+  (:action halt
+    :parameters (?l - level)
+    :precondition (at ?l)
+    :effect (and
+      (forall (?r - rider) (when (and (inside ?r) (target ?r ?l)) (and (not (inside ?r)) (done ?r))))
+      (forall (?r - rider) (when (and (start ?r ?l) (not (done ?r))) (inside ?r))))))"""
+
+
+def test_a_lift_with_conditional_effects_deals(tmp_path: Path) -> None:
+    # Five levels l0..l4, every lift at l2; rider a waits at l1 for l0, rider b at l3 for
+    # l4. The SA plan (by hand): down to l1, halt (a gets in), down, halt (a done), back up
+    # to l3, halt (b in), up, halt (b done): 10 actions. The halts that let a rider in
+    # change what the lift carries, not where it is: they are acting actions, and the
+    # rider's two halts are one piece (the lift holds a between them). Left without the
+    # walks between them, the halts do not apply from the initial state (halt l0 with the
+    # lift at l2): the order is read from the plan as it ran. Two agents: one lift takes
+    # a (move, halt, move, halt), the other b, at once: 4 steps. No schedule is shorter
+    # (a rider's two halts and two moves are one lift's), so three agents give 4 too.
+    levels = [f"l{i}" for i in range(5)]
+    problem = (
+        f"(define (problem two-riders) (:domain lift) "
+        f"(:objects {' '.join(levels)} - level a b - rider) "
+        f"(:init (at l2) {_line(levels, 'next')} (start a l1) (target a l0) "
+        "(start b l3) (target b l4)) (:goal (and (done a) (done b))))"
+    )
+    task = _own_task(tmp_path, "lift", LIFT, problem)
+    plan = (
+        "(move l2 l1)", "(halt l1)", "(move l1 l0)", "(halt l0)", "(move l0 l1)",
+        "(move l1 l2)", "(move l2 l3)", "(halt l3)", "(move l3 l4)", "(halt l4)",
+    )  # fmt: skip
+    preds = ["at", "inside"]
+    dealer = Dealer(task.problem, plan, preds)
+    walking = [str(a) for a, w in zip(dealer.cleaned, dealer.walking, strict=True) if w]
+    assert walking == [a for a in plan if a.startswith("(move")]  # every halt acts
+    assert dealer.pieces("free", False)[0] == [[1, 3], [7, 9]]  # a's halts, b's halts
+    for agents in (2, 3):
+        run = run_plan_deal(MethodRequest(task, agents, FAST, preds, sa_plan=sa_result(plan)))
+        _check(task.problem, run, preds)
+        assert run.exec_length == 4 and run.extra["agents_used"] == 2 and run.fallback is None
+
+
 # ---------------------------------------------- action elimination against a plain greedy
 
 

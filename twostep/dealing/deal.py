@@ -33,7 +33,7 @@ from twostep.decomposers.plan_split import (
     topological_pieces,
 )
 from twostep.pddl import Problem
-from twostep.strips import GroundAction, Grounder
+from twostep.strips import GroundAction, Grounder, effects_along
 
 CUTS = ("free", "holding")
 """Where the plan is cut into pieces: at free agent states, or by what the agent holds."""
@@ -81,7 +81,13 @@ def order_edges(
     to (or, after the last one, the action before it)."""
     acting = [i for i in range(len(grounded)) if not walking[i]]
     if not keep_walks:
-        sub_edges, _ = plan_order(problem, [grounded[i] for i in acting], agent_predicates)
+        # the acting actions' effects as they fire in the whole plan: without the walks
+        # between them they need not apply from the initial state (a lift's stop at a
+        # floor it has not driven to), and conditional effects depend on where they run
+        fired = effects_along(problem.init, grounded)
+        sub_edges, _ = plan_order(
+            problem, [grounded[i] for i in acting], agent_predicates, [fired[i] for i in acting]
+        )
         return {(acting[i], acting[j]) for i, j in sub_edges}
     edges_all, _ = plan_order(problem, grounded, agent_predicates)
     leads = {}

@@ -31,15 +31,26 @@ from collections.abc import Collection
 
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.pddl import Domain, Fact, Goal, Problem
+from twostep.pddl.lifted import EffectAtom, effect_parts
 from twostep.progression import agent_part, environment_part
 
 
 def positional_predicates(domain: Domain) -> set[str]:
-    """Predicates that some action both adds and deletes (an agent moving, say)."""
+    """Predicates that some action both adds and deletes (an agent moving, say), whatever
+    the state and the objects: effects under a ``when`` or a ``forall`` do not count (a
+    lift's stop that lets some passengers in and others out changes what it carries, not
+    where it is)."""
     found: set[str] = set()
     for action in domain.actions.values():
-        added = {a.predicate for a in action.add}
-        found |= added & {a.predicate for a in action.delete}
+        if action.is_strips:
+            added = {a.predicate for a in action.add}
+            deleted = {a.predicate for a in action.delete}
+        else:
+            parts = [p for p in effect_parts(action.effect)
+                     if isinstance(p, EffectAtom) and not p.conditional]  # fmt: skip
+            added = {str(p.atom[0]) for p in parts if p.positive}
+            deleted = {str(p.atom[0]) for p in parts if not p.positive}
+        found |= added & deleted
     return found
 
 

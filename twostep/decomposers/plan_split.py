@@ -76,11 +76,19 @@ class CausalLink:
 
 
 def plan_order(
-    problem: Problem, plan: Sequence[GroundAction], agent_predicates: Collection[str]
+    problem: Problem,
+    plan: Sequence[GroundAction],
+    agent_predicates: Collection[str],
+    effects: Sequence[tuple[frozenset[Fact], frozenset[Fact]]] | None = None,
 ) -> tuple[set[tuple[int, int]], list[CausalLink]]:
-    """Step 1: the order edges (i, j), i < j, the plan needs, and its causal links."""
+    """Step 1: the order edges (i, j), i < j, the plan needs, and its causal links.
+
+    ``effects``: each action's (adds, deletes) as they fired where the plan was run, for a
+    ``plan`` that does not apply from the initial state by itself (plan-deal's actions with
+    the walks between them left out); by default the plan is run from the initial state."""
     n = len(plan)
-    effects = effects_along(problem.init, plan)
+    if effects is None:
+        effects = effects_along(problem.init, plan)
     adds = [environment_part(add, agent_predicates) for add, _ in effects]
     dels = [environment_part(delete, agent_predicates) for _, delete in effects]
     deleters: dict[Fact, list[int]] = defaultdict(list)
