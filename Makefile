@@ -26,7 +26,8 @@ $(BOOTSTRAP)/bin/uv:
 	$(PYTHON) -m venv $(BOOTSTRAP)
 	$(BOOTSTRAP)/bin/python -m pip install --quiet --disable-pip-version-check "uv==$(UV_VERSION)"
 
-$(VENV)/.synced: pyproject.toml uv.lock | $(UV)
+# template.py: a change of its key (MLflow's version) makes the template again.
+$(VENV)/.synced: pyproject.toml uv.lock flows/tracking/template.py | $(UV)
 	$(UV) $(SYNC)
 	# An empty MLflow store made once by MLflow: a new store is a copy (ms), not a migration (s).
 	$(VENV)/bin/python -m flows.tracking.template

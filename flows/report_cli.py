@@ -42,6 +42,7 @@ from urllib.parse import urlparse
 
 import pandas as pd
 
+from flows.locations import sqlite_path
 from flows.sweep_state import job_records
 from twostep.benchmark import DEFAULT_DATA_ROOT
 from twostep.cli import console_main
@@ -82,7 +83,7 @@ def _check_store(tracking_uri: str, timeout_s: float = 10.0) -> None:
     hint = "run a sweep first, or pass --tracking-uri or --sweep-dir"
     parsed = urlparse(tracking_uri)
     if parsed.scheme == "sqlite":
-        path = Path(tracking_uri[len("sqlite:///") :])
+        path = sqlite_path(tracking_uri) or Path(":memory:")
         if not path.is_file():
             raise ReportInputError(f"no MLflow store at {path} ({hint})")
     elif parsed.scheme in ("", "file"):
