@@ -23,6 +23,7 @@ from hydra.types import RunMode
 from omegaconf import DictConfig
 
 from flows.artifacts import picture_paths
+from flows.command import logs_a_single_run
 from flows.config import register
 from flows.console import format_schedule, format_summary
 from flows.environment import quiet_defaults
@@ -148,7 +149,7 @@ def main() -> None:
 
         print(version_text())
         return
-    if _logs_a_single_run(sys.argv[1:]):
+    if logs_a_single_run(sys.argv[1:]):  # already started by flows.command, if run from it
         from flows.tracking.worker import TrackingWorker
 
         TrackingWorker.prestart()  # imports MLflow on the other core meanwhile
@@ -167,14 +168,6 @@ def main() -> None:
     if _SINGLE_RUN_DONE:
         _fast_exit(code if isinstance(code, int) else 1)
     sys.exit(code)
-
-
-def _logs_a_single_run(arguments: list[str]) -> bool:
-    """Whether the command line is a single run that logs to MLflow (no Hydra flag such as
-    ``-m`` or ``--help``, MLflow not turned off)."""
-    if any(a.startswith("-") for a in arguments):
-        return False
-    return not any(a.replace(" ", "").lower() == "mlflow.enabled=false" for a in arguments)
 
 
 def _fast_exit(code: int) -> None:

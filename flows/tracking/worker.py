@@ -3,9 +3,9 @@ early as the run.
 
 Importing MLflow's client and its SQLite store (SQLAlchemy, alembic) costs 2-3 CPU
 seconds, as much as the rest of a short run. The ``twostep`` command therefore starts
-this process first thing (:meth:`TrackingWorker.prestart`, before Hydra composes the
-config): it imports MLflow on the other core while the job composes its config, reads its
-task and plans. The job then tells it the store and experiment (one JSON line on stdin:
+this process first thing (:meth:`TrackingWorker.prestart`, from :mod:`flows.command`,
+before Hydra is imported): it imports MLflow on the other core while the command imports
+Hydra and the library, composes the config, reads its task and plans. The job then tells it the store and experiment (one JSON line on stdin:
 it opens them), later sends the run's record (a second line) and waits for the run id
 (one JSON line on stdout). A job with nothing to log (MLflow off, its run already in the
 store) stops the process.
