@@ -23,7 +23,6 @@ from hydra.types import RunMode
 from omegaconf import DictConfig
 
 from flows.artifacts import picture_paths
-from flows.command import logs_a_single_run
 from flows.config import register
 from flows.console import format_schedule, format_summary
 from flows.environment import quiet_defaults
@@ -149,11 +148,7 @@ def main() -> None:
 
         print(version_text())
         return
-    if logs_a_single_run(sys.argv[1:]):  # already started by flows.command, if run from it
-        from flows.tracking.worker import TrackingWorker
-
-        TrackingWorker.prestart()  # imports MLflow on the other core meanwhile
-    try:
+    try:  # flows.command (the console script) has started the MLflow logging process
         app()
     except SystemExit as stop:
         code = stop.code
