@@ -194,6 +194,32 @@ def test_real_sa_plans_deal_and_validate(data_root: Path, agents: int) -> None:
             _check(task.problem, run, preds)
 
 
+def _hubs(task: BenchmarkTask) -> int:
+    return sum(1 for kind in task.problem.all_objects.values() if kind == "hub")
+
+
+@pytest.mark.parametrize("task_id", [1, 2, 4])
+def test_tyreworld_deals_reach_the_one_jack_floor(data_root: Path, task_id: int) -> None:
+    # With one jack, any schedule of a W-hub task takes at least 6W + 6 steps, whatever N:
+    # each hub needs jack-up, undo, remove-wheel, put-on-wheel, do-up, jack-down, each
+    # using the fact the one before it gives (do-up fastens the hub, so the wheel goes on
+    # first; jack-down needs do-up's not-on-ground still true), and the next jack-up needs
+    # (have jack), which only jack-down gives back: 6W steps one after another. Before the
+    # first jack-up: open the boot, fetch the wrench, loosen the nut (it needs the hub on
+    # the ground). After the last jack-down: tighten that nut, put the wrench away, close
+    # the boot. So the floor is 6W + 6 and it does not fall with N: the deal reaches it.
+    task = load_task("tyreworld", task_id, data_root)
+    hubs = _hubs(task)
+    sa = run_single_agent(MethodRequest(task, planner=FAST))
+    assert sa.exec_length is not None
+    for agents in (2, 4):
+        run = run_plan_deal(
+            MethodRequest(task, agents, FAST, [], sa_plan=sa.planner_calls[0].result)
+        )
+        _check(task.problem, run, [])
+        assert run.exec_length == 6 * hubs + 6, (agents, run.exec_length)
+
+
 def test_the_deal_does_not_depend_on_the_hash_seed(data_root: Path, tmp_path: Path) -> None:
     # termes p02 has walks of equal length over different cells: the walking search must
     # pick the same one in every process (Python's set order changes with PYTHONHASHSEED;
