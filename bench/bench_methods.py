@@ -46,7 +46,7 @@ from typing import Any
 
 import yaml
 
-from twostep.benchmark import DEFAULT_DATA_ROOT, list_domains, list_tasks, load_task
+from twostep.benchmark import DEFAULT_DATA_ROOT, BenchmarkError, list_domains, list_tasks, load_task
 from twostep.decomposers.base import Decomposer
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.decomposers.plan_split import PlanSplitDecomposer
@@ -507,6 +507,42 @@ DEAL_LIMIT_S = 5.0  # issue 18: dealing time on any task
 PHASES = ("clean-up", "order", "dealing", "walks", "replay", "joint clean-up", "scoring")
 
 
+def tyreworld_floor(data: str, task: int) -> int | None:
+    """The fewest steps any schedule of a tyreworld task takes, for any N: 6 per hub + 6.
+
+    One jack: each hub's jack-up, undo, remove-wheel, put-on-wheel, do-up and jack-down
+    follow one another, and the next hub's jack-up waits for (have jack), which only
+    jack-down gives back; three steps come before the first jack-up (open the boot, fetch the
+    wrench, loosen the nut) and three after the last jack-down (tighten, put the wrench
+    away, close the boot). tests/test_plan_deal.py derives it and checks that the deal
+    reaches it. ``None`` when the task's files are not there."""
+    try:
+        problem = load_task("tyreworld", task, REPO / data).problem
+    except BenchmarkError:
+        return None
+    hubs = sum(1 for kind in problem.all_objects.values() if kind == "hub")
+    return 6 * hubs + 6
+
+
+def one_jack_floor(rows: Sequence[Row], dealt: Sequence[Row]) -> list[str]:
+    """How far the tyreworld deals are from :func:`tyreworld_floor` (no lines without them)."""
+    sa = {(str(r.get("data", LEGACY["data"])), r["task"]): r for r in rows
+          if r["method"] == "sa" and r["domain"] == "tyreworld" and r["valid"]}  # fmt: skip
+    mine = [r for r in dealt if r["domain"] == "tyreworld" and r["valid"]]
+    floors = {key: tyreworld_floor(*key) for key in sa}
+    known = [
+        r for r in mine if floors.get((str(r.get("data", LEGACY["data"])), r["task"])) is not None
+    ]
+    if not known:
+        return []
+    at = sum(
+        r["exec_length"] == floors[(str(r.get("data", LEGACY["data"])), r["task"])] for r in known
+    )
+    ratio = mean(f / sa[k]["exec_length"] for k, f in floors.items() if f is not None)
+    return [f"- tyreworld's one-jack floor (6 per hub + 6 steps, for any N): reached in {at} "
+            f"of {len(known)} runs; floor / SA, mean over tasks: {ratio:.3f} (no N lowers it)"]  # fmt: skip
+
+
 def deal_report(rows: Iterable[Row], ns: Sequence[int], method: str) -> list[str]:
     """For plan-deal (rows that record ``deal_seconds``): the runs that fell back to the SA
     plan and why, the runs that dealt to fewer agents, the monotonicity check (never longer
@@ -540,6 +576,7 @@ def deal_report(rows: Iterable[Row], ns: Sequence[int], method: str) -> list[str
     lines.append(f"- monotonicity (N = 1: the SA plan): {len(worse)} violations in {pairs} "
                  "pairs (N, N-1)" + "".join(f"; {d} p{t:02d} N={n}: {a} > {b}"
                                             for d, t, n, a, b in worse))  # fmt: skip
+    lines += one_jack_floor(rows, dealt)
     lines += ["", "Dealing time (everything after the SA plan: phases of the dealing, and "
               "scoring), CPU seconds; SA: its planner time (Fast Downward's, CPU time too):",
               ""]  # fmt: skip

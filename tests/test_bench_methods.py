@@ -240,3 +240,16 @@ def test_plan_deal_in_detail() -> None:
     table = {tuple(c.strip() for c in line.strip("|").split("|")) for line in lines}
     # N = 3: dealing 0.25 + 0.15 = 0.40 s and 6 + 1 = 7 s; median 3.7 > SA's median 1.0
     assert ("A", "3", "1.000", "3.700", "no", "7.00", "no") in {row[:7] for row in table}
+
+
+def test_tyreworld_one_jack_floor_line() -> None:
+    # data/tyreworld/p03 has three hubs (the-hub1..3 in its goal): 6 * 3 + 6 = 24 steps.
+    assert bm.tyreworld_floor("data", 3) == 24
+    assert bm.tyreworld_floor("no/such/root", 3) is None
+    rows = [
+        {**row("tyreworld", 3, "sa", 1, 40, 40), "data": "data"},
+        {**row("tyreworld", 3, "plan-deal", 2, 24, 40), "data": "data"},
+        {**row("tyreworld", 3, "plan-deal", 3, 25, 40), "data": "data"},
+    ]
+    (line,) = bm.one_jack_floor(rows, rows[1:])
+    assert "reached in 1 of 2 runs" in line and "floor / SA, mean over tasks: 0.600" in line
