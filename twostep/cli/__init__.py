@@ -24,7 +24,12 @@ def console_main(main: Callable[P, R]) -> Callable[P, R]:
     @functools.wraps(main)
     def run(*args: P.args, **kwargs: P.kwargs) -> R:
         try:
-            return main(*args, **kwargs)
+            try:
+                return main(*args, **kwargs)
+            finally:
+                # Flushed here, not at exit: a buffered stdout (a pipe without
+                # PYTHONUNBUFFERED) writes its last lines now, where a gone reader is caught.
+                sys.stdout.flush()
         except BrokenPipeError:
             # Nothing reads stdout any more: let its last flush at exit go nowhere too.
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
