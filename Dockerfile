@@ -19,10 +19,11 @@ RUN apt-get update \
     && apt-get install -y --no-install-recommends make \
     && rm -rf /var/lib/apt/lists/*
 
-# An unprivileged user owns the checkout, the environment and the outputs.
+# An unprivileged user owns the checkout, the environment, the outputs and ~/.cache (made
+# here: the build's cache mount below would otherwise leave it to root, unwritable at run time).
 RUN useradd --create-home --uid 1000 twostep \
-    && mkdir /home/twostep/app \
-    && chown 1000:1000 /home/twostep/app
+    && mkdir /home/twostep/app /home/twostep/.cache \
+    && chown 1000:1000 /home/twostep/app /home/twostep/.cache
 USER 1000:1000
 WORKDIR /home/twostep/app
 
