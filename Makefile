@@ -51,7 +51,7 @@ test-slow: setup
 # Both UIs in headless Chromium (apt-get install -y chromium): services up, a 2-job sweep,
 # the Prefect flow runs and the MLflow runs table checked and screenshotted into docs/.
 ui-check: setup
-	TWOSTEP_UI_SCREENSHOTS=docs $(VENV)/bin/pytest -q -m slow tests/test_ui.py
+	TWOSTEP_UI_SCREENSHOTS=docs $(VENV)/bin/pytest -q -m slow tests/test_ui.py tests/test_ui_compare.py
 
 lint: setup
 	$(VENV)/bin/ruff check . && $(VENV)/bin/ruff format --check . && $(VENV)/bin/mypy

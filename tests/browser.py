@@ -110,6 +110,98 @@ class Browser:
                 raise AssertionError(f"not on the page after {timeout_s:.0f} s: {missing}")
             time.sleep(1.0)
 
+    def find(
+        self, selector: str, text: str = "", prefix: bool = False, nth: int = 0
+    ) -> dict[str, float] | None:
+        """The centre of the first (``nth``: the one after ``nth`` others) visible element
+        matching the CSS ``selector`` whose text (trimmed) is ``text`` (or starts with it:
+        ``prefix``; any text when empty), scrolled into view; None if there is none."""
+        script = f"""(() => {{
+          const want = {json.dumps(text)}, prefix = {json.dumps(prefix)};
+          let skip = {nth};
+          for (const e of document.querySelectorAll({json.dumps(selector)})) {{
+            const own = (e.innerText || e.value || '').trim();
+            if (want && !(prefix ? own.startsWith(want) : own === want)) continue;
+            e.scrollIntoView({{block: 'nearest', inline: 'nearest'}});
+            const r = e.getBoundingClientRect();
+            if (r.width > 0 && r.height > 0 && skip-- === 0)
+              return {{x: r.x + r.width / 2, y: r.y + r.height / 2}};
+          }}
+          return null;
+        }})()"""
+        found = self.run(script)
+        return dict(found) if found else None
+
+    def locate(
+        self,
+        selector: str,
+        text: str = "",
+        prefix: bool = False,
+        nth: int = 0,
+        timeout_s: float = 30.0,
+    ) -> tuple[float, float]:
+        """:meth:`find`, waiting for the element to appear; its centre (x, y)."""
+        deadline = time.monotonic() + timeout_s
+        while (where := self.find(selector, text, prefix, nth)) is None:
+            if time.monotonic() > deadline:
+                raise AssertionError(
+                    f"not on the page after {timeout_s:.0f} s: {selector} {text!r}"
+                )
+            time.sleep(0.5)
+        return where["x"], where["y"]
+
+    def click(
+        self,
+        selector: str,
+        text: str = "",
+        prefix: bool = False,
+        nth: int = 0,
+        timeout_s: float = 30.0,
+    ) -> None:
+        """A real mouse click (move, press and release, as a user's) on the element
+        :meth:`locate` finds."""
+        x, y = self.locate(selector, text, prefix, nth, timeout_s)
+        self._mouse("mouseMoved", x, y)
+        self._mouse("mousePressed", x, y)
+        self._mouse("mouseReleased", x, y)
+        time.sleep(0.5)  # let the page react (menus open, tables re-render)
+
+    def drag(self, selector: str, dx: float, dy: float, nth: int = 0) -> None:
+        """Press the mouse on the element, move it by (dx, dy) in steps, release (a
+        column's or a card's resize handle)."""
+        x, y = self.locate(selector, nth=nth)
+        self._mouse("mouseMoved", x, y)
+        self._mouse("mousePressed", x, y)
+        for step in range(1, 11):
+            self._mouse("mouseMoved", x + dx * step / 10, y + dy * step / 10, pressed=True)
+        self._mouse("mouseReleased", x + dx, y + dy)
+        time.sleep(0.5)
+
+    def _mouse(self, kind: str, x: float, y: float, pressed: bool = False) -> None:
+        buttons = {"button": "left", "clickCount": 1} if kind != "mouseMoved" else {}
+        if pressed:
+            buttons = {"button": "left", "buttons": 1}
+        self.call("Input.dispatchMouseEvent", type=kind, x=x, y=y, **buttons)
+
+    def type(self, text: str) -> None:
+        """Keystrokes into the focused element (as typed, one character at a time)."""
+        for char in text:
+            self.call("Input.dispatchKeyEvent", type="keyDown", text=char, key=char)
+            self.call("Input.dispatchKeyEvent", type="keyUp", key=char)
+
+    def press(self, key: str, times: int = 1) -> None:
+        """A special key on the focused element, ``times`` times: Enter, Escape, Tab,
+        Backspace."""
+        code = {"Enter": 13, "Escape": 27, "Tab": 9, "Backspace": 8}[key]
+        params: dict[str, Any] = {"key": key, "code": key, "windowsVirtualKeyCode": code}
+        for _ in range(times):
+            text = {"text": "\r"} if key == "Enter" else {}
+            self.call(
+                "Input.dispatchKeyEvent", type="keyDown" if text else "rawKeyDown", **text, **params
+            )
+            self.call("Input.dispatchKeyEvent", type="keyUp", **params)
+        time.sleep(0.5)
+
     def screenshot(self, path: Path) -> Path:
         data = self.call("Page.captureScreenshot", format="png")["data"]
         path.write_bytes(base64.b64decode(data))
