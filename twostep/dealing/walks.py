@@ -240,7 +240,8 @@ def closing_walk(
     empty), no acting action leads there. Each agent whose own goal facts fail walks to
     where they hold; then, for each environment goal literal still false, an agent walks
     to where it holds, keeping the goal literals that hold already (the least busy agent
-    first); last, if the goal still fails, one agent walks to where it holds.
+    first); last, if the goal still fails (a goal that reads derived facts), one agent
+    walks to where it holds.
     :class:`DealError` when there is no such walk."""
     owns, joint = list(owns), []
     order = sorted(range(len(owns)), key=lambda a: (load[a], a))
@@ -275,7 +276,8 @@ def closing_walk(
             def kept(env: int, own: int, want: int = want) -> bool:
                 return met(env) & want == want and mine(own)
 
-            any(walk(a, kept) for a in order)
+            if not any(walk(a, kept) for a in order):  # nor does any walk to the whole goal
+                raise DealError("the dealt plans do not reach the goal")
     if goal.holds(env, owns):
         return joint
     for a in order:
