@@ -651,6 +651,41 @@ def test_ipc_sample_domains_deal_to_two_agents(tmp_path: Path) -> None:
         assert verdict.checkers.startswith(readers), (name, verdict.checkers)
 
 
+# Sample domains beyond agents.yaml, with agent predicates read from their domain files
+# (the acting object's own state, none shared with other objects): their p01 leaves work
+# to a second agent.
+BEYOND_YAML = {
+    "depot": ["available", "lifting"],
+    "rovers": ["at"],
+    "elevators-sat08-strips": ["lift-at", "boarded", "passengers"],
+    "citycar-sat14-adl": ["at_car_jun", "at_car_road", "starting"],
+}
+# ... and p01s whose SA plan ends on walks that reach goal facts (zenotravel's one flight,
+# tpp's unload counted as a move): before the closing walk no deal reached the goal.
+GOAL_BY_WALKS = {"zenotravel": ["fuel-level", "in"], "tpp": ["at", "loaded"]}
+
+
+@needs_sample
+@pytest.mark.slow
+def test_ipc_sample_domains_beyond_agents_yaml_deal() -> None:
+    for name, preds in {**BEYOND_YAML, **GOAL_BY_WALKS}.items():
+        task = load_task(name, 1, SAMPLE)
+        sa = run_single_agent(MethodRequest(task, planner=FAST))
+        assert sa.exec_length is not None, name
+        for agents in (2, 3):
+            run = run_plan_deal(
+                MethodRequest(task, agents, FAST, preds, sa_plan=sa.planner_calls[0].result)
+            )
+            _check(task.problem, run, preds)
+            assert run.exec_length is not None and run.exec_length <= sa.exec_length
+            if name in BEYOND_YAML:
+                assert run.fallback is None and run.extra["agents_used"] >= 2, (name, agents)
+                assert run.exec_length < sa.exec_length, (name, agents)
+            else:  # every way deals, though no deal is shorter than one flight or 5 steps
+                dealt = [r for r in run.extra["deal"] if r["agents"] > 1]
+                assert all("error" not in r for r in dealt), (name, agents, run.fallback)
+
+
 # ------------------------------------------------ bits against the grounded model itself
 
 
