@@ -348,6 +348,51 @@ def test_walks_that_change_shared_facts_deal(tmp_path: Path) -> None:
         assert run.exec_length == 5 and run.extra["agents_used"] == 2 and run.fallback is None
 
 
+def test_walks_that_reach_goal_facts_are_walked_at_the_end(tmp_path: Path) -> None:
+    # The hall corridor again, but the cells the robot paints from must end up empty:
+    # goal (painted c0) (painted c6) (empty c1) (empty c5). The SA plan (by hand): left
+    # two steps, paint c0, step off c1; right three steps, paint c6, step off c5: 10
+    # actions, 8 of them steps. The steps off c1 and c5 lead to no acting action, so no
+    # walk to a piece brings them back (before the fix no deal reached the goal and the
+    # run fell back to the SA plan). Two agents: each paints one end and steps off the
+    # cell it painted from (step, step, paint, step back): 4 steps.
+    cells = [f"c{i}" for i in range(7)]
+    empty = " ".join(f"(empty {c})" for c in cells if c != "c3")
+    problem = (
+        f"(define (problem corridor) (:domain hall) (:objects {' '.join(cells)} - cell) "
+        f"(:init (at c3) {empty} {_line(cells, 'adj')}) "
+        "(:goal (and (painted c0) (painted c6) (empty c1) (empty c5))))"
+    )
+    task = _own_task(tmp_path, "hall", HALL, problem)
+    plan = (
+        "(step c3 c2)", "(step c2 c1)", "(paint c1 c0)", "(step c1 c2)", "(step c2 c3)",
+        "(step c3 c4)", "(step c4 c5)", "(paint c5 c6)", "(step c5 c4)",
+    )  # fmt: skip
+    for agents in (2, 3):
+        run = run_plan_deal(MethodRequest(task, agents, FAST, ["at"], sa_plan=sa_result(plan)))
+        _check(task.problem, run, ["at"])
+        assert run.fallback is None and run.extra["agents_used"] == 2
+        assert run.exec_length == 4
+
+
+def test_an_sa_plan_of_walks_alone_is_dealt(tmp_path: Path) -> None:
+    # The robot only has to leave the middle cell: goal (empty c3). The SA plan is one
+    # step, a walk: no acting action, no piece. The deal walks an agent off at the end;
+    # one step, as the SA plan (before the fix: no deal reached the goal).
+    cells = [f"c{i}" for i in range(3)]
+    problem = (
+        f"(define (problem off) (:domain hall) (:objects {' '.join(cells)} - cell) "
+        f"(:init (at c1) (empty c0) (empty c2) {_line(cells, 'adj')}) "
+        "(:goal (empty c1)))"
+    )
+    task = _own_task(tmp_path, "hall", HALL, problem)
+    run = run_plan_deal(MethodRequest(task, 2, FAST, ["at"], sa_plan=sa_result(("(step c1 c0)",))))
+    assert run.exec_length == 1 and run.fallback is not None
+    assert "no deal shorter" in run.fallback  # dealt, just not shorter
+    assert all("error" not in row for row in run.extra["deal"])
+    _check(task.problem, run, ["at"])
+
+
 # lift: our own elevator. ``halt`` has only conditional effects (riders whose target this
 # is get off and are done, riders waiting here who are not done get in); a rider inside
 # is what the lift carries, not where it is, though ``halt`` both adds and deletes it.
@@ -604,6 +649,41 @@ def test_ipc_sample_domains_deal_to_two_agents(tmp_path: Path) -> None:
         # there the grounded-task simulator alone checks, as in tests/test_conformance.py
         readers = "grounded-task simulator" + ("" if name == "storage" else " + unified-planning")
         assert verdict.checkers.startswith(readers), (name, verdict.checkers)
+
+
+# Sample domains beyond agents.yaml, with agent predicates read from their domain files
+# (the acting object's own state, none shared with other objects): their p01 leaves work
+# to a second agent.
+BEYOND_YAML = {
+    "depot": ["available", "lifting"],
+    "rovers": ["at"],
+    "elevators-sat08-strips": ["lift-at", "boarded", "passengers"],
+    "citycar-sat14-adl": ["at_car_jun", "at_car_road", "starting"],
+}
+# ... and p01s whose SA plan ends on walks that reach goal facts (zenotravel's one flight,
+# tpp's unload counted as a move): before the closing walk no deal reached the goal.
+GOAL_BY_WALKS = {"zenotravel": ["fuel-level", "in"], "tpp": ["at", "loaded"]}
+
+
+@needs_sample
+@pytest.mark.slow
+def test_ipc_sample_domains_beyond_agents_yaml_deal() -> None:
+    for name, preds in {**BEYOND_YAML, **GOAL_BY_WALKS}.items():
+        task = load_task(name, 1, SAMPLE)
+        sa = run_single_agent(MethodRequest(task, planner=FAST))
+        assert sa.exec_length is not None, name
+        for agents in (2, 3):
+            run = run_plan_deal(
+                MethodRequest(task, agents, FAST, preds, sa_plan=sa.planner_calls[0].result)
+            )
+            _check(task.problem, run, preds)
+            assert run.exec_length is not None and run.exec_length <= sa.exec_length
+            if name in BEYOND_YAML:
+                assert run.fallback is None and run.extra["agents_used"] >= 2, (name, agents)
+                assert run.exec_length < sa.exec_length, (name, agents)
+            else:  # every way deals, though no deal is shorter than one flight or 5 steps
+                dealt = [r for r in run.extra["deal"] if r["agents"] > 1]
+                assert all("error" not in r for r in dealt), (name, agents, run.fallback)
 
 
 # ------------------------------------------------ bits against the grounded model itself

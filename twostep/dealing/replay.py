@@ -6,7 +6,9 @@ order allows). Before each action its agent walks, where needed, to a place wher
 action applies (:class:`~twostep.dealing.walks.Walker`). A piece whose agent cannot get
 there yet *waits*: the next piece the order allows goes first. When no waiting piece can
 go, the first one is *handed* to another agent that can reach it (the least busy first).
-The replay is a sequential run of all agents' plans, checked step by step; its time steps
+When the SA plan's walks reached goal facts themselves, an agent walks there at the end
+(:func:`~twostep.dealing.walks.closing_walk`). The replay is a sequential run of all
+agents' plans, checked step by step; its time steps
 come from :func:`~twostep.dealing.timeline.earliest_steps`.
 """
 
@@ -17,7 +19,7 @@ from collections.abc import Sequence
 from twostep.dealing.cleanup import JointRun
 from twostep.dealing.encoding import GoalBits, Owns, Step
 from twostep.dealing.model import DealError
-from twostep.dealing.walks import Walker
+from twostep.dealing.walks import Walker, closing_walk
 
 
 def replay_piece(
@@ -79,7 +81,7 @@ class Replay:
             pending.remove(p)
             done.add(p)
         if not self.goal.holds(env, owns):
-            raise DealError("the dealt plans do not reach the goal")
+            joint.extend(closing_walk(self.walker, self.goal, env, owns, load))
         return joint, owner
 
     def _try(

@@ -14,7 +14,8 @@ piece before.
 
 When no agent can act, the first piece whose agent cannot reach it is *handed* to an agent
 that can (an idle one, the least busy first); when there is none, the deal fails
-(:class:`~twostep.dealing.model.DealError`).
+(:class:`~twostep.dealing.model.DealError`). When the SA plan's walks reached goal facts
+themselves, an agent walks there after the last piece (:func:`~twostep.dealing.walks.closing_walk`).
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from dataclasses import dataclass, field
 
 from twostep.dealing.encoding import GoalBits, Step
 from twostep.dealing.model import DealError
-from twostep.dealing.walks import Walker
+from twostep.dealing.walks import Walker, closing_walk
 
 JointSteps = list[list[tuple[int, Step]]]
 """Per time step: the (agent, step) pairs that act in it."""
@@ -126,7 +127,10 @@ class _Run:
                 left -= self._take(a, step, len(timeline))
             timeline.append(taken)
         if not self.goal.holds(self.env, self.owns):
-            raise DealError("the dealt plans do not reach the goal")
+            busy = [agent.busy for agent in crew]
+            for a, step in closing_walk(self.walker, self.goal, self.env, self.owns, busy):
+                self.env, self.owns[a] = step.apply(self.env, self.owns[a])
+                timeline.append([(a, step)])
         return timeline, self.owner
 
     def _take(self, a: int, step: Step, now: int) -> int:

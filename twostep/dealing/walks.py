@@ -15,9 +15,9 @@ action's possible effects count, conditional ones included.
 from __future__ import annotations
 
 from collections import defaultdict, deque
-from collections.abc import Collection
+from collections.abc import Callable, Collection, Sequence
 
-from twostep.dealing.encoding import FactSpace, Step
+from twostep.dealing.encoding import FactSpace, GoalBits, Step
 from twostep.dealing.model import DealError, cpu_seconds
 from twostep.pddl import Domain, Fact, Problem
 from twostep.pddl.model import ActionSchema
@@ -176,15 +176,31 @@ class Walker:
         agent = self.space.agent_predicates
         needed = {slot(f) for f in target.action.pre_positive if f[0] in agent}
         try:
-            return self._search(env, own, target, needed)
+            return self._search(env, own, target.applicable, needed, str(target))
         except DealError:
             if all(needed >= self.moved(s) for s in self.candidates(own)[0]):
                 raise  # every move was tried already
-            return self._search(env, own, target, None)
+            return self._search(env, own, target.applicable, None, str(target))
         finally:
             self.search_s += cpu_seconds() - began
 
-    def _search(self, env: int, own: int, target: Step, needed: set[Fact] | None) -> list[Step]:
+    def walk_until(self, env: int, own: int, reached: Callable[[int, int], bool]) -> list[Step]:
+        """The shortest walk (any move) to a state where ``reached`` holds (raise
+        :class:`DealError`)."""
+        began = cpu_seconds()
+        try:
+            return self._search(env, own, reached, None, "the goal")
+        finally:
+            self.search_s += cpu_seconds() - began
+
+    def _search(
+        self,
+        env: int,
+        own: int,
+        reached: Callable[[int, int], bool],
+        needed: set[Fact] | None,
+        target: str,
+    ) -> list[Step]:
         """Breadth-first search over the moves that change ``needed`` slots (None: all)."""
         # states that differ in harmless facts alone count as one (a walk that visits
         # cells would otherwise make every path a state of its own)
@@ -196,7 +212,7 @@ class Walker:
         queue = deque([start])
         while queue:
             node = queue.popleft()
-            if target.applicable(*node):
+            if reached(*node):
                 path: list[Step] = []
                 key = (node[0] & relevant, node[1])
                 while (entry := parents[key]) is not None:
@@ -214,3 +230,61 @@ class Walker:
                     parents[key] = ((node[0] & relevant, node[1]), step)
                     queue.append(child)
         raise DealError(f"no walk to where {target} applies")
+
+
+def closing_walk(
+    walker: Walker, goal: GoalBits, env: int, owns: Sequence[int], load: Sequence[int]
+) -> list[tuple[int, Step]]:
+    """Walks after which the goal holds: when the SA plan's walks reach goal facts
+    themselves (an aircraft's last flight, a robot stepping off a cell that must end up
+    empty), no acting action leads there. Each agent whose own goal facts fail walks to
+    where they hold; then, for each environment goal literal still false, an agent walks
+    to where it holds, keeping the goal literals that hold already (the least busy agent
+    first); last, if the goal still fails (a goal that reads derived facts), one agent
+    walks to where it holds.
+    :class:`DealError` when there is no such walk."""
+    owns, joint = list(owns), []
+    order = sorted(range(len(owns)), key=lambda a: (load[a], a))
+
+    def mine(own: int) -> bool:
+        return own & goal.pos_own == goal.pos_own and not own & goal.neg_own
+
+    def met(env: int) -> int:
+        return env & goal.pos_env | ~env & goal.neg_env
+
+    def walk(a: int, reached: Callable[[int, int], bool]) -> bool:
+        nonlocal env
+        try:
+            path = walker.walk_until(env, owns[a], reached)
+        except DealError:
+            return False
+        for step in path:
+            env, owns[a] = step.apply(env, owns[a])
+            joint.append((a, step))
+        return True
+
+    if goal.space is None:
+        for a in order:
+            if not mine(owns[a]) and not walk(a, lambda _, own: mine(own)):
+                raise DealError("the dealt plans do not reach the goal")
+        missing = (goal.pos_env | goal.neg_env) & ~met(env)
+        while missing:
+            bit = missing & -missing
+            missing &= ~bit
+            want = met(env) | bit
+
+            def kept(env: int, own: int, want: int = want) -> bool:
+                return met(env) & want == want and mine(own)
+
+            if not any(walk(a, kept) for a in order):  # nor does any walk to the whole goal
+                raise DealError("the dealt plans do not reach the goal")
+    if goal.holds(env, owns):
+        return joint
+    for a in order:
+
+        def reached(env: int, own: int, a: int = a) -> bool:
+            return goal.holds(env, [own if b == a else o for b, o in enumerate(owns)])
+
+        if walk(a, reached):
+            return joint
+    raise DealError("the dealt plans do not reach the goal")

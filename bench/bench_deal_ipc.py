@@ -1,0 +1,334 @@
+"""plan-deal on real IPC domains the project never tuned for (beyond the sample's agents.yaml).
+
+For each domain of the IPC sample (read in place, ``--sample``, default ../shared/ipc-sample)
+and the agent predicates chosen below from its domain file (the facts that say what the
+acting object's own state is, none shared with other objects), the SA plan (lama-first,
+``--time-limit`` s) is dealt to N = 2 and 3 agents by plan-deal. Every schedule, a fallback
+to the SA plan included, is re-validated twice: by ``check_run`` (our simulator) and by
+unified-planning's validator on the N-agent compilation of the task, with the schedule's
+parallel steps laid out one after the other (as in tests/test_plan_split.py).
+
+Prints one row per domain, agent predicates and N: SA length, plan-deal length, the
+fallback reason if any, both verdicts, the dealing CPU seconds (every phase after the SA
+plan, scoring included). A crash (an exception out of plan-deal) or a deal that takes more
+than ``--deal-limit`` s is a row too. Domains whose SA plan takes longer than the limit are
+skipped.
+
+    .venv/bin/python bench/bench_deal_ipc.py > docs/bench/deal_ipc.txt
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import signal
+import sys
+import tempfile
+import time
+import traceback
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from types import FrameType
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from twostep.benchmark import BenchmarkTask, load_task
+from twostep.methods import MethodRequest, RunResult, check_run, run_single_agent
+from twostep.methods.plan_deal import run_plan_deal
+from twostep.multiagent import compile_multi_agent_problem
+from twostep.planner import PlannerSettings
+from twostep.strips import parse_action
+from twostep.validation import validate_plan
+
+REPO = Path(__file__).resolve().parent.parent
+SAMPLE = REPO.parent / "shared" / "ipc-sample"
+
+# Agent predicates per domain, read from each domain file: the acting object's own state.
+# Where several objects of the agent's kind exist (rovers, satellites, elevators, hoists),
+# each agent has its own copy of all of them, as floortile's agents have both robots.
+# A predicate shared by the agents' objects and others (depot's, driverlog's, zenotravel's,
+# transport's, nomystery's and sokoban's ``at``, which also places crates, packages,
+# persons or stones) gives each agent its own copy of where the cargo is: the compilation
+# reads it so, and the second row of such a domain probes that reading. airport's second
+# row makes the goal (is-parked) an agent fact, which every agent must then reach.
+ROVER = ["at", "have_soil_analysis", "have_rock_analysis", "have_image", "calibrated"]
+ROVER += ["empty", "full"]  # its store
+CASES: dict[str, list[list[str]]] = {
+    "depot": [["available", "lifting"], ["at", "available", "lifting"]],
+    "driverlog": [["driving"], ["at", "driving"]],
+    "rovers": [["at"], ROVER],
+    "satellite": [["pointing", "power_avail", "power_on", "calibrated"]],
+    "zenotravel": [["fuel-level", "in"], ["at", "fuel-level", "in"]],
+    "tpp": [["at", "loaded"]],
+    "transport-sat08-strips": [["in", "capacity"], ["at", "in", "capacity"]],
+    "nomystery-sat11-strips": [["in", "fuel"], ["at", "in", "fuel"]],
+    "elevators-sat08-strips": [["lift-at", "boarded", "passengers"]],
+    "miconic-simpleadl": [["lift-at", "boarded"]],
+    "storage": [["at", "available", "lifting"]],
+    "airport-adl": [
+        ["at-segment", "facing", "airborne", "is-moving", "is-pushing"],
+        ["at-segment", "facing", "airborne", "is-moving", "is-pushing", "is-parked"],
+    ],
+    "sokoban-sat08-strips": [["at"]],
+    "citycar-sat14-adl": [["at_car_jun", "at_car_road", "starting"]],
+    "childsnack-sat14-strips": [["at"]],
+    "floortile-sat11-strips": [["robot-at", "robot-has", "free-color"]],
+    # no acting agent in these: robustness probes (derived predicates that read an agent
+    # predicate become agent facts too; conditional effects under quantifiers)
+    "psr-middle": [["closed"]],
+    "philosophers": [["at-process"]],
+    "schedule": [["busy"]],
+    "openstacks-sat08-adl": [["stacks-avail"]],
+    "assembly": [["committed"]],
+    "pipesworld-notankage": [["on"]],
+}
+
+
+# Larger problems of our own for sample domains whose p01 has one object of the agent's
+# kind or a plan with no parallelism (as tests/test_plan_deal.py's storage problem): the
+# domain file is read from the sample, the problem written beside it in a scratch folder.
+def _zenotravel() -> str:
+    levels = " ".join(f"(next fl{i} fl{i + 1})" for i in range(6))
+    levels += " " + " ".join(f"(flevel fl{i})" for i in range(7))
+    people = {"person1": ("city0", "city1"), "person2": ("city0", "city2"),
+              "person3": ("city2", "city1"), "person4": ("city1", "city0")}  # fmt: skip
+    init = [levels, "(city city0) (city city1) (city city2)"]
+    init += ["(aircraft plane1) (at plane1 city0) (fuel-level plane1 fl3)"]
+    init += ["(aircraft plane2) (at plane2 city2) (fuel-level plane2 fl3)"]
+    init += [f"(person {p}) (at {p} {a})" for p, (a, _) in people.items()]
+    goal = " ".join(f"(at {p} {b})" for p, (_, b) in people.items())
+    objects = "plane1 plane2 city0 city1 city2 " + " ".join(people)
+    objects += " " + " ".join(f"fl{i}" for i in range(7))
+    return (f"(define (problem zeno-own) (:domain zeno-travel) (:objects {objects}) "
+            f"(:init {' '.join(init)}) (:goal (and {goal})))")  # fmt: skip
+
+
+def _satellite() -> str:
+    init = ["(satellite s0) (satellite s1) (instrument i0) (instrument i1) (mode m0)"]
+    init += ["(on_board i0 s0) (on_board i1 s1) (supports i0 m0) (supports i1 m0)"]
+    init += ["(power_avail s0) (power_avail s1) (pointing s0 d0) (pointing s1 d0)"]
+    init += ["(calibration_target i0 d1) (calibration_target i1 d1)"]
+    init += [f"(direction d{k})" for k in range(6)]
+    goal = " ".join(f"(have_image d{k} m0)" for k in range(2, 6))
+    objects = "s0 s1 i0 i1 m0 " + " ".join(f"d{k}" for k in range(6))
+    return (f"(define (problem sat-own) (:domain satellite) (:objects {objects}) "
+            f"(:init {' '.join(init)}) (:goal (and {goal})))")  # fmt: skip
+
+
+def _driverlog() -> str:
+    sites = [f"s{k}" for k in range(4)]
+    init = [f"(location {s})" for s in sites]
+    for a, b in [(0, 1), (1, 2), (2, 3), (3, 0)]:
+        init += [f"(link s{a} s{b}) (link s{b} s{a}) (location p{a}{b})",
+                 f"(path s{a} p{a}{b}) (path p{a}{b} s{a}) (path s{b} p{a}{b}) (path p{a}{b} s{b})"]  # fmt: skip
+    init += ["(driver d1) (driver d2) (at d1 s0) (at d2 s2)"]
+    init += ["(truck t1) (truck t2) (empty t1) (empty t2) (at t1 s0) (at t2 s2)"]
+    cargo = {"k1": ("s0", "s1"), "k2": ("s1", "s0"), "k3": ("s2", "s3"), "k4": ("s3", "s2")}
+    init += [f"(obj {k}) (at {k} {a})" for k, (a, _) in cargo.items()]
+    goal = " ".join(f"(at {k} {b})" for k, (_, b) in cargo.items())
+    objects = " ".join([*sites, "p01 p12 p23 p30 d1 d2 t1 t2", *cargo])
+    return (f"(define (problem dl-own) (:domain driverlog) (:objects {objects}) "
+            f"(:init {' '.join(init)}) (:goal (and {goal})))")  # fmt: skip
+
+
+def _depot() -> str:
+    places = ["depot0", "distributor0", "distributor1"]
+    init = ["(place depot0) (depot depot0) (place distributor0) (distributor distributor0)",
+            "(place distributor1) (distributor distributor1)"]  # fmt: skip
+    for k, place in enumerate(places):
+        init += [f"(pallet pallet{k}) (surface pallet{k}) (at pallet{k} {place})",
+                 f"(hoist hoist{k}) (locatable hoist{k}) (at hoist{k} {place}) (available hoist{k})"]  # fmt: skip
+    init += ["(truck truck0) (locatable truck0) (at truck0 depot0)",
+             "(truck truck1) (locatable truck1) (at truck1 distributor1)"]  # fmt: skip
+    # two stacks of two crates: crate0 on crate1 on pallet0, crate2 on crate3 on pallet2
+    stacks = {"crate1": "pallet0", "crate0": "crate1", "crate3": "pallet2", "crate2": "crate3"}
+    where = {"crate0": "depot0", "crate1": "depot0", "crate2": "distributor1",
+             "crate3": "distributor1"}  # fmt: skip
+    for crate, below in stacks.items():
+        init += [f"(crate {crate}) (surface {crate}) (locatable {crate})",
+                 f"(at {crate} {where[crate]}) (on {crate} {below})"]  # fmt: skip
+    init += ["(clear crate0) (clear crate2) (clear pallet1)"]
+    goal = "(on crate1 pallet1) (on crate3 crate1) (on crate0 pallet2) (on crate2 pallet0)"
+    objects = " ".join([*places, "truck0 truck1 pallet0 pallet1 pallet2", *stacks,
+                        "hoist0 hoist1 hoist2"])  # fmt: skip
+    return (f"(define (problem depot-own) (:domain Depot) (:objects {objects}) "
+            f"(:init {' '.join(init)}) (:goal (and {goal})))")  # fmt: skip
+
+
+def _rovers() -> str:
+    points = [f"waypoint{k}" for k in range(4)]
+    init = [f"(visible {a} {b})" for a in points for b in points if a != b]
+    init += [f"(visible_from objective{o} {w})" for o in (0, 1) for w in points]
+    init += [f"(at_soil_sample {w})" for w in points] + [f"(at_rock_sample {w})" for w in points]
+    init += ["(at_lander general waypoint0) (channel_free general)"]
+    for r, start in ((0, 3), (1, 1)):
+        init += [f"(at rover{r} waypoint{start}) (available rover{r})",
+                 f"(store_of rover{r}store rover{r}) (empty rover{r}store)",
+                 f"(equipped_for_soil_analysis rover{r}) (equipped_for_rock_analysis rover{r})",
+                 f"(equipped_for_imaging rover{r}) (on_board camera{r} rover{r})",
+                 f"(calibration_target camera{r} objective1) (supports camera{r} high_res)"]  # fmt: skip
+        for a, b in ((3, 0), (3, 1), (1, 2), (0, 1)):
+            init += [f"(can_traverse rover{r} waypoint{a} waypoint{b})",
+                     f"(can_traverse rover{r} waypoint{b} waypoint{a})"]  # fmt: skip
+    goal = [f"(communicated_soil_data waypoint{w})" for w in (0, 2, 3)]
+    goal += [f"(communicated_rock_data waypoint{w})" for w in (1, 3)]
+    goal += ["(communicated_image_data objective0 high_res)"]
+    objects = ("general - Lander colour high_res low_res - Mode rover0 rover1 - Rover "
+               "rover0store rover1store - Store camera0 camera1 - Camera "
+               "objective0 objective1 - Objective " + " ".join(points) + " - Waypoint")  # fmt: skip
+    return (f"(define (problem rovers-own) (:domain Rover) (:objects {objects}) "
+            f"(:init {' '.join(init)}) (:goal (and {' '.join(goal)})))")  # fmt: skip
+
+
+OWN = {"zenotravel": _zenotravel, "satellite": _satellite, "driverlog": _driverlog,
+       "depot": _depot, "rovers": _rovers}  # fmt: skip
+
+
+class Timeout(Exception):
+    pass
+
+
+@contextmanager
+def time_limit(seconds: int) -> Iterator[None]:
+    def expire(signum: int, frame: FrameType | None) -> None:
+        raise Timeout(f"over {seconds} s")
+
+    previous = signal.signal(signal.SIGALRM, expire)
+    signal.alarm(seconds)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def up_verdict(task: BenchmarkTask, run: RunResult, preds: Sequence[str]) -> str:
+    """unified-planning's verdict on the schedule in the N-agent compilation."""
+    try:
+        compiled, names = compile_multi_agent_problem(task.problem, len(run.agent_order), preds)
+        index = {agent: i for i, agent in enumerate(run.agent_order)}
+        sequential = []
+        for step in run.schedule:
+            for agent, action in step:
+                name, args = parse_action(action)
+                sequential.append("(" + " ".join((name, names[index[agent]], *args)) + ")")
+        verdict = validate_plan(compiled, sequential)
+    except Exception as error:  # a reader that cannot read the task: no verdict
+        return f"n/a ({type(error).__name__}: {str(error).splitlines()[0][:60]})"
+    return "ok" if verdict.valid else f"INVALID ({verdict.message[:80]})"
+
+
+def our_verdict(task: BenchmarkTask, run: RunResult, preds: Sequence[str]) -> str:
+    try:
+        check_run(task.problem, run, preds)
+    except Exception as error:
+        return f"INVALID ({type(error).__name__}: {str(error)[:80]})"
+    return "ok"
+
+
+def deal_seconds(run: RunResult) -> float:
+    return float(sum(run.extra.get("deal_seconds", {}).values()))
+
+
+def fallback_text(run: RunResult) -> str:
+    """The fallback's reason, and each distinct error of the deals once."""
+    fallback = run.fallback
+    if not fallback:
+        return "-"
+    errors = sorted({str(r["error"]) for r in run.extra.get("deal", []) if "error" in r})
+    reason = getattr(fallback, "reason", fallback)
+    return str(reason) + (f" [{'; '.join(errors)}]" if errors else "")
+
+
+def tasks_of(
+    domain: str, sample: Path, scratch: Path, own: bool
+) -> list[tuple[str, BenchmarkTask]]:
+    """The sample's p01 of ``domain``, and our own problem for it (:data:`OWN`)."""
+    tasks = [("p01", load_task(domain, 1, sample))]
+    if own and domain in OWN:
+        folder = scratch / domain
+        folder.mkdir(parents=True, exist_ok=True)
+        shutil.copy(sample / domain / "domain.pddl", folder / "domain.pddl")
+        (folder / "p01.pddl").write_text(OWN[domain]())
+        tasks.append(("own", load_task(domain, 1, scratch)))
+    return tasks
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sample", type=Path, default=SAMPLE)
+    parser.add_argument("--domains", nargs="*", default=list(CASES))
+    parser.add_argument("--agents", type=int, nargs="*", default=[2, 3])
+    parser.add_argument("--time-limit", type=float, default=30.0, help="SA planner seconds")
+    parser.add_argument("--deal-limit", type=int, default=60, help="seconds per plan-deal run")
+    parser.add_argument("--no-own", action="store_true", help="the sample's p01 files only")
+    args = parser.parse_args(argv)
+    planner = PlannerSettings("lama-first", args.time_limit)
+    shown = " ".join(a for a in (argv if argv is not None else sys.argv[1:]))
+    print(f".venv/bin/python bench/bench_deal_ipc.py {shown}".rstrip())
+    print(f"sample: {args.sample.name}, p01 of each domain and our own problems (own); "
+          f"SA lama-first {args.time_limit:g} s")  # fmt: skip
+    header = ("domain", "task", "agent predicates", "N", "SA", "deal", "fallback", "check_run",
+              "unified-planning", "deal CPU s")  # fmt: skip
+    print(" | ".join(header))
+    began = time.perf_counter()
+    lines = []
+    with tempfile.TemporaryDirectory() as scratch:
+        for domain in args.domains:
+            for name, task in tasks_of(domain, args.sample, Path(scratch), not args.no_own):
+                for line in rows(domain, name, task, planner, args.agents, args.deal_limit):
+                    print(line, flush=True)
+                    lines.append(line.split(" | "))
+    runs = [c for c in lines if len(c) == len(header)]
+    dealt = [c for c in runs if c[6] == "-" and c[5].isdigit() and int(c[5]) < int(c[4])]
+    print(f"{len(runs)} runs: {len(dealt)} dealt shorter than SA, "
+          f"{sum(c[5] == 'CRASH' for c in runs)} crashed, "
+          f"{sum('INVALID' in c[7] or 'INVALID' in c[8] for c in runs)} invalid, "
+          f"{sum(c[8].startswith('n/a') for c in runs)} not read by unified-planning; "
+          f"total {time.perf_counter() - began:.0f} s")  # fmt: skip
+    return 0
+
+
+def rows(
+    domain: str,
+    name: str,
+    task: BenchmarkTask,
+    planner: PlannerSettings,
+    agent_counts: Sequence[int],
+    deal_limit: int,
+) -> Iterator[str]:
+    """The table's rows for one task: each agent predicate set and N."""
+    try:
+        sa = run_single_agent(MethodRequest(task, planner=planner))
+    except Exception as error:
+        yield f"{domain} | {name} | - | - | SA error: {type(error).__name__}: {error}"[:200]
+        return
+    if sa.exec_length is None:
+        yield f"{domain} | {name} | - | - | no SA plan ({sa.message[:80]})"
+        return
+    sa_plan = sa.planner_calls[0].result
+    for preds in CASES[domain]:
+        for agents in agent_counts:
+            label = ",".join(preds)
+            request = MethodRequest(task, agents, planner, preds, sa_plan=sa_plan)
+            start = time.process_time()
+            try:
+                with time_limit(deal_limit):
+                    run = run_plan_deal(request)
+            except Exception as error:
+                spent = time.process_time() - start
+                where = traceback.extract_tb(error.__traceback__)[-1]
+                yield (f"{domain} | {name} | {label} | {agents} | {sa.exec_length} | CRASH | "
+                       f"{type(error).__name__}: {str(error)[:100]} "
+                       f"({Path(where.filename).name}:{where.lineno}) | - | - | {spent:.2f}")  # fmt: skip
+                continue
+            yield " | ".join(str(x) for x in (
+                domain, name, label, agents, sa.exec_length, run.exec_length,
+                fallback_text(run), our_verdict(task, run, preds), up_verdict(task, run, preds),
+                f"{deal_seconds(run):.2f}",
+            ))  # fmt: skip
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
