@@ -193,7 +193,8 @@ def test_installed_wheel_runs_the_demo_from_a_fresh_directory(tmp_path: Path) ->
     """`uv build`; a new virtual environment with the locked dependencies (offline, from
     uv's cache) and the wheel (no source tree); the demo, --version and --help from an
     empty directory."""
-    uv = os.environ.get("UV") or "uv"
+    # uv as `make` finds it: $UV, the one on PATH, else the Makefile's private copy
+    uv = os.environ.get("UV") or shutil.which("uv") or str(REPO / ".uv-bootstrap" / "bin" / "uv")
     dist, venv, work = tmp_path / "dist", tmp_path / "venv", tmp_path / "work"
     work.mkdir()
     # Built from a copy of the sources: a build writes twostep.egg-info beside the packages,
