@@ -9,19 +9,15 @@ where Chromium is not installed (``apt-get install -y chromium``).
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from flows import services
-from flows.sweep_state import SweepState
-from flows.tracking.runs import sweep_run_ids
-from tests.browser import Browser, chromium_binary
+from tests.browser import Browser
+from tests.ui_sweep import ui_sweep
 
-REPO = Path(__file__).resolve().parent.parent
+SWEEP = ["domain=grippers", "task=1", "method=sa,twostep", "agents=2", "decomposer=goal-split"]
 JOBS = ["grippers-p01-sa-n1-s0 (grid N=2)", "grippers-p01-twostep-n2-s0"]
 FLOW_RUNS = ["grippers-p01-sa-n2-s0", "grippers-p01-twostep-n2-s0"]
 EXPAND = (  # MLflow: open the sweep's parent run (its job runs are children), close the assistant
@@ -35,41 +31,19 @@ EXPAND = (  # MLflow: open the sweep's parent run (its job runs are children), c
 @pytest.mark.slow
 @pytest.mark.integration
 def test_flow_runs_in_prefect_and_job_runs_in_mlflow(data_root: Path, tmp_path: Path) -> None:
-    assert data_root.is_dir()
-    binary = chromium_binary()
-    if binary is None:
-        pytest.skip("no Chromium here: apt-get install -y chromium (the UI test needs a browser)")
-    shots = Path(os.environ.get("TWOSTEP_UI_SCREENSHOTS") or tmp_path)
-    shots.mkdir(parents=True, exist_ok=True)
-    root = tmp_path / "out"
-    try:
-        running = services.up(root, timeout_s=240)
-        # The console script, as a user runs it (its name is the runs' mlflow.source.name);
-        # the package's own data (data_root: skip when it is not there).
-        done = subprocess.run(
-            [str(Path(sys.executable).parent / "twostep"), "-m", "domain=grippers", "task=1",
-             "method=sa,twostep", "agents=2", "decomposer=goal-split", f"output.root={root}"],
-            capture_output=True, text=True, cwd=REPO, timeout=600,
-        )  # fmt: skip
-        assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
-        assert "prefect UI: " in done.stdout and "mlflow UI: " in done.stdout
-        (sweep_dir,) = root.glob("multiruns/*/*")
-        state = SweepState.load(sweep_dir)
-        assert state is not None and (sweep_dir / "results.csv").is_file()
-        ids = sweep_run_ids(state)
-        assert ids is not None
-
-        browser = Browser(binary, tmp_path / "chromium")
+    assert data_root.is_dir()  # the package's own data (data_root: skip when it is not there)
+    with ui_sweep(tmp_path, SWEEP, timeout_s=600) as sweep:
+        assert "prefect UI: " in sweep.output and "mlflow UI: " in sweep.output
+        assert (sweep.sweep_dir / "results.csv").is_file()
+        browser = Browser(sweep.binary, tmp_path / "chromium")
         try:
-            browser.open(running["prefect"].ui_url)
+            browser.open(sweep.running["prefect"].ui_url)
             browser.wait_for(["Completed", *FLOW_RUNS])
-            browser.screenshot(shots / "ui-prefect-flow-runs.png")
+            browser.screenshot(sweep.shots / "ui-prefect-flow-runs.png")
 
-            browser.open(services.experiment_page(running["mlflow"].url, ids[0]))
+            browser.open(services.experiment_page(sweep.running["mlflow"].url, sweep.parent_run_id))
             # The runs table (its "Run Name" column), not the GenAI overview; the job runs.
             browser.wait_for(["Run Name", *JOBS], action=EXPAND)
-            browser.screenshot(shots / "ui-mlflow-runs.png")
+            browser.screenshot(sweep.shots / "ui-mlflow-runs.png")
         finally:
             browser.close()
-    finally:
-        services.down(root)

@@ -20,10 +20,7 @@ from __future__ import annotations
 import csv
 import json
 import math
-import os
 import re
-import subprocess
-import sys
 import time
 from collections import defaultdict
 from pathlib import Path
@@ -33,11 +30,9 @@ from urllib.parse import parse_qs, urlsplit
 import pytest
 
 from flows import services
-from flows.sweep_state import SweepState
-from flows.tracking.runs import sweep_run_ids
-from tests.browser import Browser, chromium_binary
+from tests.browser import Browser
+from tests.ui_sweep import ui_sweep
 
-REPO = Path(__file__).resolve().parent.parent
 SWEEP = ["domain=grippers", "task=1,2", "method=sa,twostep", "agents=2,3", "decomposer=goal-split"]
 METRICS = ("exec_length", "planning_time_s")
 JOB_RUNS = "tags.twostep.kind = 'job'"  # the runs filter the README gives
@@ -200,36 +195,17 @@ def compare_in_mlflow(
 @pytest.mark.integration
 def test_compare_methods_by_agents_in_the_mlflow_ui(data_root: Path, tmp_path: Path) -> None:
     assert data_root.is_dir()
-    binary = chromium_binary()
-    if binary is None:
-        pytest.skip("no Chromium here: apt-get install -y chromium (the UI test needs a browser)")
-    shots = Path(os.environ.get("TWOSTEP_UI_SCREENSHOTS") or tmp_path)
-    shots.mkdir(parents=True, exist_ok=True)
-    root = tmp_path / "out"
-    try:
-        running = services.up(root, timeout_s=240)
-        done = subprocess.run(
-            [str(Path(sys.executable).parent / "twostep"), "-m", *SWEEP, f"output.root={root}"],
-            capture_output=True, text=True, cwd=REPO, timeout=900,
-        )  # fmt: skip
-        assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
-        (sweep_dir,) = root.glob("multiruns/*/*")
-        state = SweepState.load(sweep_dir)
-        assert state is not None
-        ids = sweep_run_ids(state)
-        assert ids is not None
-        expected = expected_groups(sweep_dir)
+    with ui_sweep(tmp_path, SWEEP, timeout_s=900) as sweep:
+        expected = expected_groups(sweep.sweep_dir)
         assert sorted(expected) == [("sa", 1), ("twostep", 2), ("twostep", 3)]
-        assert summary_rows(sweep_dir) == {k: v["exec_length"] for k, v in expected.items()}
+        assert summary_rows(sweep.sweep_dir) == {k: v["exec_length"] for k, v in expected.items()}
 
-        browser = Browser(binary, tmp_path / "chromium", size=(1400, 1000))
+        browser = Browser(sweep.binary, tmp_path / "chromium", size=(1400, 1000))
         try:
-            page = services.experiment_page(running["mlflow"].url, ids[0])
-            groups, bars, scatter = compare_in_mlflow(browser, page, shots)
+            page = services.experiment_page(sweep.running["mlflow"].url, sweep.parent_run_id)
+            groups, bars, scatter = compare_in_mlflow(browser, page, sweep.shots)
         finally:
             browser.close()
-    finally:
-        services.down(root)
 
     # The table's groups: one per (method, N), its run count and averages.
     assert set(groups) == set(expected)
