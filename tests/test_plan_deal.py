@@ -320,20 +320,25 @@ def test_walks_that_mark_spots_split_a_round(tmp_path: Path) -> None:
         assert run.exec_length == 4 and run.extra["agents_used"] == 2 and run.fallback is None
 
 
+def _hall_task(tmp_path: Path, length: int, robot: int, goal: str) -> BenchmarkTask:
+    """The hall domain on a corridor of cells c0..c<length-1>, the robot on c<robot>, every
+    other cell empty."""
+    cells = [f"c{i}" for i in range(length)]
+    empty = " ".join(f"(empty {c})" for i, c in enumerate(cells) if i != robot)
+    problem = (
+        f"(define (problem corridor) (:domain hall) (:objects {' '.join(cells)} - cell) "
+        f"(:init (at c{robot}) {empty} {_line(cells, 'adj')}) (:goal (and {goal})))"
+    )
+    return _own_task(tmp_path, "hall", HALL, problem)
+
+
 def test_walks_that_change_shared_facts_deal(tmp_path: Path) -> None:
     # Seven cells in a corridor, the robot on the middle one (c3); paint both ends' two
     # cells. The SA plan (by hand): left two steps, paint c0, step back, paint c1, right
     # three steps, paint c6, step back, paint c5: 11 actions. A step changes the shared
     # ``empty`` facts, so walks do too. Two agents: one paints the left end, the other
     # the right end, 5 steps each at once (step, step, paint, step back, paint): 5.
-    cells = [f"c{i}" for i in range(7)]
-    empty = " ".join(f"(empty {c})" for c in cells if c != "c3")
-    problem = (
-        f"(define (problem corridor) (:domain hall) (:objects {' '.join(cells)} - cell) "
-        f"(:init (at c3) {empty} {_line(cells, 'adj')}) "
-        "(:goal (and (painted c0) (painted c1) (painted c5) (painted c6))))"
-    )
-    task = _own_task(tmp_path, "hall", HALL, problem)
+    task = _hall_task(tmp_path, 7, 3, "(painted c0) (painted c1) (painted c5) (painted c6)")
     plan = (
         "(step c3 c2)", "(step c2 c1)", "(paint c1 c0)", "(step c1 c2)", "(paint c2 c1)",
         "(step c2 c3)", "(step c3 c4)", "(step c4 c5)", "(paint c5 c6)", "(step c5 c4)",
@@ -356,14 +361,7 @@ def test_walks_that_reach_goal_facts_are_walked_at_the_end(tmp_path: Path) -> No
     # walk to a piece brings them back (before the fix no deal reached the goal and the
     # run fell back to the SA plan). Two agents: each paints one end and steps off the
     # cell it painted from (step, step, paint, step back): 4 steps.
-    cells = [f"c{i}" for i in range(7)]
-    empty = " ".join(f"(empty {c})" for c in cells if c != "c3")
-    problem = (
-        f"(define (problem corridor) (:domain hall) (:objects {' '.join(cells)} - cell) "
-        f"(:init (at c3) {empty} {_line(cells, 'adj')}) "
-        "(:goal (and (painted c0) (painted c6) (empty c1) (empty c5))))"
-    )
-    task = _own_task(tmp_path, "hall", HALL, problem)
+    task = _hall_task(tmp_path, 7, 3, "(painted c0) (painted c6) (empty c1) (empty c5)")
     plan = (
         "(step c3 c2)", "(step c2 c1)", "(paint c1 c0)", "(step c1 c2)", "(step c2 c3)",
         "(step c3 c4)", "(step c4 c5)", "(paint c5 c6)", "(step c5 c4)",
@@ -379,13 +377,7 @@ def test_an_sa_plan_of_walks_alone_is_dealt(tmp_path: Path) -> None:
     # The robot only has to leave the middle cell: goal (empty c3). The SA plan is one
     # step, a walk: no acting action, no piece. The deal walks an agent off at the end;
     # one step, as the SA plan (before the fix: no deal reached the goal).
-    cells = [f"c{i}" for i in range(3)]
-    problem = (
-        f"(define (problem off) (:domain hall) (:objects {' '.join(cells)} - cell) "
-        f"(:init (at c1) (empty c0) (empty c2) {_line(cells, 'adj')}) "
-        "(:goal (empty c1)))"
-    )
-    task = _own_task(tmp_path, "hall", HALL, problem)
+    task = _hall_task(tmp_path, 3, 1, "(empty c1)")
     run = run_plan_deal(MethodRequest(task, 2, FAST, ["at"], sa_plan=sa_result(("(step c1 c0)",))))
     assert run.exec_length == 1 and run.fallback is not None
     assert "no deal shorter" in run.fallback  # dealt, just not shorter
