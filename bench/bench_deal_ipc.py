@@ -36,10 +36,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from twostep.benchmark import BenchmarkTask, load_task
 from twostep.methods import MethodRequest, RunResult, check_run, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
-from twostep.multiagent import compile_multi_agent_problem
 from twostep.planner import PlannerSettings
-from twostep.strips import parse_action
-from twostep.validation import validate_plan
+from twostep.validation import validate_schedule
 
 REPO = Path(__file__).resolve().parent.parent
 SAMPLE = REPO.parent / "shared" / "ipc-sample"
@@ -206,14 +204,7 @@ def time_limit(seconds: int) -> Iterator[None]:
 def up_verdict(task: BenchmarkTask, run: RunResult, preds: Sequence[str]) -> str:
     """unified-planning's verdict on the schedule in the N-agent compilation."""
     try:
-        compiled, names = compile_multi_agent_problem(task.problem, len(run.agent_order), preds)
-        index = {agent: i for i, agent in enumerate(run.agent_order)}
-        sequential = []
-        for step in run.schedule:
-            for agent, action in step:
-                name, args = parse_action(action)
-                sequential.append("(" + " ".join((name, names[index[agent]], *args)) + ")")
-        verdict = validate_plan(compiled, sequential)
+        verdict = validate_schedule(task.problem, run.agent_order, run.schedule, preds)
     except Exception as error:  # a reader that cannot read the task: no verdict
         return f"n/a ({type(error).__name__}: {str(error).splitlines()[0][:60]})"
     return "ok" if verdict.valid else f"INVALID ({verdict.message[:80]})"

@@ -20,11 +20,9 @@ from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.base import DecompositionRequest
 from twostep.decomposers.plan_split import PlanSplitDecomposer, split_plan
 from twostep.methods import MethodRequest, RunResult, check_run, run_single_agent, run_twostep
-from twostep.multiagent import compile_multi_agent_problem
 from twostep.pddl import Goal, Problem, parse_goal
 from twostep.planner import PlannerSettings, PlanResult, Status
-from twostep.strips import parse_action
-from twostep.validation import validate_plan
+from twostep.validation import validate_schedule
 
 BW = ["arm-empty", "holding"]
 BARMAN = ["handempty", "holding"]
@@ -123,14 +121,7 @@ def up_validate_run(problem: Problem, run: RunResult, agent_predicates: list[str
     In the N-agent compilation every action names its agent; actions of one time step do
     not interfere (the scorer's rule), so any order of them is a valid sequential plan.
     """
-    compiled, names = compile_multi_agent_problem(problem, len(run.agent_order), agent_predicates)
-    index = {agent: i for i, agent in enumerate(run.agent_order)}
-    sequential = []
-    for step in run.schedule:
-        for agent, action in step:
-            name, args = parse_action(action)
-            sequential.append("(" + " ".join((name, names[index[agent]], *args)) + ")")
-    verdict = validate_plan(compiled, sequential)
+    verdict = validate_schedule(problem, run.agent_order, run.schedule, agent_predicates)
     assert verdict.valid, verdict.message
 
 

@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from twostep.multiagent import compile_multi_agent_problem
 from twostep.pddl import Problem, planner_input
 from twostep.strips import parse_action
 
@@ -58,3 +59,22 @@ def validate_plan(problem: Problem, plan: Sequence[str], up_problem: Any = None)
     detail = str(getattr(result, "inapplicable_action", "") or "")
     message = " ".join(str(x) for x in (reason, detail) if x) or "invalid plan"
     return Validation(False, message)
+
+
+def validate_schedule(
+    problem: Problem,
+    agent_order: Sequence[str],
+    schedule: Sequence[Sequence[tuple[str, str]]],
+    agent_predicates: Sequence[str],
+) -> Validation:
+    """unified-planning's verdict on a joint schedule: its steps laid out one after the
+    other in the N-agent compilation, where every action names its agent (actions of one
+    time step do not interfere, so any order of them is a valid sequential plan)."""
+    compiled, names = compile_multi_agent_problem(problem, len(agent_order), agent_predicates)
+    index = {agent: i for i, agent in enumerate(agent_order)}
+    sequential = []
+    for step in schedule:
+        for agent, action in step:
+            name, args = parse_action(action)
+            sequential.append("(" + " ".join((name, names[index[agent]], *args)) + ")")
+    return validate_plan(compiled, sequential)
