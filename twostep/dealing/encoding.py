@@ -97,7 +97,15 @@ class GoalBits:
         if self.space is not None:
             goal, view = self.space.problem.goal, self.space.view
             return all(goal.holds(view(env, own)) for own in owns)
-        return all(own & self.pos_own == self.pos_own and not own & self.neg_own for own in owns)
+        return all(self.own_holds(own) for own in owns)
+
+    def own_holds(self, own: int) -> bool:
+        """Whether one agent's copy meets the goal's agent literals."""
+        return own & self.pos_own == self.pos_own and not own & self.neg_own
+
+    def env_met(self, env: int) -> int:
+        """The bits of the goal's environment literals that hold in ``env``."""
+        return env & self.pos_env | ~env & self.neg_env
 
 
 VIEWS_KEPT = 200_000

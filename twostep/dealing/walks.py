@@ -246,12 +246,6 @@ def closing_walk(
     owns, joint = list(owns), []
     order = sorted(range(len(owns)), key=lambda a: (load[a], a))
 
-    def mine(own: int) -> bool:
-        return own & goal.pos_own == goal.pos_own and not own & goal.neg_own
-
-    def met(env: int) -> int:
-        return env & goal.pos_env | ~env & goal.neg_env
-
     def walk(a: int, reached: Callable[[int, int], bool]) -> bool:
         nonlocal env
         try:
@@ -265,16 +259,16 @@ def closing_walk(
 
     if goal.space is None:
         for a in order:
-            if not mine(owns[a]) and not walk(a, lambda _, own: mine(own)):
+            if not goal.own_holds(owns[a]) and not walk(a, lambda _, own: goal.own_holds(own)):
                 raise DealError("the dealt plans do not reach the goal")
-        missing = (goal.pos_env | goal.neg_env) & ~met(env)
+        missing = (goal.pos_env | goal.neg_env) & ~goal.env_met(env)
         while missing:
             bit = missing & -missing
             missing &= ~bit
-            want = met(env) | bit
+            want = goal.env_met(env) | bit
 
             def kept(env: int, own: int, want: int = want) -> bool:
-                return met(env) & want == want and mine(own)
+                return goal.env_met(env) & want == want and goal.own_holds(own)
 
             if not any(walk(a, kept) for a in order):  # nor does any walk to the whole goal
                 raise DealError("the dealt plans do not reach the goal")
