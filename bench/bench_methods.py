@@ -97,9 +97,13 @@ def data_label(root: Path) -> str:
     return path.relative_to(REPO).as_posix() if path.is_relative_to(REPO) else path.as_posix()
 
 
+def row_data(row: Mapping[str, Any]) -> str:
+    """The data root a row was planned on (rows of the first runs name none: ``data``)."""
+    return str(row.get("data", LEGACY["data"]))
+
+
 def row_key(row: Mapping[str, Any]) -> RowKey:
-    data = str(row.get("data", LEGACY["data"]))
-    return data, row["domain"], int(row["task"]), int(row["agents"]), row["method"]
+    return row_data(row), row["domain"], int(row["task"]), int(row["agents"]), row["method"]
 
 
 def same_settings(row: Mapping[str, Any], alias: str, time_limit_s: float, fallback: bool) -> bool:
@@ -526,19 +530,15 @@ def tyreworld_floor(data: str, task: int) -> int | None:
 
 def one_jack_floor(rows: Sequence[Row], dealt: Sequence[Row]) -> list[str]:
     """How far the tyreworld deals are from :func:`tyreworld_floor` (no lines without them)."""
-    sa = {(str(r.get("data", LEGACY["data"])), r["task"]): r for r in rows
+    sa = {(row_data(r), r["task"]): r for r in rows
           if r["method"] == "sa" and r["domain"] == "tyreworld" and r["valid"]}  # fmt: skip
-    mine = [r for r in dealt if r["domain"] == "tyreworld" and r["valid"]]
-    floors = {key: tyreworld_floor(*key) for key in sa}
-    known = [
-        r for r in mine if floors.get((str(r.get("data", LEGACY["data"])), r["task"])) is not None
-    ]
+    floors = {key: floor for key in sa if (floor := tyreworld_floor(*key)) is not None}
+    known = [r for r in dealt if r["domain"] == "tyreworld" and r["valid"]
+             and (row_data(r), r["task"]) in floors]  # fmt: skip
     if not known:
         return []
-    at = sum(
-        r["exec_length"] == floors[(str(r.get("data", LEGACY["data"])), r["task"])] for r in known
-    )
-    ratio = mean(f / sa[k]["exec_length"] for k, f in floors.items() if f is not None)
+    at = sum(r["exec_length"] == floors[(row_data(r), r["task"])] for r in known)
+    ratio = mean(f / sa[k]["exec_length"] for k, f in floors.items())
     return [f"- tyreworld's one-jack floor (6 per hub + 6 steps, for any N): reached in {at} "
             f"of {len(known)} runs; floor / SA, mean over tasks: {ratio:.3f} (no N lowers it)"]  # fmt: skip
 
@@ -609,8 +609,8 @@ def report_all(
 ) -> str:
     """One :func:`report` per data root (the issue's targets apply to the 100 tasks only)."""
     out = []
-    for label in sorted({str(r.get("data", LEGACY["data"])) for r in rows}):
-        part = [r for r in rows if str(r.get("data", LEGACY["data"])) == label]
+    for label in sorted({row_data(r) for r in rows}):
+        part = [r for r in rows if row_data(r) == label]
         tasks = sorted({(r["domain"], r["task"]) for r in part if r["method"] == "sa"})
         counts: dict[str, int] = defaultdict(int)
         for d, _ in tasks:
