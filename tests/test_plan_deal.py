@@ -27,13 +27,21 @@ from tests.test_plan_split import (
     sa_result,
 )
 from twostep.benchmark import BenchmarkTask, load_task
-from twostep.dealing import Dealer, deal_plan, eliminate_actions, eliminate_joint, walks
+from twostep.dealing import (
+    Dealer,
+    DealError,
+    deal_plan,
+    eliminate_actions,
+    eliminate_joint,
+    walks,
+)
 from twostep.methods import MethodRequest, check_run, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
 from twostep.methods.portfolio import Portfolio, run_portfolio
 from twostep.pddl import Problem
 from twostep.planner import PlannerSettings
 from twostep.strips import GroundAction, Grounder
+from twostep.validation import validate_plan
 
 
 def test_two_towers_dealt_to_two_and_four_agents(tmp_path: Path) -> None:
@@ -330,6 +338,24 @@ def _hall_task(tmp_path: Path, length: int, robot: int, goal: str) -> BenchmarkT
         f"(:init (at c{robot}) {empty} {_line(cells, 'adj')}) (:goal (and {goal})))"
     )
     return _own_task(tmp_path, "hall", HALL, problem)
+
+
+def test_plans_of_agents_that_start_alike_are_stitched_with_walks(tmp_path: Path) -> None:
+    # TwoStep's agents each start on c3. The helper paints c0 from c1; the main agent's
+    # plan starts with a step from c3, where one agent no longer stands: the stitch walks
+    # it back first (c1 -> c2 -> c3), and the result is one plan the task accepts.
+    task = _hall_task(tmp_path, 7, 3, "(painted c0) (painted c6)")
+    helper = ["(step c3 c2)", "(step c2 c1)", "(paint c1 c0)"]
+    main = ["(step c3 c4)", "(step c4 c5)", "(paint c5 c6)"]
+    stitched = walks.stitch(task.problem, [helper, main], ["at"])
+    assert stitched == [*helper, "(step c1 c2)", "(step c2 c3)", *main]
+    assert validate_plan(task.problem, stitched).valid
+    # plans that apply one after the other come back as they are
+    assert walks.stitch(task.problem, [main, ["(step c5 c4)"]], ["at"]) == [*main, "(step c5 c4)"]
+    # a helper that paints its way into c0 boxes the agent in: no walk back to c3
+    boxed = ["(step c3 c2)", "(step c2 c1)", "(step c1 c0)", "(paint c0 c1)"]
+    with pytest.raises(DealError, match="no walk"):
+        walks.stitch(task.problem, [boxed, main], ["at"])
 
 
 def test_walks_that_change_shared_facts_deal(tmp_path: Path) -> None:

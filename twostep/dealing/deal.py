@@ -17,13 +17,11 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 
 from twostep.dealing.cleanup import Elimination
-from twostep.dealing.encoding import FactSpace
 from twostep.dealing.model import Deal, DealError, cpu_seconds
 from twostep.dealing.replay import Replay
 from twostep.dealing.schedule import ListScheduler, PieceOrder, WalkEstimate
 from twostep.dealing.timeline import Timeline, earliest_steps
-from twostep.dealing.walks import Walker, harmless_predicates, is_walking
-from twostep.decomposers.goal_split import positional_predicates
+from twostep.dealing.walks import Walker, is_walking, walking_space
 from twostep.decomposers.plan_split import (
     free_pieces,
     free_states,
@@ -139,13 +137,7 @@ class Dealer:
         self.agent_predicates = tuple(agent_predicates)
         self.seconds: defaultdict[str, float] = defaultdict(float)
         start = cpu_seconds()
-        domain = problem.domain
-        self.space = FactSpace(
-            problem,
-            agent_predicates,
-            positional_predicates(domain),
-            harmless_predicates(domain, agent_predicates),
-        )
+        self.space = walking_space(problem, agent_predicates)
         grounded = Grounder(problem).ground_plan(plan)
         self.init = self.space.bits(problem.init)
         self.goal = self.space.goal()

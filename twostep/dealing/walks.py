@@ -19,12 +19,24 @@ from collections.abc import Callable, Collection, Sequence
 
 from twostep.dealing.encoding import FactSpace, GoalBits, Step
 from twostep.dealing.model import DealError, cpu_seconds
+from twostep.decomposers.goal_split import positional_predicates
 from twostep.pddl import Domain, Fact, Problem
 from twostep.pddl.model import ActionSchema
-from twostep.strips import GroundAction
+from twostep.strips import GroundAction, Grounder
 
 WALK_LIMIT = 20_000
 """States the walking search may visit for one action before the deal gives up."""
+
+
+def walking_space(problem: Problem, agent_predicates: Collection[str]) -> FactSpace:
+    """The task's facts as bits, with the positional and harmless predicates walks use."""
+    domain = problem.domain
+    return FactSpace(
+        problem,
+        agent_predicates,
+        positional_predicates(domain),
+        harmless_predicates(domain, agent_predicates),
+    )
 
 
 def is_walking(step: Step, space: FactSpace) -> bool:
@@ -282,3 +294,30 @@ def closing_walk(
         if walk(a, reached):
             return joint
     raise DealError("the dealt plans do not reach the goal")
+
+
+def stitch(
+    problem: Problem, plans: Sequence[Sequence[str]], agent_predicates: Collection[str]
+) -> list[str]:
+    """The plans one after the other as one agent's plan, with the shortest walk before
+    each action that does not apply where the plans before left the agent (TwoStep's
+    agents each start from the initial agent facts: a helper's robot ends in another room
+    than the main agent's starts from). Plans that apply one after the other come back
+    unchanged. Raise :class:`DealError` where no walk helps (an agent still holding
+    something), :class:`~twostep.strips.PlanError` for an action the task does not have."""
+    space = walking_space(problem, agent_predicates)
+    grounder = Grounder(problem)
+    plans_grounded = [grounder.ground_plan(plan) for plan in plans]
+    universe = problem.init.union(*(a.possible_add for plan in plans_grounded for a in plan))
+    walker = Walker(problem, space, universe)
+    env, own = space.bits(problem.init)
+    stitched: list[str] = []
+    for action in (a for plan in plans_grounded for a in plan):
+        step = space.step(action)
+        if not step.applicable(env, own):
+            for move in walker.walk_to(env, own, step):
+                env, own = move.apply(env, own)
+                stitched.append(str(move))
+        env, own = step.apply(env, own)
+        stitched.append(str(action))
+    return stitched
