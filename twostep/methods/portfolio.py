@@ -197,9 +197,16 @@ def redeal_all(
     """Deal each TwoStep candidate's concatenated plans with each cut (module docstring):
     the rows and the runs are appended to ``rows`` and ``runs``; returns the time spent."""
     sa_steps = solved_steps(sa_plan)
-    sa_length = request.sa_length if request.sa_length is not None else len(sa_steps or ())
+    sa_length = request.sa_length
+    if sa_length is None and sa_steps is not None:
+        sa_length = len(sa_steps)
     one = replace(request, sa_length=sa_length, fallback_if_longer=False)
     dealt: dict[tuple[str, tuple[str, ...]], int] = {}  # (cut, plan) -> its row
+    if sa_steps is not None:  # the SA plan: plan-deal's own rows
+        for k, earlier in enumerate(rows):
+            for cut in cuts:
+                if earlier["decomposer"] == deal_name(cut) and earlier["agents"] == request.agents:
+                    dealt[(cut, sa_steps)] = k
     spent = 0.0
     for source, twostep in planned:
         plan = concatenation(twostep)
@@ -208,11 +215,9 @@ def redeal_all(
         for cut in cuts:
             row: dict[str, Any] = {"decomposer": f"{deal_name(cut)}<{rows[source]['decomposer']}>",
                                    "agents": request.agents, "dealt_from": source}  # fmt: skip
-            if plan == sa_steps or (cut, plan) in dealt:
-                same = dealt.get((cut, plan))
-                row.update(same_as="sa" if same is None else same,
-                           exec_length=None if same is None else rows[same]["exec_length"])  # fmt: skip
-                rows.append(row)
+            if (cut, plan) in dealt:
+                same = dealt[(cut, plan)]
+                rows.append({**row, "same_as": same, "exec_length": rows[same]["exec_length"]})
                 continue
             dealt[(cut, plan)] = len(rows)
             start = cpu_seconds()
@@ -224,6 +229,7 @@ def redeal_all(
                 spent += seconds
                 continue
             run.planner_calls = list(twostep.planner_calls)  # the calls that made the plan
+            run.sa_length = sa_length  # the SA plan's, not the concatenation's
             run.extra["dealt_from"] = source
             spent += run.planning_time_s
             rows.append({**row, **candidate_row(run, Candidate(row["decomposer"], request.agents))})
