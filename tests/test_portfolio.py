@@ -1,8 +1,10 @@
 """twostep.methods.portfolio: several decompositions through TwoStep, the shortest schedule kept.
 
-Lengths are derived by hand on blocksworld tasks small enough for that; every returned
-schedule is re-validated by ``check_run`` and by unified-planning on the sequentialised
-N-agent schedule (:func:`tests.test_plan_split.up_validate_run`).
+Lengths are derived by hand on blocksworld tasks small enough for that, and on a tiny bar
+(:data:`CUPS_DOMAIN`) whose planner calls are scripted (no Fast Downward: each plan is
+written by hand); every returned schedule is re-validated by ``check_run`` and by
+unified-planning on the sequentialised N-agent schedule
+(:func:`tests.test_plan_split.up_validate_run`).
 """
 
 from __future__ import annotations
@@ -20,10 +22,14 @@ from tests.test_plan_split import (
     _check,
     sa_result,
 )
+from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.methods import MethodRequest
 from twostep.methods.portfolio import Portfolio, run_portfolio
+from twostep.methods.steps import Steps
+from twostep.pddl import Problem
+from twostep.planner import PlannerSettings, PlanResult, Status
 
 
 class Scripted:
@@ -68,7 +74,7 @@ def test_portfolio_finds_partial_progress_and_fewer_agents(tmp_path: Path) -> No
     rows = run.extra["candidates"]
     members = ["plan-split", "plan-split-holding", "plan-split-holding-goal", "goal-split"]
     members += [f"{m}-chunks" for m in members[:3]]
-    assert [(r["decomposer"], r["agents"]) for r in rows] == [
+    assert [(r["decomposer"], r["agents"]) for r in rows[:15]] == [
         (m, n) for n in (3, 2) for m in members
     ] + [("plan-deal", 3)]
     assert rows[0]["accepted"] == 1 and rows[0]["exec_length"] < 10
@@ -77,6 +83,16 @@ def test_portfolio_finds_partial_progress_and_fewer_agents(tmp_path: Path) -> No
     assert rows[2]["fallback"] == "no helper subgoal proposed" and rows[2]["exec_length"] == 10
     assert rows[3]["same_as"] == 2  # goal-split: one component, no helper either
     assert [r.get("same_as") for r in rows[7:11]] == [0, 0, 2, 2]  # 2 agents: as with 3
+    # then each joint run's plans (a helper accepted, no fallback), one after the other,
+    # dealt to 3 agents. None can beat 5 steps: unstack d b, putdown d, stack c d, stack b
+    # c, stack a b follow one another in any schedule; a tie keeps the earlier candidate.
+    joint = [k for k, r in enumerate(rows[:14]) if r.get("accepted") and r["fallback"] is None]
+    assert [r["dealt_from"] for r in rows[15:]] == joint and joint
+    assert all(r["agents"] == 3 and r["exec_length"] >= rows[14]["exec_length"] for r in rows[15:])
+    assert (
+        run.extra["candidate"]
+        == min((r["exec_length"], k) for k, r in enumerate(rows) if "same_as" not in r)[1]
+    )
     assert run.exec_length == min(r["exec_length"] for r in rows)
     assert run.success and run.exec_length < 10
     _check(task.problem, run, BW)
@@ -106,3 +122,120 @@ def test_portfolio_falls_back_to_sa_when_every_candidate_is_longer(tmp_path: Pat
     one = run_portfolio(MethodRequest(task, 1, FAST, BW), portfolio)
     assert one.extra["candidates"] == [] and one.exec_length == 4
     assert one.fallback == "no candidate (one agent)"
+
+
+# A bar: each cup is taken from the shelf into the agent's hand, filled, served to one
+# guest, washed to be filled again, put back. The agent's hand is its own.
+CUPS_DOMAIN = """(define (domain cups)
+  (:requirements :strips)
+  (:predicates (hand-free) (holding ?c) (shelf ?c) (clean ?c) (full ?c) (used ?c)
+    (thirsty ?g) (served ?g))
+  (:action take :parameters (?c)
+    :precondition (and (shelf ?c) (hand-free))
+    :effect (and (holding ?c) (not (shelf ?c)) (not (hand-free))))
+  (:action fill :parameters (?c)
+    :precondition (and (holding ?c) (clean ?c))
+    :effect (and (full ?c) (not (clean ?c))))
+  (:action serve :parameters (?c ?g)
+    :precondition (and (holding ?c) (full ?c) (thirsty ?g))
+    :effect (and (served ?g) (used ?c) (not (full ?c)) (not (thirsty ?g))))
+  (:action wash :parameters (?c)
+    :precondition (and (holding ?c) (used ?c))
+    :effect (and (clean ?c) (not (used ?c))))
+  (:action put :parameters (?c)
+    :precondition (holding ?c)
+    :effect (and (shelf ?c) (hand-free) (not (holding ?c)))))"""
+CUPS = ["hand-free", "holding"]
+CUPS_TASK = """(define (problem three) (:domain cups)
+  (:objects c1 c2 c3 g1 g2 g3)
+  (:init (hand-free) (shelf c1) (shelf c2) (shelf c3) (clean c1) (clean c2) (clean c3)
+    (thirsty g1) (thirsty g2) (thirsty g3))
+  (:goal (and (served g1) (served g2) (served g3))))"""
+# The SA plan serves every guest from cup c1, washing it in between (the one-glass chain)
+CUPS_SA_PLAN = (
+    "(take c1)", "(fill c1)", "(serve c1 g1)", "(wash c1)", "(fill c1)", "(serve c1 g2)",
+    "(wash c1)", "(fill c1)", "(serve c1 g3)",
+)  # fmt: skip
+# After the helper served g1 from c1, the main agent takes the clean cups c2 and c3
+CUPS_MAIN_PLAN = (
+    "(take c2)", "(fill c2)", "(serve c2 g2)", "(put c2)",
+    "(take c3)", "(fill c3)", "(serve c3 g3)",
+)  # fmt: skip
+
+
+def _cups(tmp_path: Path) -> BenchmarkTask:
+    folder = tmp_path / "cups"
+    folder.mkdir()
+    (folder / "domain.pddl").write_text(CUPS_DOMAIN)
+    (folder / "domain.nl").write_text("A bar with cups.")
+    (folder / "p01.pddl").write_text(CUPS_TASK)
+    return load_task("cups", 1, tmp_path)
+
+
+def scripted_planner(helper: tuple[str, ...]) -> Steps:
+    """Steps whose planner returns ``helper`` for the helper's subgoal (served g1) and
+    :data:`CUPS_MAIN_PLAN` for the whole goal (every plan written by hand)."""
+
+    def plan(problem: Problem, settings: PlannerSettings) -> PlanResult:
+        whole = "g3" in problem.goal.to_pddl()
+        return PlanResult(Status.SOLVED, CUPS_MAIN_PLAN if whole else helper, 0.0, 0.0)
+
+    return Steps(plan=plan)
+
+
+def test_portfolio_deals_the_twostep_plans_again(tmp_path: Path) -> None:
+    # N = 3, one helper asked to serve g1. The SA plan is one chain on c1 (each action
+    # needs the cup as the one before left it; no action can go: without a wash the next
+    # fill does not apply), so plan-deal has only the cleaned SA plan: 9 steps. TwoStep:
+    # the helper takes c1, fills it, serves g1, puts it back (4), the main agent runs its
+    # 7 actions with its one hand meanwhile: 7 steps. Concatenated (11 actions, valid: the
+    # helper's hand is free again) the three cups are three pieces take-fill-serve(-put),
+    # one per agent; the puts do not serve the goal: 3 steps.
+    task = _cups(tmp_path)
+    helper = ("(take c1)", "(fill c1)", "(serve c1 g1)", "(put c1)")
+    scripted = Scripted("serve-g1", "(served g1)")
+    request = MethodRequest(
+        task, 3, FAST, CUPS, steps=scripted_planner(helper), sa_plan=sa_result(CUPS_SA_PLAN)
+    )
+    run = run_portfolio(request, Portfolio(members=[scripted]))
+    rows = run.extra["candidates"]
+    assert [(r["decomposer"], r["agents"]) for r in rows] == [
+        ("serve-g1", 3), ("serve-g1", 2), ("plan-deal", 3), ("plan-deal<serve-g1>", 3)
+    ]  # fmt: skip
+    assert rows[0]["exec_length"] == 7 and rows[1]["same_as"] == 0
+    assert rows[2]["exec_length"] == 9
+    assert rows[3]["dealt_from"] == 0 and rows[3]["exec_length"] == 3
+    assert run.exec_length == 3 and run.fallback is None and run.extra["dealt_from"] == 0
+    assert run.extra["agents_used"] == 3 and run.sa_length == 9
+    served = {a.split()[2].rstrip(")") for p in run.plans.values() for a in p if "serve" in a}
+    assert served == {"g1", "g2", "g3"} and sorted(map(len, run.plans.values())) == [3, 3, 3]
+    # the plans came from the helper's and the main agent's planner calls
+    assert [c.role for c in run.planner_calls] == ["helper", "main"]
+    assert "deal" not in run.extra and run.extra["redeal"][0]["cleaned_sa_length"] == 11
+    _check(task.problem, run, CUPS)
+    # without the re-deal the TwoStep run wins
+    alone = run_portfolio(request, Portfolio(members=[scripted], redeal=False))
+    assert alone.exec_length == 7 and len(alone.extra["candidates"]) == 3
+    _check(task.problem, alone, CUPS)
+
+
+def test_portfolio_skips_a_concatenation_that_does_not_apply(tmp_path: Path) -> None:
+    # The helper keeps c1 in its hand after serving g1; the joint run is valid (the main
+    # agent has its own hand: 7 steps), but one agent running both plans cannot take c2
+    # with c1 in hand: that re-deal is skipped with the reason, the TwoStep run wins.
+    task = _cups(tmp_path)
+    helper = ("(take c1)", "(fill c1)", "(serve c1 g1)")
+    scripted = Scripted("serve-g1", "(served g1)")
+    request = MethodRequest(
+        task, 3, FAST, CUPS, steps=scripted_planner(helper), sa_plan=sa_result(CUPS_SA_PLAN)
+    )
+    run = run_portfolio(request, Portfolio(members=[scripted]))
+    rows = run.extra["candidates"]
+    assert [r["decomposer"] for r in rows] == ["serve-g1", "serve-g1", "plan-deal",
+                                               "plan-deal<serve-g1>"]  # fmt: skip
+    skipped = rows[3]
+    assert skipped["dealt_from"] == 0 and skipped["exec_length"] is None
+    assert "(take c2) does not apply" in skipped["skipped"]
+    assert rows[0]["exec_length"] == 7 and rows[2]["exec_length"] == 9
+    assert run.exec_length == 7 and run.extra["candidate"] == 0 and run.fallback is None
+    _check(task.problem, run, CUPS)

@@ -11,6 +11,19 @@ plan's once; result.json ``candidates`` lists every candidate with its length.
 Candidates whose helper subgoals equal an earlier candidate's are not planned again (same
 subgoals, same run, whatever the number of agents). With ``fallback_if_longer`` the SA
 plan is itself the last candidate: a winner longer than SA gives way to it.
+
+Then the re-deals (``redeal``): plan-deal keeps the SA plan's choices (on barman one
+shot glass carries every ingredient, so the deal is one chain), while a TwoStep candidate
+has planned again. Each solved TwoStep candidate's agents' plans, one after the other in
+planning order (the helpers in hand-off order, then the main agent), make a sequential
+plan; it is dealt by plan-deal to N agents with each cut of ``deals`` exactly as the SA
+plan is (its own planning time is the dealing time only: the plans were planned and
+counted in their candidate's row). A concatenation equal to the SA plan or to one dealt
+already is not dealt again (its row says ``same_as``); one that is not a valid plan for
+one agent (a helper that ends holding something, or stands where the next plan does not
+start) is skipped, its row says why (``skipped``). Re-deal rows come after every other
+candidate (``dealt_from``: the row the plans came from), so a tie keeps the earlier
+candidate; the comparison with SA and ``fallback_if_longer`` use the true SA plan.
 """
 
 from __future__ import annotations
@@ -20,6 +33,7 @@ from collections.abc import Collection, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
+from twostep.dealing.model import cpu_seconds
 from twostep.decomposers.base import (
     Decomposer,
     DecompositionRequest,
@@ -44,7 +58,8 @@ from twostep.methods.result import (
 )
 from twostep.methods.single_agent import single_agent_plan
 from twostep.methods.twostep import propose, run_twostep
-from twostep.planner import PlanResult
+from twostep.planner import PlanResult, Status
+from twostep.strips import PlanError
 from twostep.subgoals import SubgoalStatus
 
 
@@ -88,7 +103,8 @@ def default_members(agent_predicates: Collection[str], link_degree: int = 2) -> 
 
 class Portfolio:
     """The candidates: every member (default: :func:`default_members`) with N, N-1, ..., 2
-    agents, then plan-deal with each cut of ``deals`` and N agents."""
+    agents, then plan-deal with each cut of ``deals`` and N agents, then (``redeal``) the
+    solved TwoStep candidates' plans, concatenated, dealt with each cut of ``deals``."""
 
     name = "portfolio"
 
@@ -97,10 +113,12 @@ class Portfolio:
         link_degree: int = 2,
         members: Sequence[Decomposer] | None = None,
         deals: Sequence[str] = (BEST,),
+        redeal: bool = True,
     ):
         self.link_degree = link_degree
         self.members = None if members is None else list(members)
         self.deals = tuple(deals)
+        self.redeal = redeal
 
     def candidates(self, request: MethodRequest) -> list[Candidate]:
         """Members first, with N agents down to 2, then plan-deal with N (its list schedule
@@ -124,6 +142,7 @@ def run_portfolio(request: MethodRequest, portfolio: Portfolio | None = None) ->
     rows: list[dict[str, Any]] = []
     runs: list[RunResult] = []
     seen: dict[tuple[str | None, ...], int] = {}  # subgoals -> the row that planned them
+    planned: list[tuple[int, RunResult]] = []  # the TwoStep candidates' rows and runs
     planning = 0.0
     for candidate in portfolio.candidates(request):
         one = replace(request, agents=candidate.agents, sa_plan=sa_plan, fallback_if_longer=False)
@@ -141,10 +160,13 @@ def run_portfolio(request: MethodRequest, portfolio: Portfolio | None = None) ->
                 continue
             seen[key] = len(rows)
             run = run_twostep(replace(one, decomposer=Proposed(candidate.name, proposals)))
+            planned.append((len(rows), run))
         planning += run.planning_time_s - (run.sa_time_included_s or 0.0)  # SA counted once
         rows.append(candidate_row(run, candidate))
         run.extra["candidate"] = len(rows) - 1
         runs.append(run)
+    if portfolio.redeal and request.agents > 1:
+        planning += redeal_all(request, portfolio.deals, planned, sa_plan, rows, runs)
     best = choose(request, runs, rows, sa_plan)
     best.agents = request.agents
     best.decomposer = portfolio.name
@@ -153,6 +175,86 @@ def run_portfolio(request: MethodRequest, portfolio: Portfolio | None = None) ->
     best.planning_time_s = planning + count_sa_time(best, sa_plan)
     best.wall_time_s = time.perf_counter() - start
     return best
+
+
+def concatenation(run: RunResult) -> tuple[str, ...] | None:
+    """A solved TwoStep run's agents' plans one after the other, in planning order (the
+    helpers in hand-off order, then the main agent); None for a run that is not a joint
+    schedule of two agents or more (it fell back to the SA plan)."""
+    if not run.success or run.fallback is not None or len(run.agent_order) < 2:
+        return None
+    return tuple(action for agent in run.agent_order for action in run.plans[agent])
+
+
+def redeal_all(
+    request: MethodRequest,
+    cuts: Sequence[str],
+    planned: Sequence[tuple[int, RunResult]],
+    sa_plan: PlanResult,
+    rows: list[dict[str, Any]],
+    runs: list[RunResult],
+) -> float:
+    """Deal each TwoStep candidate's concatenated plans with each cut (module docstring):
+    the rows and the runs are appended to ``rows`` and ``runs``; returns the time spent."""
+    sa_steps = solved_steps(sa_plan)
+    sa_length = request.sa_length
+    if sa_length is None and sa_steps is not None:
+        sa_length = len(sa_steps)
+    one = replace(request, sa_length=sa_length, fallback_if_longer=False)
+    dealt: dict[tuple[str, tuple[str, ...]], int] = {}  # (cut, plan) -> its row
+    if sa_steps is not None:  # the SA plan: plan-deal's own rows
+        for k, earlier in enumerate(rows):
+            for cut in cuts:
+                if earlier["decomposer"] == deal_name(cut) and earlier["agents"] == request.agents:
+                    dealt[(cut, sa_steps)] = k
+    spent = 0.0
+    for source, twostep in planned:
+        plan = concatenation(twostep)
+        if plan is None:
+            continue
+        for cut in cuts:
+            row: dict[str, Any] = {"decomposer": f"{deal_name(cut)}<{rows[source]['decomposer']}>",
+                                   "agents": request.agents, "dealt_from": source}  # fmt: skip
+            if (cut, plan) in dealt:
+                same = dealt[(cut, plan)]
+                rows.append({**row, "same_as": same, "exec_length": rows[same]["exec_length"]})
+                continue
+            dealt[(cut, plan)] = len(rows)
+            start = cpu_seconds()
+            run = redeal(one, plan, cut)
+            if isinstance(run, str):
+                seconds = cpu_seconds() - start
+                row.update(exec_length=None, planning_time_s=round(seconds, 4), skipped=run)
+                rows.append(row)
+                spent += seconds
+                continue
+            run.planner_calls = list(twostep.planner_calls)  # the calls that made the plan
+            run.sa_length = sa_length  # the SA plan's, not the concatenation's
+            run.extra["dealt_from"] = source
+            spent += run.planning_time_s
+            rows.append({**row, **candidate_row(run, Candidate(row["decomposer"], request.agents))})
+            run.extra["candidate"] = len(rows) - 1
+            runs.append(run)
+    return spent
+
+
+def redeal(request: MethodRequest, plan: tuple[str, ...], cut: str) -> RunResult | str:
+    """plan-deal of ``plan`` as if it were the SA plan (planned in no time): the run, or
+    why ``plan`` cannot be dealt (not a valid plan for one agent, or no deal of it
+    re-validates). The run's deals are its ``redeal`` rows (``deal`` stays the SA
+    plan's: the bench reads the cleaned SA length there)."""
+    made = PlanResult(Status.SOLVED, plan, 0.0, 0.0, message="agents' plans concatenated")
+    try:
+        run = run_plan_deal(replace(request, sa_plan=made), cut)
+    except (PlanError, ValueError) as error:
+        return f"not a valid plan for one agent: {error}"
+    deals = run.extra.pop("deal")
+    run.extra["redeal"] = deals
+    run.extra["redeal_seconds"] = run.extra.pop("deal_seconds")
+    if not any(d.get("chosen") for d in deals):
+        why = deals[0].get("error") if deals else None
+        return f"not a valid plan for one agent: {why}" if why else "no deal re-validates"
+    return run
 
 
 def candidate_row(run: RunResult, candidate: Candidate) -> dict[str, Any]:
