@@ -222,7 +222,8 @@ def test_portfolio_deals_the_twostep_plans_again(tmp_path: Path) -> None:
 def test_portfolio_skips_a_concatenation_that_does_not_apply(tmp_path: Path) -> None:
     # The helper keeps c1 in its hand after serving g1; the joint run is valid (the main
     # agent has its own hand: 7 steps), but one agent running both plans cannot take c2
-    # with c1 in hand: that re-deal is skipped with the reason, the TwoStep run wins.
+    # with c1 in hand, and no walk frees a hand (putting a cup back is no walk: it changes
+    # the shelf): that re-deal is skipped with the reason, the TwoStep run wins.
     task = _cups(tmp_path)
     helper = ("(take c1)", "(fill c1)", "(serve c1 g1)")
     scripted = Scripted("serve-g1", "(served g1)")
@@ -235,7 +236,7 @@ def test_portfolio_skips_a_concatenation_that_does_not_apply(tmp_path: Path) -> 
                                                "plan-deal<serve-g1>"]  # fmt: skip
     skipped = rows[3]
     assert skipped["dealt_from"] == 0 and skipped["exec_length"] is None
-    assert "(take c2) does not apply" in skipped["skipped"]
+    assert "no walk to where (take c2) applies" in skipped["skipped"]
     assert rows[0]["exec_length"] == 7 and rows[2]["exec_length"] == 9
     assert run.exec_length == 7 and run.extra["candidate"] == 0 and run.fallback is None
     _check(task.problem, run, CUPS)

@@ -16,12 +16,14 @@ Then the re-deals (``redeal``): plan-deal keeps the SA plan's choices (on barman
 shot glass carries every ingredient, so the deal is one chain), while a TwoStep candidate
 has planned again. Each solved TwoStep candidate's agents' plans, one after the other in
 planning order (the helpers in hand-off order, then the main agent), make a sequential
-plan; it is dealt by plan-deal to N agents with each cut of ``deals`` exactly as the SA
-plan is (its own planning time is the dealing time only: the plans were planned and
+plan, with a walk where an agent starts elsewhere than the one before ended
+(:func:`~twostep.dealing.walks.stitch`: a helper's robot ends in another room); it is
+dealt by plan-deal to N agents with each cut of ``deals`` exactly as the SA plan is (its
+own planning time is the stitching and dealing time only: the plans were planned and
 counted in their candidate's row). A concatenation equal to the SA plan or to one dealt
-already is not dealt again (its row says ``same_as``); one that is not a valid plan for
-one agent (a helper that ends holding something, or stands where the next plan does not
-start) is skipped, its row says why (``skipped``). Re-deal rows come after every other
+already is not dealt again (its row says ``same_as``); one that no walk makes a valid plan
+for one agent (a helper that ends holding something) is skipped, its row says why
+(``skipped``). Re-deal rows come after every other
 candidate (``dealt_from``: the row the plans came from), so a tie keeps the earlier
 candidate; the comparison with SA and ``fallback_if_longer`` use the true SA plan.
 """
@@ -33,7 +35,8 @@ from collections.abc import Collection, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
-from twostep.dealing.model import cpu_seconds
+from twostep.dealing.model import DealError, cpu_seconds
+from twostep.dealing.walks import stitch
 from twostep.decomposers.base import (
     Decomposer,
     DecompositionRequest,
@@ -177,13 +180,18 @@ def run_portfolio(request: MethodRequest, portfolio: Portfolio | None = None) ->
     return best
 
 
-def concatenation(run: RunResult) -> tuple[str, ...] | None:
+def concatenation(request: MethodRequest, run: RunResult) -> tuple[str, ...] | str | None:
     """A solved TwoStep run's agents' plans one after the other, in planning order (the
-    helpers in hand-off order, then the main agent); None for a run that is not a joint
-    schedule of two agents or more (it fell back to the SA plan)."""
+    helpers in hand-off order, then the main agent), stitched with walks
+    (:func:`~twostep.dealing.walks.stitch`); why not, when no walk helps; None for a run
+    that is not a joint schedule of two agents or more (it fell back to the SA plan)."""
     if not run.success or run.fallback is not None or len(run.agent_order) < 2:
         return None
-    return tuple(action for agent in run.agent_order for action in run.plans[agent])
+    plans = [run.plans[agent] for agent in run.agent_order]
+    try:
+        return tuple(stitch(request.problem, plans, request.agent_predicates))
+    except (DealError, PlanError) as error:
+        return f"not a valid plan for one agent: {error}"
 
 
 def redeal_all(
@@ -209,12 +217,17 @@ def redeal_all(
                     dealt[(cut, sa_steps)] = k
     spent = 0.0
     for source, twostep in planned:
-        plan = concatenation(twostep)
+        start = cpu_seconds()
+        plan = concatenation(request, twostep)
+        spent += cpu_seconds() - start
         if plan is None:
             continue
         for cut in cuts:
             row: dict[str, Any] = {"decomposer": f"{deal_name(cut)}<{rows[source]['decomposer']}>",
                                    "agents": request.agents, "dealt_from": source}  # fmt: skip
+            if isinstance(plan, str):
+                rows.append({**row, "exec_length": None, "skipped": plan})
+                continue
             if (cut, plan) in dealt:
                 same = dealt[(cut, plan)]
                 rows.append({**row, "same_as": same, "exec_length": rows[same]["exec_length"]})
