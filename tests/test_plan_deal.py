@@ -35,6 +35,7 @@ from twostep.dealing import (
     eliminate_joint,
     walks,
 )
+from twostep.execution import ScheduleError
 from twostep.methods import MethodRequest, check_run, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
 from twostep.methods.portfolio import Portfolio, run_portfolio
@@ -150,6 +151,20 @@ def test_longer_than_sa_falls_back(tmp_path: Path) -> None:
     task = _blocks(tmp_path, TWO_TOWERS)
     run = run_plan_deal(MethodRequest(task, 1, FAST, BW, sa_plan=sa_result(TWO_TOWERS_PLAN)))
     assert run.exec_length == 8 and run.fallback == "one agent"
+
+
+def test_an_sa_plan_that_does_not_apply_is_not_dealt(tmp_path: Path) -> None:
+    # (stack a b) first: the arm holds nothing yet. The dealer says so in the deal rows
+    # (no exception); the outcome is the plan it was given, which check_run rejects.
+    task = _blocks(tmp_path, TWO_TOWERS)
+    bad = ("(stack a b)", *TWO_TOWERS_PLAN)
+    run = run_plan_deal(MethodRequest(task, 2, FAST, BW, sa_plan=sa_result(bad)))
+    assert run.extra["deal"] == [
+        {"agents": 1, "error": "not a valid run: (stack a b) does not apply"}
+    ]
+    assert run.fallback == "one agent" and run.plans == {"agent0": list(bad)}
+    with pytest.raises(ScheduleError, match=r"\(stack a b\): precondition \(holding a\)"):
+        check_run(task.problem, run, BW)
 
 
 def test_portfolio_keeps_the_deal_when_it_is_shortest(tmp_path: Path) -> None:

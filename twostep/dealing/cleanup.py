@@ -20,7 +20,7 @@ from collections.abc import Collection, Sequence
 
 from twostep.dealing.encoding import FactSpace, GoalBits, Owns, Step
 from twostep.pddl import Problem
-from twostep.strips import GroundAction, Grounder
+from twostep.strips import GroundAction, Grounder, PlanError
 
 JointRun = list[tuple[int, Step]]  # (agent, step), in the order they run
 
@@ -57,7 +57,7 @@ class Elimination:
         env, owns = self.envs[i], self.owns[i]
         for a, step in steps[i:]:
             if i == 0 and not step.applicable(env, owns[a]):
-                raise ValueError(f"not a valid run: {step} does not apply")
+                raise PlanError(f"not a valid run: {step} does not apply")
             new_env, own = step.apply(env, owns[a])
             env, owns = new_env, (*owns[:a], own, *owns[a + 1 :])
             self.envs.append(env)

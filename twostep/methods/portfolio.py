@@ -259,7 +259,7 @@ def redeal(request: MethodRequest, plan: tuple[str, ...], cut: str) -> RunResult
     made = PlanResult(Status.SOLVED, plan, 0.0, 0.0, message="agents' plans concatenated")
     try:
         run = run_plan_deal(replace(request, sa_plan=made), cut)
-    except (PlanError, ValueError) as error:
+    except PlanError as error:
         return f"not a valid plan for one agent: {error}"
     deals = run.extra.pop("deal")
     run.extra["redeal"] = deals
