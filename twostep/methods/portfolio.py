@@ -180,6 +180,10 @@ def run_portfolio(request: MethodRequest, portfolio: Portfolio | None = None) ->
     return best
 
 
+NOT_ONE_PLAN = "not a valid plan for one agent"
+"""Why a TwoStep candidate's plans are not dealt again (a re-deal row's ``skipped``)."""
+
+
 def concatenation(request: MethodRequest, run: RunResult) -> tuple[str, ...] | str | None:
     """A solved TwoStep run's agents' plans one after the other, in planning order (the
     helpers in hand-off order, then the main agent), stitched with walks
@@ -191,7 +195,7 @@ def concatenation(request: MethodRequest, run: RunResult) -> tuple[str, ...] | s
     try:
         return tuple(stitch(request.problem, plans, request.agent_predicates))
     except (DealError, PlanError) as error:
-        return f"not a valid plan for one agent: {error}"
+        return f"{NOT_ONE_PLAN}: {error}"
 
 
 def redeal_all(
@@ -257,16 +261,13 @@ def redeal(request: MethodRequest, plan: tuple[str, ...], cut: str) -> RunResult
     re-validates). The run's deals are its ``redeal`` rows (``deal`` stays the SA
     plan's: the bench reads the cleaned SA length there)."""
     made = PlanResult(Status.SOLVED, plan, 0.0, 0.0, message="agents' plans concatenated")
-    try:
-        run = run_plan_deal(replace(request, sa_plan=made), cut)
-    except PlanError as error:
-        return f"not a valid plan for one agent: {error}"
+    run = run_plan_deal(replace(request, sa_plan=made), cut)  # records a plan that fails
     deals = run.extra.pop("deal")
     run.extra["redeal"] = deals
     run.extra["redeal_seconds"] = run.extra.pop("deal_seconds")
     if not any(d.get("chosen") for d in deals):
         why = deals[0].get("error") if deals else None
-        return f"not a valid plan for one agent: {why}" if why else "no deal re-validates"
+        return f"{NOT_ONE_PLAN}: {why}" if why else "no deal re-validates"
     return run
 
 
