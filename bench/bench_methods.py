@@ -47,6 +47,7 @@ from typing import Any
 import yaml
 
 from twostep.benchmark import DEFAULT_DATA_ROOT, BenchmarkError, list_domains, list_tasks, load_task
+from twostep.dealing.cleanup import clean_plan
 from twostep.decomposers.base import Decomposer
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.decomposers.plan_split import PlanSplitDecomposer
@@ -56,6 +57,7 @@ from twostep.methods import MethodRequest, RunResult, check_run, method_for
 from twostep.methods.registry import TWOSTEP_METHODS
 from twostep.planner import PlannerSettings
 from twostep.planner.results import PlanResult, Status
+from twostep.strips import PlanError
 
 REPO = Path(__file__).resolve().parent.parent
 CONF = REPO / "conf"
@@ -281,12 +283,32 @@ def cleaned_ratio(row: Mapping[str, Any]) -> float | None:
 
 
 def with_cleaned(rows: Iterable[Row]) -> list[Row]:
-    """The rows, each with the cleaned SA plan's length of its task (``cleaned``), where a
-    plan-deal row of the task recorded it (the same SA plan, so the same for every N)."""
+    """The rows, each with the cleaned SA plan's length of its task (``cleaned``): where a
+    plan-deal row of the task recorded it (the same SA plan, so the same for every N), else
+    the task's stored SA plan cleaned now (a run whose winner is not plan-deal's own deal,
+    such as the portfolio's, records none)."""
     rows = list(rows)
     known = {(r.get("data"), r["domain"], r["task"]): r["cleaned_sa_length"]
              for r in rows if r.get("cleaned_sa_length")}  # fmt: skip
+    for r in rows:
+        key = (r.get("data"), r["domain"], r["task"])
+        if r["method"] == "sa" and key not in known and r.get("valid"):
+            known[key] = cleaned_length(r)
     return [{**r, "cleaned": known.get((r.get("data"), r["domain"], r["task"]))} for r in rows]
+
+
+def cleaned_length(sa_row: Row) -> int | None:
+    """The length of a stored SA row's plan after plan-deal's action elimination (step 0 of
+    :mod:`twostep.dealing`); None without the plan or the task's files, or for a plan that
+    does not apply to its task."""
+    plan = _sa_plan(sa_row)
+    if plan is None or plan.plan is None:
+        return None
+    try:
+        task = load_task(sa_row["domain"], sa_row["task"], REPO / row_data(sa_row))
+        return len(clean_plan(task.problem, plan.plan))
+    except (BenchmarkError, PlanError):
+        return None
 
 
 @dataclass(frozen=True)

@@ -229,6 +229,30 @@ def test_the_cleaned_sa_plan_and_the_lower_bound() -> None:
     assert any(line[:6] == ("A", "3", "2", "15.0", "14.0", "7.0 [5.5]") for line in lines)
 
 
+# grippers p01 of data/ by hand: robot1 takes ball2 to room2 and ball1 back (6 actions, each
+# needed); robot2's trip there and back first changes nothing, so the clean-up drops it.
+HAND_PLAN = ["(move robot2 room2 room1)", "(move robot2 room1 room2)",
+             "(pick robot1 ball2 room1 lgripper1)", "(move robot1 room1 room2)",
+             "(drop robot1 ball2 room2 lgripper1)", "(pick robot1 ball1 room2 lgripper1)",
+             "(move robot1 room2 room1)", "(drop robot1 ball1 room1 lgripper1)"]  # fmt: skip
+
+
+def test_the_cleaned_sa_plan_without_plan_deal_rows_comes_from_the_sa_plan() -> None:
+    # a portfolio run records no deal: its task's cleaned SA length is the stored SA plan,
+    # cleaned now (6 of 8 actions), and a plan-deal row's recorded length is kept as it is
+    sa = row("grippers", 1, "sa", 1, 8, 8, data="data", plan=HAND_PLAN)
+    portfolio = row("grippers", 1, "portfolio", 2, 3, 8, data="data")
+    rows = bm.with_cleaned([sa, portfolio])
+    assert [r["cleaned"] for r in rows] == [6, 6]
+    table = bm.summarise([sa, portfolio], ["portfolio"], [1, 2])
+    assert table[("grippers", 1, "sa-cleaned")].length == 6
+    assert table[("grippers", 2, "portfolio")].ratio_cleaned == pytest.approx(3 / 6)
+    recorded = row("grippers", 1, "plan-deal", 2, 3, 8, data="data", cleaned_sa_length=7)
+    assert {r["cleaned"] for r in bm.with_cleaned([sa, recorded])} == {7}
+    # a stored plan that does not apply (grippers has no pick-up) gives no cleaned length
+    assert bm.cleaned_length({**sa, "plan": ["(pick-up ball1)"]}) is None
+
+
 def test_plan_deal_in_detail() -> None:
     lines = bm.deal_report(DEAL_ROWS, [2, 3, 4], "plan-deal")
     text = "\n".join(lines)
