@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from tests.conftest import blocks_problem
 from tests.test_plan_split import (
     BW,
@@ -237,6 +239,11 @@ def test_portfolio_skips_a_concatenation_that_does_not_apply(tmp_path: Path) -> 
     skipped = rows[3]
     assert skipped["dealt_from"] == 0 and skipped["exec_length"] is None
     assert "no walk to where (take c2) applies" in skipped["skipped"]
+    # every row carries its own time (the skipped one: its stitching); with the SA plan's,
+    # they make the run's planning time
+    own = sum(r.get("planning_time_s", 0.0) for r in rows)
+    assert "planning_time_s" in skipped
+    assert run.planning_time_s == pytest.approx(own + (run.sa_time_included_s or 0.0), abs=1e-3)
     assert rows[0]["exec_length"] == 7 and rows[2]["exec_length"] == 9
     assert run.exec_length == 7 and run.extra["candidate"] == 0 and run.fallback is None
     _check(task.problem, run, CUPS)

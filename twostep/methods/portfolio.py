@@ -23,7 +23,7 @@ own planning time is the stitching and dealing time only: the plans were planned
 counted in their candidate's row). A concatenation equal to the SA plan or to one dealt
 already is not dealt again (its row says ``same_as``); one that no walk makes a valid plan
 for one agent (a helper that ends holding something) is skipped, its row says why
-(``skipped``). Re-deal rows come after every other
+(``skipped``) and carries the stitching time. Re-deal rows come after every other
 candidate (``dealt_from``: the row the plans came from), so a tie keeps the earlier
 candidate; the comparison with SA and ``fallback_if_longer`` use the true SA plan.
 """
@@ -223,14 +223,17 @@ def redeal_all(
     for source, twostep in planned:
         start = cpu_seconds()
         plan = concatenation(request, twostep)
-        spent += cpu_seconds() - start
+        stitching = cpu_seconds() - start
+        spent += stitching
         if plan is None:
             continue
         for cut in cuts:
             row: dict[str, Any] = {"decomposer": f"{deal_name(cut)}<{rows[source]['decomposer']}>",
                                    "agents": request.agents, "dealt_from": source}  # fmt: skip
-            if isinstance(plan, str):
-                rows.append({**row, "exec_length": None, "skipped": plan})
+            if isinstance(plan, str):  # the stitching time on the first cut's row only
+                rows.append({**row, "exec_length": None, "skipped": plan,
+                             "planning_time_s": round(stitching, 4)})  # fmt: skip
+                stitching = 0.0
                 continue
             if (cut, plan) in dealt:
                 same = dealt[(cut, plan)]
