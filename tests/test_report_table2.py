@@ -12,8 +12,8 @@ from typing import Any
 
 import pytest
 
+from twostep.planner.limits import guard_stops, planner_limit_hits
 from twostep.report import build_report, format_console, load_runs_from_sweep_dir
-from twostep.report.table2 import guard_stops, planner_limit_hits
 
 FINISHED = {"status": "solved", "exit_code": 0, "message": "plan found"}
 OUT_OF_TIME = {"status": "solved", "exit_code": 23, "message": "search out of time"}

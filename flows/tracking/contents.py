@@ -195,7 +195,7 @@ def job_metrics(result: Mapping[str, Any], timings: Mapping[str, float]) -> dict
     if per_call and all(v is not None for v in per_call):
         metrics["planner_time_s"] = [v for v in per_call if v is not None]
     if calls:  # Table II's "timeout": planner calls stopped by their own time limit
-        from twostep.report.table2 import guard_stops, planner_limit_hits
+        from twostep.planner.limits import guard_stops, planner_limit_hits
 
         metrics["planner_timeouts"] = float(planner_limit_hits(result))
         metrics["planner_guard_stops"] = float(guard_stops(result))

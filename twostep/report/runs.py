@@ -42,7 +42,7 @@ import pandas as pd
 import yaml
 
 from twostep.params import flatten_config
-from twostep.report.table2 import guard_stops, planner_limit_hits
+from twostep.planner.limits import guard_stops, planner_limit_hits
 
 
 class ReportInputError(Exception):

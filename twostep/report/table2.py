@@ -10,11 +10,11 @@ mean of the task stds (the paper's MA macro std 105.8 is the mean of its four st
 
 Planning time as in the paper: a task cell whose runs all hit the planner's time limit
 reads ``timeout``; the macro column counts those cells. A run hit the limit when one of its
-planner calls stopped for lack of time by the planner's own limit and exit code
-(:func:`planner_limit_hits`), whether or not the anytime planner had found a plan by then
-(the paper's SA has a length and a timeout). A call the wall-clock guard stopped first
-(:func:`guard_stops`: a machine too loaded for the limit) is no timeout: its run's
-planning time is left out of the cell and counted beside it (``n guard stops``).
+planner calls stopped for lack of time by the planner's own limit and exit code, whether
+or not the anytime planner had found a plan by then (the paper's SA has a length and a
+timeout). A call the wall-clock guard stopped first (a machine too loaded for the limit)
+is no timeout: its run's planning time is left out of the cell and counted beside it
+(``n guard stops``). Both counts come from :mod:`twostep.planner.limits`.
 """
 
 from __future__ import annotations
@@ -28,7 +28,6 @@ import pandas as pd
 import yaml
 
 from twostep.benchmark import TITLES_FILE, BenchmarkError, parse_task_titles
-from twostep.planner import returncodes
 from twostep.report.aggregation import sample_std
 
 TABLE2_DOMAIN = "alfworld"
@@ -46,45 +45,6 @@ PAPER_TABLE2: tuple[tuple[str, list[tuple[float, float | None]], list[float | No
     ("paper: TwoStep", [(113.6, 6.6), (147.0, 62.7), (204.5, 17.8), (54.2, 14.0), (129.8, 25.3)],
      [22.0, 14.8, 18.4, None]),
 )  # fmt: skip
-
-
-#: Exit codes of a planner call stopped by its time limit (with or without a plan).
-LIMIT_CODES: frozenset[int] = returncodes.OUT_OF_TIME | {
-    returncodes.SEARCH_PLAN_FOUND_AND_OUT_OF_TIME,
-    returncodes.SEARCH_PLAN_FOUND_AND_OUT_OF_MEMORY_AND_TIME,
-}
-
-
-def _calls(result: Mapping[str, Any]) -> list[Mapping[str, Any]]:
-    return [c for c in result.get("planner_calls") or [] if isinstance(c, Mapping)]
-
-
-def _guard_stopped(call: Mapping[str, Any]) -> bool:
-    """A call the wall-clock guard stopped (results before the flag: no exit code and the
-    guard's message)."""
-    if "guard_stopped" in call:
-        return bool(call["guard_stopped"])
-    return call.get("exit_code") is None and "wall-clock guard" in str(call.get("message") or "")
-
-
-def planner_limit_hits(result: Mapping[str, Any]) -> int:
-    """How many of a result.json's planner calls the planner's own time limit stopped
-    (its exit code; a call the wall-clock guard stopped is not one: :func:`guard_stops`)."""
-    hits = 0
-    for call in _calls(result):
-        code = call.get("exit_code")
-        if not _guard_stopped(call) and (
-            (isinstance(code, int) and code in LIMIT_CODES) or call.get("status") == "timeout"
-        ):
-            hits += 1
-    if not hits and result.get("status") == "timeout" and not guard_stops(result):
-        hits = 1
-    return hits
-
-
-def guard_stops(result: Mapping[str, Any]) -> int:
-    """How many of a result.json's planner calls the wall-clock guard stopped."""
-    return sum(1 for call in _calls(result) if _guard_stopped(call))
 
 
 def _cell(runs: pd.DataFrame, length: str) -> dict[str, Any]:
