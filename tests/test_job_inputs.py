@@ -161,6 +161,39 @@ def test_default_single_run_starts_no_prefect_server(tmp_path: Path) -> None:
     assert json.loads(result.read_text())["orchestration"]["prefect"] is False
 
 
+def test_a_logged_single_run_imports_nothing_of_the_reports(tmp_path: Path) -> None:
+    """The run's MLflow record counts the planner calls a time limit stopped; before, that
+    count was read from the reports' Table II module, which imported pandas and matplotlib
+    (1.2 s, and matplotlib's font cache in a fresh container) on the logged run's path."""
+    data, out = make_data(tmp_path / "data"), tmp_path / "out"
+    script = (
+        "import os, sys\n"
+        "import flows.cli\n"
+        "def report(code):\n"  # the command ends a single run with os._exit: look first
+        "    heavy = ('pandas', 'matplotlib', 'twostep.report')\n"
+        "    print('heavy imported:', [m for m in heavy if m in sys.modules])\n"
+        "    sys.stdout.flush()\n"
+        "    os._exit(code)\n"
+        "flows.cli._fast_exit = report\n"
+        "flows.cli.main()\n"
+    )
+    argv = [f"data.root={data}", f"output.root={out}", "domain=blocksworld", "task=1"]
+    argv += ["method=sa", "orchestration.prefect=false"]
+    done = subprocess.run(
+        [sys.executable, "-c", script, *argv],
+        capture_output=True, text=True, cwd=REPO, timeout=240,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "blocksworld p01 sa" in done.stdout and "heavy imported: []" in done.stdout
+    from mlflow.tracking import MlflowClient  # the run was logged, with the counts
+
+    client = MlflowClient(f"sqlite:///{out}/mlflow.db")
+    experiment = client.get_experiment_by_name("twostep")
+    assert experiment is not None
+    (run,) = client.search_runs([experiment.experiment_id])
+    assert run.data.metrics["planner_timeouts"] == 0 == run.data.metrics["planner_guard_stops"]
+
+
 def test_single_run_logs_to_mlflow_through_its_worker(tmp_path: Path) -> None:
     """The command's MLflow logging runs in a helper process: the run is there when the
     command returns, found again (not duplicated) by a second run that reuses the job."""
