@@ -183,6 +183,7 @@ class Job:
     time_limit_s: float
     fallback: bool
     known: tuple[Row, ...]  # rows of this task that are reused, not planned again
+    predicates: tuple[str, ...] | None = None  # the agent predicates; None: conf/domain's
 
 
 def run_job(job: Job) -> list[Row]:
@@ -191,7 +192,7 @@ def run_job(job: Job) -> list[Row]:
     known = {(r["agents"], r["method"]): r for r in job.known}
     todo = [(n, m) for n in job.agents if n > 1 for m in job.methods if (n, m) not in known]
     task = load_task(job.domain, job.task, Path(job.data))
-    preds = agent_predicates(job.domain)
+    preds = agent_predicates(job.domain) if job.predicates is None else list(job.predicates)
     settings = PlannerSettings(job.alias, job.time_limit_s)
     common = {"data": job.label, "domain": job.domain, "task": job.task, "alias": job.alias,
               "time_limit_s": job.time_limit_s}  # fmt: skip
@@ -689,6 +690,12 @@ def main() -> int:
         help="methods whose rows --reuse takes (default: sa ma, which no decomposer changes)",
     )
     parser.add_argument(
+        "--agent-predicates",
+        type=Path,
+        help="YAML: domain -> agent predicates, for domains conf/domain/ does not have or "
+        "names differently (default: conf/domain/<domain>.yaml)",
+    )
+    parser.add_argument(
         "--report", nargs="*", help="print the tables of these rows JSON files, run nothing"
     )
     args = parser.parse_args()
@@ -710,6 +717,7 @@ def main() -> int:
     earlier: list[Row] = json.loads(out.read_text()) if args.resume and out.is_file() else []
     # rows of this very run: every method
     known.update(reusable_rows(earlier, ("sa", *METHODS), args.alias, args.time_limit, fallback))
+    given = yaml.safe_load(args.agent_predicates.read_text()) if args.agent_predicates else {}
     jobs = []
     for data in args.data:
         label = data_label(Path(data))
@@ -718,8 +726,9 @@ def main() -> int:
         for domain in domains:
             for t in task_ids(args.tasks, list_tasks(domain, Path(data))):
                 of_task = tuple(r for k, r in known.items() if k[:3] == (label, domain, t))
+                preds = tuple(given[domain]) if domain in given else None
                 jobs.append(Job(data, label, domain, t, tuple(ns), tuple(args.methods), args.alias,
-                                args.time_limit, fallback, of_task))  # fmt: skip
+                                args.time_limit, fallback, of_task, preds))  # fmt: skip
     # task-major order (a run stopped early still covers every domain), larger roots last
     jobs.sort(key=lambda j: (args.data.index(j.data), j.task, j.domain))
     # a resumed --out keeps its rows of tasks outside this run (other roots, domains, tasks)

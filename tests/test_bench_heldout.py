@@ -1,0 +1,84 @@
+"""bench/bench_heldout.py: an LLM+P checkout laid out as a data root (checked by Fast
+Downward and unified-planning on the files it writes), and bench_methods'
+``--agent-predicates`` for a domain conf/domain/ does not have.
+
+The LLM+P files themselves are not in the repository: the layout here is made by hand, in
+LLM+P's shape (untyped blocksworld problems naming ``blocksworld-4ops``, no domain file).
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from bench import bench_methods as bm
+from bench.bench_heldout import prepare, untyped_domain
+from bench.independent import IndependentValidator, fast_downward
+from tests.conftest import DATA
+
+# Two blocks on the table, b1 to go on b2: two steps for any planner (pick up, stack).
+UNTYPED_PROBLEM = """(define (problem BW-rand-2)
+(:domain blocksworld-4ops)
+(:objects b1 b2 )
+(:init (arm-empty) (on-table b1) (on-table b2) (clear b1) (clear b2))
+(:goal (and (on b1 b2))))
+"""
+
+
+def _llmp(tmp_path: Path) -> Path:
+    """A checkout in LLM+P's layout: blocksworld without a domain file, grippers with one."""
+    root = tmp_path / "llm-pddl" / "domains"
+    (root / "blocksworld").mkdir(parents=True)
+    (root / "blocksworld" / "p01.pddl").write_text(UNTYPED_PROBLEM)
+    (root / "blocksworld" / "p_example.pddl").write_text(UNTYPED_PROBLEM)  # not a task
+    (root / "grippers").mkdir()
+    for name in ("domain.pddl", "p01.pddl"):
+        shutil.copyfile(DATA / "grippers" / name, root / "grippers" / name)
+    return root.parent
+
+
+def test_untyped_blocksworld_reads_the_untyped_problems(tmp_path: Path) -> None:
+    out = tmp_path / "data"
+    assert prepare(_llmp(tmp_path), out, ("blocksworld", "grippers")) == {
+        "blocksworld": 1,
+        "grippers": 1,
+    }
+    domain, problem = out / "blocksworld" / "domain.pddl", out / "blocksworld" / "p01.pddl"
+    assert problem.read_text() == UNTYPED_PROBLEM  # copied as it is
+    text = domain.read_text()
+    assert "(domain blocksworld-4ops)" in text and " - " not in text and ":typing" not in text
+    # Fast Downward plans on the written files, unified-planning and its translation accept
+    run = fast_downward.plan(domain, problem, time_limit_s=10)
+    assert run.plan is not None and len(run.plan) == 2
+    assert IndependentValidator(domain, problem).check_plan(run.plan).valid
+    # our own typed domain gives the untyped objects no action: no plan
+    typed = tmp_path / "typed.pddl"
+    ours = (DATA / "blocksworld" / "domain.pddl").read_text()
+    typed.write_text(ours.replace("(domain blocksworld)", "(domain blocksworld-4ops)"))
+    assert fast_downward.plan(typed, problem, time_limit_s=10).plan is None
+    assert untyped_domain(ours, "blocksworld-4ops") == text
+
+
+def test_a_domain_without_its_domain_file_is_an_error(tmp_path: Path) -> None:
+    llmp = _llmp(tmp_path)
+    (llmp / "domains" / "grippers" / "domain.pddl").unlink()
+    with pytest.raises(FileNotFoundError, match=r"no domain\.pddl"):
+        prepare(llmp, tmp_path / "data", ("grippers",))
+
+
+def test_agent_predicates_given_for_a_domain_conf_does_not_have(tmp_path: Path) -> None:
+    # grippers under another name: conf/domain/ has no "grips", so the run reads the given
+    # predicates (without them it cannot start)
+    (tmp_path / "grips").mkdir()
+    for name in ("domain.pddl", "p01.pddl"):
+        shutil.copyfile(DATA / "grippers" / name, tmp_path / "grips" / name)
+    job = bm.Job(str(tmp_path), str(tmp_path), "grips", 1, (1, 2), ("plan-deal",), "lama-first",
+                 10.0, True, (), ("at-robby", "free", "carry"))  # fmt: skip
+    rows = {(r["method"], r["agents"]): r for r in bm.run_job(job)}
+    assert rows[("sa", 1)]["valid"] and rows[("plan-deal", 2)]["valid"]
+    assert rows[("plan-deal", 2)]["exec_length"] < rows[("sa", 1)]["exec_length"]
+    with pytest.raises(FileNotFoundError):
+        bm.run_job(bm.Job(str(tmp_path), str(tmp_path), "grips", 1, (1, 2), ("plan-deal",),
+                          "lama-first", 10.0, True, ()))  # fmt: skip
