@@ -290,7 +290,7 @@ def with_cleaned(rows: Iterable[Row]) -> list[Row]:
     such as the portfolio's, records none)."""
     rows = list(rows)
     known = {(r.get("data"), r["domain"], r["task"]): r["cleaned_sa_length"]
-             for r in rows if r.get("cleaned_sa_length")}  # fmt: skip
+             for r in rows if r.get("cleaned_sa_length") is not None}  # fmt: skip
     for r in rows:
         key = (r.get("data"), r["domain"], r["task"])
         if r["method"] == "sa" and key not in known and r.get("valid"):
@@ -360,7 +360,7 @@ def summarise(
         if (r["domain"], r["task"]) in have_sa and (r["method"] in methods or r["method"] == "sa"):
             by[(r["domain"], int(r["agents"]), r["method"])].append(r)
     for r in sa:
-        if r["valid"] and r["cleaned"]:
+        if r["valid"] and r["cleaned"] is not None:  # 0: the goal holds at the start
             by[(r["domain"], 1, "sa-cleaned")].append(
                 {**r, "exec_length": r["cleaned"], "total_actions": r["cleaned"]}
             )

@@ -253,6 +253,18 @@ def test_the_cleaned_sa_plan_without_plan_deal_rows_comes_from_the_sa_plan() -> 
     assert bm.cleaned_length({**sa, "plan": ["(pick-up ball1)"]}) is None
 
 
+def test_a_task_whose_goal_holds_at_the_start_counts_in_the_cleaned_length() -> None:
+    # task 1's SA plan is empty (its cleaned plan too), task 2's 10 steps clean to 8: the
+    # lengths average both tasks ((0 + 8) / 2, as SA's (0 + 10) / 2), ratios task 2 only
+    rows = [row("A", 1, "sa", 1, 0, 0), row("A", 2, "sa", 1, 10, 10),
+            row("A", 1, "plan-deal", 2, 0, 0, cleaned_sa_length=0),
+            row("A", 2, "plan-deal", 2, 5, 10, cleaned_sa_length=8)]  # fmt: skip
+    table = bm.summarise(rows, ["plan-deal"], [1, 2])
+    cleaned, sa = table[("A", 1, "sa-cleaned")], table[("A", 1, "sa")]
+    assert (cleaned.length, sa.length) == (4.0, 5.0)
+    assert cleaned.ratio == pytest.approx(0.8)
+
+
 def test_plan_deal_in_detail() -> None:
     lines = bm.deal_report(DEAL_ROWS, [2, 3, 4], "plan-deal")
     text = "\n".join(lines)
