@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from bench import bench_methods as bm
-from bench.bench_heldout import prepare, untyped_domain
+from bench.bench_heldout import heldout_predicates, prepare, untyped_domain, validate
 from bench.independent import IndependentValidator, fast_downward
 from tests.conftest import DATA
 
@@ -82,3 +82,22 @@ def test_agent_predicates_given_for_a_domain_conf_does_not_have(tmp_path: Path) 
     with pytest.raises(FileNotFoundError):
         bm.run_job(bm.Job(str(tmp_path), str(tmp_path), "grips", 1, (1, 2), ("plan-deal",),
                           "lama-first", 10.0, True, ()))  # fmt: skip
+
+
+def test_validate_deals_the_stored_sa_plans_and_checks_them_apart(tmp_path: Path) -> None:
+    out = tmp_path / "data"
+    prepare(_llmp(tmp_path), out, ("blocksworld", "grippers"))
+    hand = ["(pick robot1 ball2 room1 lgripper1)", "(move robot1 room1 room2)",
+            "(drop robot1 ball2 room2 lgripper1)", "(pick robot1 ball1 room2 lgripper1)",
+            "(move robot1 room2 room1)", "(drop robot1 ball1 room1 lgripper1)"]  # fmt: skip
+    rows = [
+        {"method": "sa", "valid": True, "domain": "blocksworld", "task": 1,
+         "plan": ["(pickup b1)", "(stack b1 b2)"]},
+        {"method": "sa", "valid": True, "domain": "grippers", "task": 1, "plan": hand},
+        {"method": "sa", "valid": False, "domain": "grippers", "task": 2, "plan": None},
+    ]  # fmt: skip
+    counts = validate(out, rows, (2, 3))
+    assert counts["valid"] == 4 and counts["not valid"] == 0
+    assert counts["checked by: grounded-task simulator + unified-planning"] == 4
+    assert heldout_predicates("grippers") == ["at-robby", "free", "carry"]
+    assert heldout_predicates("storage") == ["at", "available", "lifting"]
