@@ -45,6 +45,7 @@ from typing import Any
 import yaml
 
 REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))  # bench.independent, run as a script too
 DOMAINS = ("barman", "blocksworld", "grippers", "termes", "tyreworld", "storage", "floortile")
 PROBLEM = re.compile(r"p\d\d\.pddl")
 DOMAIN_NAME = re.compile(r"\(\s*:domain\s+([^\s()]+)\s*\)", re.IGNORECASE)
