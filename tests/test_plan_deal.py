@@ -683,6 +683,30 @@ def test_ipc_sample_domains_deal_to_two_agents(tmp_path: Path) -> None:
         assert verdict.checkers.startswith(readers), (name, verdict.checkers)
 
 
+@needs_sample
+def test_a_deal_stuck_in_every_replay_is_offloaded() -> None:
+    # openstacks p01 with two agents (agent facts: stacks-avail): every way's replay gets
+    # stuck (no agent can walk to where a piece applies); offloading pieces from the SA
+    # plan's own run to the second agent, one at a time where the run stays valid and gets
+    # shorter, deals it. The schedule is shorter than the cleaned SA plan and valid for
+    # the independent checkers on the original files.
+    from bench.independent import IndependentValidator
+
+    preds = ["stacks-avail"]
+    task = load_task("openstacks-sat08-adl", 1, SAMPLE)
+    sa = run_single_agent(MethodRequest(task, planner=FAST))
+    run = run_plan_deal(MethodRequest(task, 2, FAST, preds, sa_plan=sa.planner_calls[0].result))
+    (chosen,) = [row for row in run.extra["deal"] if row.get("chosen")]
+    assert chosen["agents"] == 2 and chosen.get("offloaded") is True
+    assert run.fallback is None and run.exec_length is not None
+    assert run.exec_length < chosen["cleaned_sa_length"]
+    check_run(task.problem, run, preds)
+    verdict = IndependentValidator(task.domain_path, task.problem_path).check_schedule(
+        run.agent_order, run.plans, run.schedule, preds
+    )
+    assert verdict.valid, verdict
+
+
 # Sample domains beyond agents.yaml, with agent predicates read from their domain files
 # (the acting object's own state, none shared with other objects): their p01 leaves work
 # to a second agent.

@@ -16,7 +16,7 @@ from collections.abc import Collection, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 
-from twostep.dealing.cleanup import Elimination
+from twostep.dealing.cleanup import Elimination, JointRun
 from twostep.dealing.model import Deal, DealError, cpu_seconds
 from twostep.dealing.replay import Replay
 from twostep.dealing.schedule import ListScheduler, PieceOrder, WalkEstimate
@@ -189,7 +189,9 @@ class Dealer:
         the agents then find no way on (a ramp taken away before an agent crossed it), the
         deal is made again with the walks' own causal links kept (:func:`order_edges`); when
         that fails too, the pieces are replayed one after the other instead of in time steps
-        (:mod:`~twostep.dealing.replay`), where a piece may wait for any other."""
+        (:mod:`~twostep.dealing.replay`), where a piece may wait for any other. When every
+        replay is stuck (no agent can walk to a piece: the agents before it boxed the place
+        in), the pieces are offloaded instead (:meth:`offload`)."""
         error = DealError("not dealt")
         for timed in (True, False):
             for keep_walks in (False, True):
@@ -197,7 +199,58 @@ class Dealer:
                     return self._deal(agents, cut, order, keep_walks, timed and steal, timed)
                 except DealError as failed:
                     error = failed
-        raise error
+        try:
+            return self.offload(agents, cut)
+        except DealError:
+            raise error from None
+
+    def offload(self, agents: int, cut: str = "free") -> Deal:
+        """The last resort of :meth:`deal`: every piece the first agent's, replayed in the
+        plan's order (the SA plan's run, walks found again); then, piece by piece in that
+        order, each other agent in turn takes the piece where the replay still works and
+        the joint run gets shorter. A run of one agent when nothing gets shorter; made
+        once per number of agents and cut (raise :class:`DealError` when even the first
+        replay fails)."""
+        key: tuple[object, ...] = ("offload", agents, cut)
+        if key not in self._deals:
+            try:
+                self._deals[key] = self._offload(agents, cut)
+            except DealError as error:
+                self._deals[key] = error
+        found = self._deals[key]
+        if isinstance(found, DealError):
+            raise found
+        return found
+
+    def _offload(self, agents: int, cut: str) -> Deal:
+        pieces, piece_order = self.pieces(cut, keep_walks=True)
+        start = [min(piece) for piece in pieces]  # the plan's order
+        replay = Replay(self.walker, self.steps, pieces, piece_order.preds, self.goal, self.init)
+        owner = [0] * len(pieces)
+        with self._phase("replay"):
+            best, owner = self._replayed(replay, owner, start, agents)
+            for p in sorted(range(len(pieces)), key=lambda p: start[p]):
+                for a in range(1, agents):
+                    trial = [*owner[:p], a, *owner[p + 1 :]]
+                    try:
+                        run, got = self._replayed(replay, trial, start, agents)
+                    except DealError:
+                        continue
+                    if len(earliest_steps(run, agents)) < len(earliest_steps(best, agents)):
+                        best, owner = run, got
+                        break
+        deal = self._finish(pieces, owner, start, best, agents, len(earliest_steps(best, agents)))
+        deal.offloaded = True
+        return deal
+
+    def _replayed(
+        self, replay: Replay, owner: Sequence[int], start: Sequence[int], agents: int
+    ) -> tuple[JointRun, list[int]]:
+        """The replay of the pieces with these owners, after the joint clean-up; the owners
+        it ended with (it hands a piece on where its agent cannot get there)."""
+        run, got = replay.run(owner, start, agents)
+        env, own = self.init
+        return Elimination(self.goal, env, (own,) * agents, run).run(), got
 
     def _deal(
         self, agents: int, cut: str, order: str, keep_walks: bool, steal: bool, timed: bool
@@ -247,16 +300,29 @@ class Dealer:
             # what several agents no longer need (a block parked for want of a second hand)
             env, own = self.init
             joint = Elimination(self.goal, env, (own,) * agents, run).run()
+        return self._finish(pieces, owner, schedule.start, joint, agents, schedule.makespan)
+
+    def _finish(
+        self,
+        pieces: Sequence[list[int]],
+        owner: Sequence[int],
+        start: Sequence[int],
+        joint: JointRun,
+        agents: int,
+        estimate: int,
+    ) -> Deal:
+        """The deal of a cleaned joint run: the agents' plans and its time steps."""
+        with self._phase("joint clean-up"):
             steps = earliest_steps(joint, agents)
         plans: list[list[str]] = [[] for _ in range(agents)]
         for a, step in joint:
             plans[a].append(str(step))
-        started = sorted(range(len(pieces)), key=lambda p: (schedule.start[p], p))
+        started = sorted(range(len(pieces)), key=lambda p: (start[p], p))
         return Deal(
             [pieces[p] for p in started],
             [owner[p] for p in started],
             plans,
-            schedule.makespan,
+            estimate,
             sum(is_walking(step, self.space) for _, step in joint),
             len(self.cleaned),
             [[(a, str(step)) for a, step in pairs] for pairs in steps],

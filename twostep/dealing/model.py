@@ -29,3 +29,4 @@ class Deal:
     walks: int  # walking actions the agents' plans have (SA's own were dropped)
     cleaned: int  # the SA plan's length after action elimination
     schedule: list[list[tuple[int, str]]]  # per time step: (agent, action), a valid joint schedule
+    offloaded: bool = False  # every replay was stuck: pieces offloaded from the plan's run

@@ -10,7 +10,8 @@ The SA plan itself is the outcome only when there is none to deal or one agent.
 No planner call beyond the SA plan: the run's planning time is the SA plan's planner time
 and the time spent dealing (CPU time, both: :func:`~twostep.dealing.model.cpu_seconds`). Deals that give the same plans are scored once. result.json
 ``deal`` records every deal tried (its agents, cut and order, pieces, walks, the cleaned
-SA plan's length, the agents used, its length or its error), ``deal_seconds`` where the
+SA plan's length, the agents used, ``offloaded`` when every replay was stuck and the pieces
+were offloaded from the plan's own run, its length or its error), ``deal_seconds`` where the
 dealing time went and ``agents_used`` how many agents the outcome has.
 """
 
@@ -143,6 +144,8 @@ def try_deals(
             plans, schedule = used_agents(dealt.plans, dealt.schedule)
             row.update(pieces=len(dealt.pieces), walks=dealt.walks,
                        cleaned_sa_length=dealt.cleaned, agents_used=len(plans))  # fmt: skip
+            if dealt.offloaded:
+                row["offloaded"] = True
             candidates.append((row, plans, schedule))
     choose_deal(request, candidates, trials)
 
