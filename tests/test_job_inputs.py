@@ -132,26 +132,34 @@ def test_llm_error_is_a_failed_job_that_a_rerun_tries_again(
     assert written["status"] == "llm_error" and written["success"] is False
 
 
-def test_default_single_run_starts_no_prefect_server(tmp_path: Path) -> None:
-    """orchestration.prefect is left at its default (auto) and no services are up."""
-    data, out = make_data(tmp_path / "data"), tmp_path / "out"
+def run_reporting_imports(
+    argv: list[str], modules: tuple[str, ...]
+) -> subprocess.CompletedProcess[str]:
+    """The command on ``argv``, printing ``<module> imported: <bool>`` for each of
+    ``modules`` just before the single run exits (it ends with os._exit: look first)."""
     script = (
         "import os, sys\n"
         "import flows.cli\n"
-        "def report(code):\n"  # the command ends a single run with os._exit: look first
-        "    print('prefect imported:', 'prefect' in sys.modules)\n"
-        "    print('litellm imported:', 'litellm' in sys.modules)\n"
+        "def report(code):\n"
+        f"    for name in {modules!r}:\n"
+        "        print(name, 'imported:', name in sys.modules)\n"
         "    sys.stdout.flush()\n"
         "    os._exit(code)\n"
         "flows.cli._fast_exit = report\n"
         "flows.cli.main()\n"
     )
-    argv = [f"data.root={data}", f"output.root={out}", "domain=blocksworld", "task=1"]
-    argv += ["method=sa", "mlflow.enabled=false"]
-    done = subprocess.run(
+    return subprocess.run(
         [sys.executable, "-c", script, *argv],
         capture_output=True, text=True, cwd=REPO, timeout=240,
     )  # fmt: skip
+
+
+def test_default_single_run_starts_no_prefect_server(tmp_path: Path) -> None:
+    """orchestration.prefect is left at its default (auto) and no services are up."""
+    data, out = make_data(tmp_path / "data"), tmp_path / "out"
+    argv = [f"data.root={data}", f"output.root={out}", "domain=blocksworld", "task=1"]
+    argv += ["method=sa", "mlflow.enabled=false"]
+    done = run_reporting_imports(argv, ("prefect", "litellm"))
     assert done.returncode == 0, done.stdout + done.stderr
     assert "blocksworld p01 sa" in done.stdout and "success" in done.stdout
     assert "prefect imported: False" in done.stdout
@@ -166,25 +174,14 @@ def test_a_logged_single_run_imports_nothing_of_the_reports(tmp_path: Path) -> N
     count was read from the reports' Table II module, which imported pandas and matplotlib
     (1.2 s, and matplotlib's font cache in a fresh container) on the logged run's path."""
     data, out = make_data(tmp_path / "data"), tmp_path / "out"
-    script = (
-        "import os, sys\n"
-        "import flows.cli\n"
-        "def report(code):\n"  # the command ends a single run with os._exit: look first
-        "    heavy = ('pandas', 'matplotlib', 'twostep.report')\n"
-        "    print('heavy imported:', [m for m in heavy if m in sys.modules])\n"
-        "    sys.stdout.flush()\n"
-        "    os._exit(code)\n"
-        "flows.cli._fast_exit = report\n"
-        "flows.cli.main()\n"
-    )
     argv = [f"data.root={data}", f"output.root={out}", "domain=blocksworld", "task=1"]
     argv += ["method=sa", "orchestration.prefect=false"]
-    done = subprocess.run(
-        [sys.executable, "-c", script, *argv],
-        capture_output=True, text=True, cwd=REPO, timeout=240,
-    )  # fmt: skip
+    heavy = ("pandas", "matplotlib", "twostep.report")
+    done = run_reporting_imports(argv, heavy)
     assert done.returncode == 0, done.stdout + done.stderr
-    assert "blocksworld p01 sa" in done.stdout and "heavy imported: []" in done.stdout
+    assert "blocksworld p01 sa" in done.stdout
+    for name in heavy:
+        assert f"{name} imported: False" in done.stdout
     from mlflow.tracking import MlflowClient  # the run was logged, with the counts
 
     client = MlflowClient(f"sqlite:///{out}/mlflow.db")

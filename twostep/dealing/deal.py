@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import bisect
 from collections import defaultdict
-from collections.abc import Collection, Iterator, Sequence
+from collections.abc import Callable, Collection, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -211,16 +211,7 @@ class Dealer:
         the joint run gets shorter. A run of one agent when nothing gets shorter; made
         once per number of agents and cut (raise :class:`DealError` when even the first
         replay fails)."""
-        key: tuple[object, ...] = ("offload", agents, cut)
-        if key not in self._deals:
-            try:
-                self._deals[key] = self._offload(agents, cut)
-            except DealError as error:
-                self._deals[key] = error
-        found = self._deals[key]
-        if isinstance(found, DealError):
-            raise found
-        return found
+        return self._once(("offload", agents, cut), lambda: self._offload(agents, cut))
 
     def _offload(self, agents: int, cut: str) -> Deal:
         pieces, piece_order = self.pieces(cut, keep_walks=True)
@@ -229,6 +220,7 @@ class Dealer:
         owner = [0] * len(pieces)
         with self._phase("replay"):
             best, owner = self._replayed(replay, owner, start, agents)
+            length = len(earliest_steps(best, agents))
             for p in sorted(range(len(pieces)), key=lambda p: start[p]):
                 for a in range(1, agents):
                     trial = [*owner[:p], a, *owner[p + 1 :]]
@@ -236,10 +228,11 @@ class Dealer:
                         run, got = self._replayed(replay, trial, start, agents)
                     except DealError:
                         continue
-                    if len(earliest_steps(run, agents)) < len(earliest_steps(best, agents)):
-                        best, owner = run, got
+                    steps = len(earliest_steps(run, agents))
+                    if steps < length:
+                        best, owner, length = run, got, steps
                         break
-        deal = self._finish(pieces, owner, start, best, agents, len(earliest_steps(best, agents)))
+        deal = self._finish(pieces, owner, start, best, agents, length)
         deal.offloaded = True
         return deal
 
@@ -249,8 +242,26 @@ class Dealer:
         """The replay of the pieces with these owners, after the joint clean-up; the owners
         it ended with (it hands a piece on where its agent cannot get there)."""
         run, got = replay.run(owner, start, agents)
+        return self._joint_cleanup(run, agents), got
+
+    def _joint_cleanup(self, run: JointRun, agents: int) -> JointRun:
+        """What several agents no longer need of a joint run (a block parked for want of a
+        second hand): action elimination from the initial state."""
         env, own = self.init
-        return Elimination(self.goal, env, (own,) * agents, run).run(), got
+        return Elimination(self.goal, env, (own,) * agents, run).run()
+
+    def _once(self, key: tuple[object, ...], make: Callable[[], Deal]) -> Deal:
+        """The deal made under ``key``, or its :class:`DealError` raised again: each is made
+        once."""
+        if key not in self._deals:
+            try:
+                self._deals[key] = make()
+            except DealError as error:
+                self._deals[key] = error
+        found = self._deals[key]
+        if isinstance(found, DealError):
+            raise found
+        return found
 
     def _deal(
         self, agents: int, cut: str, order: str, keep_walks: bool, steal: bool, timed: bool
@@ -259,17 +270,9 @@ class Dealer:
         made once."""
         pieces, piece_order = self.pieces(cut, keep_walks)
         key = (agents, order, keep_walks, steal, timed, tuple(map(tuple, pieces)))
-        if key not in self._deals:
-            try:
-                self._deals[key] = self._deal_pieces(
-                    agents, order, pieces, piece_order, steal, timed
-                )
-            except DealError as error:
-                self._deals[key] = error
-        found = self._deals[key]
-        if isinstance(found, DealError):
-            raise found
-        return found
+        return self._once(
+            key, lambda: self._deal_pieces(agents, order, pieces, piece_order, steal, timed)
+        )
 
     def _deal_pieces(
         self,
@@ -297,9 +300,7 @@ class Dealer:
                                 self.init)  # fmt: skip
                 run, owner = replay.run(schedule.owner, schedule.start, agents)
         with self._phase("joint clean-up"):
-            # what several agents no longer need (a block parked for want of a second hand)
-            env, own = self.init
-            joint = Elimination(self.goal, env, (own,) * agents, run).run()
+            joint = self._joint_cleanup(run, agents)
         return self._finish(pieces, owner, schedule.start, joint, agents, schedule.makespan)
 
     def _finish(
