@@ -105,8 +105,9 @@ def heldout_predicates(domain: str) -> list[str]:
     given = yaml.safe_load(AGENTS_FILE.read_text()) or {}
     if domain in given:
         return [str(p) for p in given[domain]]
-    conf = yaml.safe_load((REPO / "conf" / "domain" / f"{domain}.yaml").read_text())
-    return [str(p) for p in conf["agent_predicates"]]
+    from bench.bench_methods import agent_predicates
+
+    return agent_predicates(domain)
 
 
 def validate(root: Path, rows: list[dict[str, Any]], agents: tuple[int, ...]) -> Counter[str]:
