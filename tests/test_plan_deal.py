@@ -155,7 +155,8 @@ def test_longer_than_sa_falls_back(tmp_path: Path) -> None:
 
 def test_an_sa_plan_that_does_not_apply_is_not_dealt(tmp_path: Path) -> None:
     # (stack a b) first: the arm holds nothing yet. The dealer says so in the deal rows
-    # (no exception); the outcome is the plan it was given, which check_run rejects.
+    # (no exception); the outcome is the plan it was given, which check_run rejects, and the
+    # run is an error, not a success.
     task = _blocks(tmp_path, TWO_TOWERS)
     bad = ("(stack a b)", *TWO_TOWERS_PLAN)
     run = run_plan_deal(MethodRequest(task, 2, FAST, BW, sa_plan=sa_result(bad)))
@@ -165,6 +166,9 @@ def test_an_sa_plan_that_does_not_apply_is_not_dealt(tmp_path: Path) -> None:
     assert run.fallback == "one agent" and run.plans == {"agent0": list(bad)}
     with pytest.raises(ScheduleError, match=r"\(stack a b\): precondition \(holding a\)"):
         check_run(task.problem, run, BW)
+    # ... and it is not reported as solved: no success, no length, the message says why
+    assert not run.success and run.status == "error" and run.exec_length is None
+    assert run.message == "the SA plan does not apply: not a valid run: (stack a b) does not apply"
 
 
 def test_portfolio_keeps_the_deal_when_it_is_shortest(tmp_path: Path) -> None:

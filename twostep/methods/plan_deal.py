@@ -32,6 +32,7 @@ from twostep.methods.result import (
     FallbackReason,
     MethodName,
     RunResult,
+    RunStatus,
     adopt_sa_plan,
     adopt_schedule,
     count_sa_time,
@@ -63,6 +64,7 @@ class Trials:
     rows: list[dict[str, Any]] = field(default_factory=list)
     best: tuple[ParallelExecution, list[list[str]]] | None = None
     seconds: dict[str, float] = field(default_factory=dict)
+    invalid: str | None = None  # why the SA plan given does not apply (nothing dealt)
 
     @property
     def deal_time_s(self) -> float:
@@ -107,6 +109,10 @@ def run_plan_deal(request: MethodRequest, cut: str = BEST) -> RunResult:
                 FallbackReason.NO_SA_PLAN if sa_steps is None else FallbackReason.ONE_AGENT
             )
         adopt_sa_plan(run, sa_plan)
+        if trials.invalid is not None:  # a caller's SA plan that does not apply: no success
+            run.success, run.exec_length = False, None
+            run.status = RunStatus.ERROR
+            run.message = f"the SA plan does not apply: {trials.invalid}"
     run.extra["agents_used"] = len(run.agent_order) or 1
     run.state_editing_time_s = trials.deal_time_s
     run.planning_time_s = count_sa_time(run, sa_plan) + trials.deal_time_s
@@ -124,6 +130,7 @@ def try_deals(
         dealer = Dealer(problem, sa_steps, request.agent_predicates)
     except PlanError as error:  # an SA plan that does not apply: nothing to deal
         trials.rows.append({"agents": 1, "error": str(error)})
+        trials.invalid = str(error)
         return
     trials.seconds = dealer.seconds  # the dealer's phases, and scoring beside them
     cleaned = [str(a) for a in dealer.cleaned]
