@@ -107,3 +107,30 @@ def test_our_domain_reads_plans_and_validates_a_paper_shaped_problem(
     assert "unified-planning" in verdict.checkers and "simulator" in verdict.checkers
     # every step matters in these tasks: without its last step the plan is not valid
     assert not validator.check_plan(list(result.plan)[:-1]).valid
+
+
+def test_the_cross_check_reads_both_domains_and_checks_each_plan_on_the_other(
+    tmp_path: Path,
+) -> None:
+    """bench_heldout --cross on a root in the paper's layout: grippers with our domain as
+    "theirs", tyreworld with ours less its constants (the paper's shape: only the problems
+    declare the tools)."""
+    from bench.bench_heldout import cross_check
+
+    ours_tyreworld = (REPO / "data" / "tyreworld" / "domain.pddl").read_text()
+    theirs_tyreworld = ours_tyreworld.replace("(:constants wrench jack pump - tool)", "")
+    assert theirs_tyreworld != ours_tyreworld
+    for domain, domain_text, problem in (
+        ("grippers", (REPO / "data" / "grippers" / "domain.pddl").read_text(), GRIPPERS),
+        ("tyreworld", theirs_tyreworld, TYREWORLD),
+    ):
+        (tmp_path / domain).mkdir()
+        (tmp_path / domain / "domain.pddl").write_text(domain_text)
+        (tmp_path / domain / "p01.pddl").write_text(problem)
+    said: list[str] = []
+    summary = cross_check(tmp_path, ("grippers", "tyreworld"), said.append)
+    for domain in ("grippers", "tyreworld"):
+        counts = summary[domain]
+        assert (counts["tasks"], counts["loaded"], counts["plans"]) == (1, 1, 1), said
+        assert counts["valid both ways"] == 1, said
+        assert counts["checked by: grounded-task simulator + unified-planning"] == 2, said
