@@ -23,6 +23,18 @@ It deals each stored SA plan again with plan-deal (no planner call) and checks t
 LLM+P's tyreworld domain names ``wrench``, ``jack`` and ``pump``, which only its problems
 declare, so the checkers read copies with those moved to the domain's constants.
 
+Our domains read LLM+P's problem files as they are; the cross-check shows it, for every
+task of barman, grippers, termes and tyreworld (blocksworld: see below):
+
+    python bench/bench_heldout.py --cross /tmp/llmp
+
+loads each problem with our domain (``data/<domain>/domain.pddl``) and with theirs, plans
+both with lama-first (60 s), and checks each plan on the other domain's task with twostep's
+simulator and with the independent validator (their tyreworld: read with the tools moved
+to its constants, as ``--validate`` does; ours: with the problem's second declaration of
+our constants left out). It prints a line per task and a summary per domain, and writes
+them to ``docs/bench/faithful_cross.txt`` (``--report``) under the command line.
+
 LLM+P's blocksworld folder has problems but no domain file: its problems are untyped and name
 the domain ``blocksworld-4ops`` (the four operators of ``data/blocksworld``, with the same
 predicates), so the script writes ``data/blocksworld/domain.pddl`` without its types and under
@@ -143,6 +155,167 @@ def validate(root: Path, rows: list[dict[str, Any]], agents: tuple[int, ...]) ->
     return counts
 
 
+CROSS_DOMAINS = ("barman", "grippers", "termes", "tyreworld")
+CROSS_TIME_LIMIT_S = 60.0
+
+
+def without_domain_constants(domain: Path, problem: Path, out_dir: Path) -> Path:
+    """A copy of ``problem`` without the objects ``domain`` declares as constants, written
+    with the independent checkers' own s-expression code (not twostep's repair)."""
+    from bench.independent.constants import read_sexp, write_sexp
+
+    def part(expr: Any, keyword: str) -> list[Any]:
+        found = [p for p in expr if isinstance(p, list) and p and str(p[0]).lower() == keyword]
+        return found[0] if found else [keyword]
+
+    domain_expr, problem_expr = read_sexp(domain.read_text()), read_sexp(problem.read_text())
+    constants = {str(n).lower() for n in part(domain_expr, ":constants")[1:] if n != "-"}
+    objects, kept, pending = part(problem_expr, ":objects"), [":objects"], []
+    items = objects[1:]
+    index = 0
+    while index < len(items):
+        if items[index] == "-" and index + 1 < len(items):
+            staying = [n for n in pending if str(n).lower() not in constants]
+            kept += [*staying, "-", items[index + 1]] if staying else []
+            pending, index = [], index + 2
+            continue
+        pending.append(items[index])
+        index += 1
+    kept += [n for n in pending if str(n).lower() not in constants]
+    objects[:] = kept
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / problem.name).write_text(write_sexp(problem_expr) + "\n")
+    return out_dir / problem.name
+
+
+def _simulated(task: Any, plan: list[str]) -> str:
+    """'' if twostep's simulator runs ``plan`` to ``task``'s goal, else why not."""
+    from twostep.strips import Grounder, PlanError, simulate
+
+    try:
+        state = simulate(task.init, Grounder(task).ground_plan(plan))
+    except PlanError as error:
+        return str(error)
+    return "" if task.goal.holds(state) else "the goal does not hold at the end"
+
+
+def cross_check(root: Path, domains: tuple[str, ...], say: Any) -> dict[str, Counter[str]]:
+    """Every task of ``root``'s ``domains`` read with our domain and with theirs, planned
+    on both, each plan checked on the other task; per domain, the counts (see ``main``)."""
+    from bench.independent import IndependentValidator
+    from bench.independent.constants import move_constants
+    from twostep.pddl import PDDLError, load_problem
+    from twostep.planner import PlannerSettings, plan
+
+    settings = PlannerSettings("lama-first", CROSS_TIME_LIMIT_S)
+    scratch = Path(tempfile.mkdtemp(prefix="cross-"))
+    summary: dict[str, Counter[str]] = {}
+    for domain in domains:
+        counts: Counter[str] = Counter()
+        ours_domain = REPO / "data" / domain / "domain.pddl"
+        theirs_domain = root / domain / "domain.pddl"
+        for problem in sorted(
+            p for p in (root / domain).glob("p*.pddl") if PROBLEM.fullmatch(p.name)
+        ):
+            counts["tasks"] += 1
+            label = f"{domain} {problem.stem}"
+            tasks: dict[str, Any] = {}
+            for side, domain_file in (("ours", ours_domain), ("theirs", theirs_domain)):
+                try:
+                    tasks[side] = load_problem(domain_file, problem)
+                except PDDLError as error:
+                    say(f"{label}: not loaded with {side} domain: {error}")
+            if len(tasks) < 2:
+                continue
+            counts["loaded"] += 1
+            plans: dict[str, list[str]] = {}
+            for side, task in tasks.items():
+                result = plan(task, settings)
+                if result.solved and result.plan is not None:
+                    plans[side] = list(result.plan)
+                else:
+                    say(f"{label}: no plan on {side} domain: {result.status} {result.message}")
+            if len(plans) < 2:
+                continue
+            counts["plans"] += 1
+            counts["length ours"] += len(plans["ours"])
+            counts["length theirs"] += len(plans["theirs"])
+            # the files of each task as the independent checkers read them
+            here = scratch / domain / problem.stem
+            files = {
+                "ours": (ours_domain, without_domain_constants(ours_domain, problem, here)),
+                "theirs": (theirs_domain, problem),
+            }
+            if domain in CONSTANTS_IN_PROBLEMS:
+                files["theirs"] = move_constants(
+                    theirs_domain, problem, CONSTANTS_IN_PROBLEMS[domain], here / "theirs"
+                )
+            verdicts = []
+            for made_on, checked_on in (("ours", "theirs"), ("theirs", "ours")):
+                steps = plans[made_on]
+                simulator = _simulated(tasks[checked_on], steps)
+                verdict = IndependentValidator(*files[checked_on]).check_plan(steps)
+                ok = not simulator and verdict.valid
+                counts[f"valid {made_on} on {checked_on}"] += ok
+                counts[f"checked by: {verdict.checkers}"] += 1
+                verdicts.append(ok)
+                if not ok:
+                    say(
+                        f"{label}: the plan on {made_on} domain is not valid on {checked_on}: "
+                        f"simulator: {simulator or 'valid'}; independent: "
+                        f"{verdict.reason or 'valid'}"
+                    )
+            counts["valid both ways"] += all(verdicts)
+            say(
+                f"{label}: lengths {len(plans['ours'])} (ours) {len(plans['theirs'])} (theirs), "
+                f"valid both ways: {'yes' if all(verdicts) else 'NO'}"
+            )
+        summary[domain] = counts
+    return summary
+
+
+def cross_table(summary: dict[str, Counter[str]]) -> list[str]:
+    """The per-domain summary of :func:`cross_check` as a Markdown table."""
+    lines = [
+        "| domain | tasks | loaded | plans both ways | valid both ways | mean length ours | "
+        "mean length theirs |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for domain, c in summary.items():
+        means = [f"{c[f'length {s}'] / c['plans']:.1f}" if c["plans"] else "-" for s in
+                 ("ours", "theirs")]  # fmt: skip
+        lines.append(
+            f"| {domain} | {c['tasks']} | {c['loaded']} | {c['plans']} | "
+            f"{c['valid both ways']} | {means[0]} | {means[1]} |"
+        )
+    checkers = Counter[str]()
+    for c in summary.values():
+        checkers.update({k: v for k, v in c.items() if k.startswith("checked by: ")})
+    lines += ["", "independent validator, plans checked by:"]
+    lines += [f"  {k.removeprefix('checked by: ')}: {v}" for k, v in sorted(checkers.items())]
+    return lines
+
+
+def run_cross(root: Path, domains: tuple[str, ...], report: Path | None, command: str) -> int:
+    """The cross-check, printed and written to ``report`` under ``command``."""
+    lines = [f"$ {command}", f"lama-first {CROSS_TIME_LIMIT_S:.0f} s per planner call", ""]
+
+    def say(line: str) -> None:
+        print(line, flush=True)
+        lines.append(line)
+
+    summary = cross_check(root, domains, say)
+    lines.append("")
+    for line in cross_table(summary):
+        print(line)
+        lines.append(line)
+    if report is not None:
+        report.parent.mkdir(parents=True, exist_ok=True)
+        report.write_text("\n".join(lines) + "\n")
+    complete = all(c["valid both ways"] == c["tasks"] for c in summary.values())
+    return 0 if complete else 1
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--llmp", type=Path, help="a checkout of llm-pddl")
@@ -151,7 +324,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--validate", type=Path, help="a data root made by this script")
     parser.add_argument("--rows", type=Path, help="the methods bench's rows of that root")
     parser.add_argument("--agents", nargs="*", type=int, default=[2, 3, 4])
+    parser.add_argument("--cross", type=Path, help="a data root of LLM+P's files: cross-check")
+    parser.add_argument(
+        "--report",
+        type=Path,
+        default=REPO / "docs" / "bench" / "faithful_cross.txt",
+        help="where --cross writes its output (default: docs/bench/faithful_cross.txt)",
+    )
     args = parser.parse_args(argv)
+    if args.cross:
+        domains = tuple(d for d in args.domains if d in CROSS_DOMAINS)
+        shown = ["python bench/bench_heldout.py", *(argv if argv is not None else sys.argv[1:])]
+        return run_cross(args.cross, domains, args.report, " ".join(shown))
     if args.validate:
         if args.rows is None:
             parser.error("--validate needs --rows")

@@ -1,5 +1,5 @@
 (define (problem grippers-p02)
-  (:domain grippers)
+  (:domain gripper-strips)
   (:objects
     robot1 robot2 - robot
     room1 room2 room3 - room

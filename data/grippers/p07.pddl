@@ -1,5 +1,5 @@
 (define (problem grippers-p07)
-  (:domain grippers)
+  (:domain gripper-strips)
   (:objects
     robot1 robot2 robot3 - robot
     room1 room2 room3 room4 - room

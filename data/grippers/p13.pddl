@@ -1,5 +1,5 @@
 (define (problem grippers-p13)
-  (:domain grippers)
+  (:domain gripper-strips)
   (:objects
     robot1 - robot
     room1 room2 room3 - room

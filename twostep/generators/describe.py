@@ -423,6 +423,7 @@ DESCRIBERS: Mapping[str, Describer] = {
     "barman": describe_barman,
     "blocksworld": describe_blocksworld,
     "grippers": describe_grippers,
+    "gripper-strips": describe_grippers,  # the PDDL name of the grippers domain
     "termes": describe_termes,
     "tyreworld": describe_tyreworld,
 }

@@ -23,13 +23,18 @@ class TaskSpec:
     init: tuple[Fact, ...]
     goal: tuple[Fact, ...]
     negative_goal: tuple[Fact, ...] = ()
+    pddl_domain: str = ""  # the name in ``(:domain ...)`` when it is not ``domain``
 
     def to_pddl(self) -> str:
         """The problem as PDDL text: objects grouped by type, one fact per line."""
         by_type: dict[str, list[str]] = {}
         for obj, type_name in self.objects:
             by_type.setdefault(type_name, []).append(obj)
-        lines = [f"(define (problem {self.name})", f"  (:domain {self.domain})", "  (:objects"]
+        lines = [
+            f"(define (problem {self.name})",
+            f"  (:domain {self.pddl_domain or self.domain})",
+            "  (:objects",
+        ]
         lines += [f"    {' '.join(names)} - {type_name}" for type_name, names in by_type.items()]
         lines += ["  )", "  (:init"]
         lines += [f"    {_atom(fact)}" for fact in self.init]

@@ -1,12 +1,19 @@
 """Repairs of real-world PDDL quirks, made on s-expressions before anything reads the task.
 
-Two quirks of files that are otherwise read as they are:
+Three quirks of files that are otherwise read as they are:
 
 - **Objects only the problem declares.** The LLM+P tyreworld domain mentions ``wrench``,
   ``jack`` and ``pump`` in its actions, AlfWorld's ``alfred.pddl`` mentions
   ``SinkBasinType`` and ``MicrowaveType``, while only the problems declare them; Fast
   Downward rejects that ("Undefined object"). They become typed constants of the domain
   (and leave the problem's objects), which keeps the meaning.
+- **Objects both files declare.** The LLM+P tyreworld problems declare ``wrench``,
+  ``jack`` and ``pump`` as objects; a domain that already declares them as constants (ours
+  does) meets them twice, and Fast Downward rejects the duplicates. A problem object that
+  is a domain constant of the same type (or that the problem leaves untyped or types as
+  ``object``) is the same object: it leaves the problem's objects. A problem that gives it
+  another type contradicts the domain: a :class:`~twostep.pddl.errors.PDDLError` naming the
+  file, the object and both types.
 - **Commas in variable lists.** AlfWorld writes ``(?l - location, ?r - receptacle)``;
   Fast Downward would read ``location,`` as a type of no objects and silently make the
   action impossible. A comma is no part of a PDDL name: it is dropped.
@@ -19,7 +26,8 @@ live apart.)
 
 from __future__ import annotations
 
-from twostep.pddl.sexp import SExp, define_body, section, typed_names
+from twostep.pddl.errors import PDDLError
+from twostep.pddl.sexp import SExp, TypeSpec, define_body, section, typed_list, typed_names
 
 
 def _undeclared_constants(domain_body: list[SExp]) -> set[str]:
@@ -117,6 +125,38 @@ def _declare_constants(
     return rebuilt, problem_rebuilt
 
 
+def _type_text(spec: TypeSpec) -> str:
+    return spec if isinstance(spec, str) else "(either " + " ".join(spec) + ")"
+
+
+def _drop_duplicate_objects(
+    domain_body: list[SExp], problem_body: list[SExp], problem_source: str | None
+) -> list[SExp] | None:
+    """The problem body without the objects the domain declares as constants (None: there
+    are none); a problem object typed otherwise than its constant is a :class:`PDDLError`."""
+    constants_section = section(domain_body, ":constants")
+    objects_section = section(problem_body, ":objects")
+    if constants_section is None or objects_section is None:
+        return None
+    constants = dict(typed_list(constants_section[1:]))
+    objects = typed_list(objects_section[1:])
+    duplicates = [(name, spec) for name, spec in objects if name in constants]
+    if not duplicates:
+        return None
+    for name, spec in duplicates:
+        if spec not in (constants[name], "object"):
+            raise PDDLError(
+                f"object '{name}' is declared here of type '{_type_text(spec)}', but the "
+                f"domain declares it as a constant of type '{_type_text(constants[name])}'",
+                problem_source,
+            )
+    kept: list[SExp] = [":objects"]
+    for name, spec in objects:
+        if name not in constants:
+            kept += [name, "-", spec if isinstance(spec, str) else ["either", *spec]]
+    return [kept if item is objects_section else item for item in problem_body]
+
+
 def _without_commas(expr: SExp) -> tuple[SExp, bool]:
     """``expr`` with commas dropped from its tokens, and whether there were any."""
     if isinstance(expr, str):
@@ -142,7 +182,10 @@ def repair_task(
     cleaned, commas = _without_commas(domain_body)
     assert isinstance(cleaned, list)
     domain_body = cleaned
+    deduplicated = _drop_duplicate_objects(domain_body, problem_body, problem_source)
+    if deduplicated is not None:
+        problem_body = deduplicated
     moved = _declare_constants(domain_body, problem_body)
     if moved is not None:
         domain_body, problem_body = moved
-    return domain_body, problem_body, commas or moved is not None
+    return domain_body, problem_body, commas or deduplicated is not None or moved is not None

@@ -1,6 +1,6 @@
 ; Several robots, each with a left and a right gripper, carry balls between rooms
 ; (twostep benchmark data). Balls are plain objects of the root type.
-(define (domain grippers)
+(define (domain gripper-strips)
   (:requirements :strips :typing)
   (:types robot room gripper)
   (:predicates
