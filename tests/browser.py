@@ -15,8 +15,9 @@ import shutil
 import subprocess
 import time
 import urllib.request
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from websockets.sync.client import ClientConnection, connect
 
@@ -35,8 +36,25 @@ FLAGS = (
 )
 
 
+T = TypeVar("T")
+
+
 def chromium_binary() -> str | None:
     return shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+def poll(
+    look: Callable[[], T | None], missing: Callable[[], object], timeout_s: float, interval_s: float
+) -> T:
+    """What ``look`` returns once it returns something (not None), looking again every
+    ``interval_s``; after ``timeout_s`` without it, an AssertionError naming what
+    ``missing`` says is still not on the page (asked after the last look)."""
+    deadline = time.monotonic() + timeout_s
+    while (found := look()) is None:
+        if time.monotonic() > deadline:
+            raise AssertionError(f"not on the page after {timeout_s:.0f} s: {missing()}")
+        time.sleep(interval_s)
+    return found
 
 
 class Browser:
@@ -98,17 +116,16 @@ class Browser:
     def wait_for(self, texts: list[str], timeout_s: float = 90.0, action: str = "") -> str:
         """Poll the page's text until every one of ``texts`` is in it (running ``action``,
         a script, before each look); the text (raises with what is missing on timeout)."""
-        deadline = time.monotonic() + timeout_s
-        while True:
+        last = ""
+
+        def look() -> str | None:
+            nonlocal last
             if action:
                 self.run(action)
-            text = self.text()
-            missing = [t for t in texts if t not in text]
-            if not missing:
-                return text
-            if time.monotonic() > deadline:
-                raise AssertionError(f"not on the page after {timeout_s:.0f} s: {missing}")
-            time.sleep(1.0)
+            last = self.text()
+            return last if all(t in last for t in texts) else None
+
+        return poll(look, lambda: [t for t in texts if t not in last], timeout_s, 1.0)
 
     def find(
         self, selector: str, text: str = "", prefix: bool = False, nth: int = 0
@@ -141,13 +158,12 @@ class Browser:
         timeout_s: float = 30.0,
     ) -> tuple[float, float]:
         """:meth:`find`, waiting for the element to appear; its centre (x, y)."""
-        deadline = time.monotonic() + timeout_s
-        while (where := self.find(selector, text, prefix, nth)) is None:
-            if time.monotonic() > deadline:
-                raise AssertionError(
-                    f"not on the page after {timeout_s:.0f} s: {selector} {text!r}"
-                )
-            time.sleep(0.5)
+        where = poll(
+            lambda: self.find(selector, text, prefix, nth),
+            lambda: f"{selector} {text!r}",
+            timeout_s,
+            0.5,
+        )
         return where["x"], where["y"]
 
     def click(
