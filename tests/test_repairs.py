@@ -109,3 +109,15 @@ def test_a_constant_the_problem_types_otherwise_is_an_error(
     message = str(raised.value)
     assert str(problem_file) in message and "'key'" in message
     assert f"'{type_text}'" in message and "'tool'" in message
+
+
+def test_a_task_the_translator_rejects_names_its_files(tmp_path: Path) -> None:
+    # The problem names another domain: our reader lets it through, Fast Downward's
+    # translator refuses it; the error says which files, not "<pddl>".
+    other = problem("key - tool").replace("(:domain cellar)", "(:domain basement)")
+    domain_file, problem_file = write(tmp_path, DOMAIN, other)
+    with pytest.raises(PDDLError) as raised:
+        load_problem(domain_file, problem_file)
+    message = str(raised.value)
+    assert message.startswith(f"{problem_file} (domain {domain_file}): ")
+    assert "translator rejects the task" in message and "basement" in message

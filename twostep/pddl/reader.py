@@ -100,7 +100,17 @@ def ground_problem(problem: Problem) -> GroundTask:
     grounded towards the empty goal (its goal facts: :data:`UNREACHABLE_GOAL`).
     """
     domain_text, problem_text = planner_input(problem)
-    translation = translate(domain_text, problem_text)
+    try:
+        translation = translate(domain_text, problem_text)
+    except PDDLError as error:  # the translator reads both files: name them
+        if error.source is not None or problem.source is None:
+            raise
+        files = (
+            f"{problem.source} (domain {problem.domain.source})"
+            if problem.domain.source
+            else problem.source
+        )
+        raise PDDLError(error.message, files) from None
     if translation.goal_unreachable:
         open_goal = problem.with_state(goal=Goal()) if problem.goal else problem
         translation = translate(domain_text, problem_to_pddl(open_goal))
