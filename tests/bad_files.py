@@ -39,8 +39,11 @@ def wrong_arity(path: Path) -> None:
 
 
 def undeclared_type(path: Path) -> None:
-    """An object of a type the domain does not declare."""
-    path.write_text(path.read_text().replace("- block\n", "- block w1 - widget\n", 1))
+    """An object of a type the domain does not declare, on the line after ``(:objects``."""
+    text = path.read_text()
+    if "(:objects\n" not in text:
+        raise ValueError(f"{path}: no '(:objects' line to add an object after")
+    path.write_text(text.replace("(:objects\n", "(:objects\n    w1 - widget\n", 1))
 
 
 def duplicate_action(path: Path) -> None:

@@ -3,18 +3,20 @@ Downward and unified-planning on the files it writes), and bench_methods'
 ``--agent-predicates`` for a domain conf/domain/ does not have.
 
 The LLM+P files themselves are not in the repository: the layout here is made by hand, in
-LLM+P's shape (untyped blocksworld problems naming ``blocksworld-4ops``, no domain file).
+LLM+P's shape (untyped blocksworld problems naming ``blocksworld-4ops``, no domain file:
+the layout gives them ours, untyped and named so too).
 """
 
 from __future__ import annotations
 
+import re
 import shutil
 from pathlib import Path
 
 import pytest
 
 from bench import bench_methods as bm
-from bench.bench_heldout import heldout_predicates, prepare, untyped_domain, validate
+from bench.bench_heldout import heldout_predicates, prepare, validate
 from bench.independent import IndependentValidator, fast_downward
 from tests.conftest import DATA
 
@@ -25,6 +27,19 @@ UNTYPED_PROBLEM = """(define (problem BW-rand-2)
 (:init (arm-empty) (on-table b1) (on-table b2) (clear b1) (clear b2))
 (:goal (and (on b1 b2))))
 """
+
+
+def typed_blocks(domain: str) -> str:
+    """``domain`` with every predicate and action parameter of a type ``block``."""
+    head, actions = domain.split("(:action", 1)  # the predicates come before the actions
+
+    def typed(variables: str) -> str:
+        return re.sub(r"(\?[\w-]+)", r"\1 - block", variables)
+
+    head = re.sub(r"\(:predicates.*", lambda m: typed(m.group(0)), head, flags=re.DOTALL)
+    head = head.replace("(:requirements :strips)", "(:requirements :strips :typing) (:types block)")
+    params = re.sub(r":parameters \(([^)]*)\)", lambda m: f":parameters ({typed(m[1])})", actions)
+    return f"{head}(:action{params}"
 
 
 def _llmp(tmp_path: Path) -> Path:
@@ -39,7 +54,7 @@ def _llmp(tmp_path: Path) -> Path:
     return root.parent
 
 
-def test_untyped_blocksworld_reads_the_untyped_problems(tmp_path: Path) -> None:
+def test_our_blocksworld_reads_the_untyped_problems(tmp_path: Path) -> None:
     out = tmp_path / "data"
     assert prepare(_llmp(tmp_path), out, ("blocksworld", "grippers")) == {
         "blocksworld": 1,
@@ -48,17 +63,25 @@ def test_untyped_blocksworld_reads_the_untyped_problems(tmp_path: Path) -> None:
     domain, problem = out / "blocksworld" / "domain.pddl", out / "blocksworld" / "p01.pddl"
     assert problem.read_text() == UNTYPED_PROBLEM  # copied as it is
     text = domain.read_text()
+    assert text == (DATA / "blocksworld" / "domain.pddl").read_text()  # ours, as it is
     assert "(domain blocksworld-4ops)" in text and " - " not in text and ":typing" not in text
     # Fast Downward plans on the written files, unified-planning and its translation accept
     run = fast_downward.plan(domain, problem, time_limit_s=10)
     assert run.plan is not None and len(run.plan) == 2
     assert IndependentValidator(domain, problem).check_plan(run.plan).valid
-    # our own typed domain gives the untyped objects no action: no plan
+    # the same domain with a type 'block' gives the untyped objects no action: no plan
     typed = tmp_path / "typed.pddl"
-    ours = (DATA / "blocksworld" / "domain.pddl").read_text()
-    typed.write_text(ours.replace("(domain blocksworld)", "(domain blocksworld-4ops)"))
+    typed.write_text(typed_blocks(text))
+    assert typed.read_text().count(" - block") == 11  # 5 predicate and 6 action parameters
     assert fast_downward.plan(typed, problem, time_limit_s=10).plan is None
-    assert untyped_domain(ours, "blocksworld-4ops") == text
+
+
+def test_a_problem_naming_another_domain_is_an_error(tmp_path: Path) -> None:
+    llmp = _llmp(tmp_path)
+    problem = llmp / "domains" / "blocksworld" / "p01.pddl"
+    problem.write_text(UNTYPED_PROBLEM.replace("blocksworld-4ops", "blocks"))
+    with pytest.raises(ValueError, match=r"names domain blocks, .* is blocksworld-4ops"):
+        prepare(llmp, tmp_path / "data", ("blocksworld",))
 
 
 def test_a_domain_without_its_domain_file_is_an_error(tmp_path: Path) -> None:

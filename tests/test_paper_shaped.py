@@ -1,11 +1,12 @@
 """Our benchmark domains read problems written as the paper's task files write them.
 
-The paper's (LLM+P) grippers problems name their domain ``gripper-strips``; its tyreworld
-problems declare ``wrench``, ``jack`` and ``pump`` as objects, which our tyreworld domain
-declares as constants. Small problems of that shape (written here) are read with
-``data/grippers/domain.pddl`` and ``data/tyreworld/domain.pddl``, planned, and the plans
-checked by the independent validator (unified-planning and Fast Downward's grounding, on
-the files; tyreworld: on the problem without the second declaration of the tools, which
+The paper's (LLM+P) blocksworld problems are untyped and name their domain
+``blocksworld-4ops`` (its folder has no domain file); its grippers problems name their
+domain ``gripper-strips``; its tyreworld problems declare ``wrench``, ``jack`` and ``pump``
+as objects, which our tyreworld domain declares as constants. Small problems of that shape
+(written here) are read with ``data/<domain>/domain.pddl``, planned, and the plans checked
+by the independent validator (unified-planning and Fast Downward's grounding, on the files;
+tyreworld: on the problem without the second declaration of the tools, which
 unified-planning and Fast Downward both refuse).
 """
 
@@ -20,6 +21,27 @@ from twostep.pddl import load_problem
 from twostep.planner import PlannerSettings, plan
 
 REPO = Path(__file__).resolve().parent.parent
+
+# Two towers, b3 on b1 and b4 on b2; the goal swaps what stands on the bottom blocks.
+BLOCKSWORLD = """(define (problem swap-two-tops)
+(:domain blocksworld-4ops)
+(:objects b1 b2 b3 b4 )
+(:init
+(arm-empty)
+(on-table b1)
+(on-table b2)
+(on b3 b1)
+(on b4 b2)
+(clear b3)
+(clear b4)
+)
+(:goal
+(and
+(on b3 b2)
+(on b4 b1))
+)
+)
+"""
 
 GRIPPERS = """(define (problem two-rooms-three-balls)
 (:domain gripper-strips)
@@ -88,6 +110,7 @@ spare flat - wheel
 @pytest.mark.parametrize(
     ("domain", "text", "as_checked"),
     [
+        ("blocksworld", BLOCKSWORLD, BLOCKSWORLD),
         ("grippers", GRIPPERS, GRIPPERS),
         ("tyreworld", TYREWORLD, TYREWORLD.replace(TOOLS, "")),
     ],
@@ -114,8 +137,8 @@ def test_the_cross_check_reads_both_domains_and_checks_each_plan_on_the_other(
 ) -> None:
     """bench_heldout --cross on a root in the paper's layout: grippers with our domain as
     "theirs", tyreworld with ours less its constants (the paper's shape: only the problems
-    declare the tools)."""
-    from bench.bench_heldout import cross_check
+    declare the tools), blocksworld without a domain file (read with ours alone)."""
+    from bench.bench_heldout import cross_check, cross_table
 
     ours_tyreworld = (REPO / "data" / "tyreworld" / "domain.pddl").read_text()
     theirs_tyreworld = ours_tyreworld.replace("(:constants wrench jack pump - tool)", "")
@@ -127,10 +150,26 @@ def test_the_cross_check_reads_both_domains_and_checks_each_plan_on_the_other(
         (tmp_path / domain).mkdir()
         (tmp_path / domain / "domain.pddl").write_text(domain_text)
         (tmp_path / domain / "p01.pddl").write_text(problem)
+    (tmp_path / "blocksworld").mkdir()
+    (tmp_path / "blocksworld" / "p01.pddl").write_text(BLOCKSWORLD)
+    # a problem our blocksworld reads but no plan reaches: b1 cannot be on two blocks
+    impossible = BLOCKSWORLD.replace("(on b4 b1))", "(on b1 b3) (on b1 b4))")
+    (tmp_path / "blocksworld" / "p02.pddl").write_text(impossible)
     said: list[str] = []
-    summary = cross_check(tmp_path, ("grippers", "tyreworld"), said.append)
+    summary = cross_check(tmp_path, ("blocksworld", "grippers", "tyreworld"), said.append)
     for domain in ("grippers", "tyreworld"):
         counts = summary[domain]
         assert (counts["tasks"], counts["loaded"], counts["plans"]) == (1, 1, 1), said
         assert counts["valid both ways"] == 1, said
         assert counts["checked by: grounded-task simulator + unified-planning"] == 2, said
+    blocks = summary["blocksworld"]
+    assert (blocks["tasks"], blocks["loaded"], blocks["plans"], blocks["valid ours"]) == (
+        2,
+        2,
+        1,
+        1,
+    ), said
+    assert blocks["checked by: grounded-task simulator + unified-planning"] == 1, said
+    assert any(line.startswith("blocksworld p02: no plan on ours domain") for line in said)
+    (row,) = [line for line in cross_table(summary) if line.startswith("| blocksworld ")]
+    assert "theirs: no domain file" in row

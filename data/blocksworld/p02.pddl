@@ -1,7 +1,7 @@
 (define (problem blocksworld-p02)
-  (:domain blocksworld)
+  (:domain blocksworld-4ops)
   (:objects
-    b1 b2 b3 - block
+    b1 b2 b3
   )
   (:init
     (on-table b1)

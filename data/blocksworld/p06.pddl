@@ -1,7 +1,7 @@
 (define (problem blocksworld-p06)
-  (:domain blocksworld)
+  (:domain blocksworld-4ops)
   (:objects
-    b1 b2 b3 b4 b5 - block
+    b1 b2 b3 b4 b5
   )
   (:init
     (on-table b2)

@@ -1,7 +1,7 @@
 (define (problem blocksworld-p10)
-  (:domain blocksworld)
+  (:domain blocksworld-4ops)
   (:objects
-    b1 b2 b3 b4 b5 b6 b7 - block
+    b1 b2 b3 b4 b5 b6 b7
   )
   (:init
     (on-table b7)

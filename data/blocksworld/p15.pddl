@@ -1,7 +1,7 @@
 (define (problem blocksworld-p15)
-  (:domain blocksworld)
+  (:domain blocksworld-4ops)
   (:objects
-    b1 b2 b3 b4 b5 b6 b7 b8 b9 b10 - block
+    b1 b2 b3 b4 b5 b6 b7 b8 b9 b10
   )
   (:init
     (on-table b10)

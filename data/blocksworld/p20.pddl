@@ -1,7 +1,7 @@
 (define (problem blocksworld-p20)
-  (:domain blocksworld)
+  (:domain blocksworld-4ops)
   (:objects
-    b1 b2 b3 b4 b5 b6 b7 b8 b9 b10 b11 b12 - block
+    b1 b2 b3 b4 b5 b6 b7 b8 b9 b10 b11 b12
   )
   (:init
     (on-table b5)

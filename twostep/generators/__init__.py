@@ -98,7 +98,7 @@ def domain_model(domain: str) -> Domain:
 def as_problem(task: TaskSpec, domain: Domain) -> Problem:
     """The parsed form of ``task`` without going through PDDL text (fast, same result)."""
     goal = Goal(frozenset(task.goal), frozenset(task.negative_goal))
-    return Problem(task.name, domain, dict(task.objects), frozenset(task.init), goal)
+    return Problem(task.name, domain, task.pddl_objects(), frozenset(task.init), goal)
 
 
 def task_files(stem: str, task: TaskSpec, domain: Domain) -> dict[str, str]:

@@ -2,7 +2,9 @@
 
 The initial state is a random set of towers; the goal is ``goal_atoms`` facts
 (``on`` or ``on-table``) drawn from another random arrangement, never all true at the
-start. Blocks are ``b1 .. bN``.
+start. Blocks are ``b1 .. bN``. The PDDL domain is untyped (blocks are plain objects) and
+named ``blocksworld-4ops``, as in the paper's task files, so that those files read with it
+as they are; the folder and the generator keep the name ``blocksworld``.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from twostep.generators.spec import TaskSpec, numbered
 from twostep.pddl import Fact
 
 DOMAIN = "blocksworld"
+PDDL_NAME = "blocksworld-4ops"  # the name inside the PDDL (the paper's problems name it)
 SCALE_UNIT = "blocks"
 
 
@@ -49,7 +52,10 @@ def make_task(name: str, blocks: int, goal_atoms: int, rng: Random) -> TaskSpec:
         goal = sorted(rng.sample(candidates, min(goal_atoms, len(candidates))), key=_block_order)
         if not set(goal) <= set(init):
             break
-    return TaskSpec(name, DOMAIN, numbered("b", blocks, "block"), tuple(init), tuple(goal))
+    objects = numbered("b", blocks, "block")  # the kind of object; the PDDL has no types
+    return TaskSpec(
+        name, DOMAIN, objects, tuple(init), tuple(goal), pddl_domain=PDDL_NAME, typed=False
+    )
 
 
 def _block_order(fact: Fact) -> tuple[int, ...]:

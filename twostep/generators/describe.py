@@ -422,6 +422,7 @@ def describe_tyreworld(problem: Problem) -> str:
 DESCRIBERS: Mapping[str, Describer] = {
     "barman": describe_barman,
     "blocksworld": describe_blocksworld,
+    "blocksworld-4ops": describe_blocksworld,  # the PDDL name of the blocksworld domain
     "grippers": describe_grippers,
     "gripper-strips": describe_grippers,  # the PDDL name of the grippers domain
     "termes": describe_termes,

@@ -15,7 +15,12 @@ from twostep.pddl import Fact
 
 @dataclass(frozen=True)
 class TaskSpec:
-    """One problem of a domain: objects ``(name, type)``, init facts and goal literals."""
+    """One problem of a domain: objects ``(name, type)``, init facts and goal literals.
+
+    In an untyped domain (``typed=False``) an object's type says what kind of object it is
+    (the benchmark's sizes count them by it) but the PDDL does not write it: every object
+    is of the root type ``object`` there.
+    """
 
     name: str
     domain: str
@@ -24,9 +29,15 @@ class TaskSpec:
     goal: tuple[Fact, ...]
     negative_goal: tuple[Fact, ...] = ()
     pddl_domain: str = ""  # the name in ``(:domain ...)`` when it is not ``domain``
+    typed: bool = True  # False: the domain has no types; objects are written without one
+
+    def pddl_objects(self) -> dict[str, str]:
+        """Each object's type as the PDDL reads it (untyped: ``object``)."""
+        return {name: type_name if self.typed else "object" for name, type_name in self.objects}
 
     def to_pddl(self) -> str:
-        """The problem as PDDL text: objects grouped by type, one fact per line."""
+        """The problem as PDDL text: objects grouped by type (untyped: on one line), one
+        fact per line."""
         by_type: dict[str, list[str]] = {}
         for obj, type_name in self.objects:
             by_type.setdefault(type_name, []).append(obj)
@@ -35,7 +46,10 @@ class TaskSpec:
             f"  (:domain {self.pddl_domain or self.domain})",
             "  (:objects",
         ]
-        lines += [f"    {' '.join(names)} - {type_name}" for type_name, names in by_type.items()]
+        if self.typed:
+            lines += [f"    {' '.join(names)} - {t}" for t, names in by_type.items()]
+        else:
+            lines.append(f"    {' '.join(name for name, _ in self.objects)}")
         lines += ["  )", "  (:init"]
         lines += [f"    {_atom(fact)}" for fact in self.init]
         lines += ["  )", "  (:goal (and"]

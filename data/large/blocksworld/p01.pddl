@@ -1,7 +1,7 @@
 (define (problem blocksworld-s30-01)
-  (:domain blocksworld)
+  (:domain blocksworld-4ops)
   (:objects
-    b1 b2 b3 b4 b5 b6 b7 b8 b9 b10 b11 b12 b13 b14 b15 b16 b17 b18 b19 b20 b21 b22 b23 b24 b25 b26 b27 b28 b29 b30 - block
+    b1 b2 b3 b4 b5 b6 b7 b8 b9 b10 b11 b12 b13 b14 b15 b16 b17 b18 b19 b20 b21 b22 b23 b24 b25 b26 b27 b28 b29 b30
   )
   (:init
     (on-table b3)
