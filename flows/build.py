@@ -114,9 +114,16 @@ def check_task(cfg: TwostepConfig, task: BenchmarkTask) -> None:
     predicates = task.problem.domain.predicates
     unknown = [p for p in cfg.domain.agent_predicates if str(p).lower() not in predicates]
     if unknown:
+        booleans = [p for p in unknown if str(p) in ("True", "False")]
+        hint = (
+            f"; {', '.join(booleans)} came from YAML, which reads unquoted on/off/yes/no/"
+            "true/false as booleans: quote the name, e.g. agent_predicates: ['on']"
+            if booleans
+            else ""
+        )
         raise JobError(
             f"domain.agent_predicates: {', '.join(unknown)} not in domain '{cfg.domain.name}' "
-            f"({task.domain_path}); its predicates: {', '.join(sorted(predicates))}"
+            f"({task.domain_path}); its predicates: {', '.join(sorted(predicates))}{hint}"
         )
     if cfg.executor.name == "embodied":
         check_kitchen(task)

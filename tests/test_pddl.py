@@ -87,6 +87,34 @@ def test_malformed_domain_is_blamed_on_the_domain(tmp_path: Path) -> None:
     assert info.value.line is not None and info.value.line > 1
 
 
+@pytest.mark.parametrize(
+    ("where", "typo"),
+    [
+        ("(:predicates (clear ?x)", "(:types block)\n  (:predicates (clear ?x -block)"),
+        (
+            "(:action pickup :parameters (?b)",
+            "(:types block)\n  (:action pickup :parameters (?b -block)",
+        ),
+    ],
+    ids=["predicate", "parameters"],
+)
+def test_a_dash_glued_to_its_type_is_named_with_file_and_line(
+    tmp_path: Path, where: str, typo: str
+) -> None:
+    # `?x -block` (no space after the dash): Fast Downward refuses it ("Expected a
+    # variable"); read as a third name it would blame the problem's arity instead.
+    domain = BLOCKS_DOMAIN.replace("(:requirements :strips)", "(:requirements :strips :typing)")
+    assert where in domain
+    (tmp_path / "d.pddl").write_text(domain.replace(where, typo, 1))
+    (tmp_path / "p.pddl").write_text(blocks_problem("(arm-empty)", "(arm-empty)"))
+    with pytest.raises(PDDLError) as info:
+        load_problem(tmp_path / "d.pddl", tmp_path / "p.pddl")
+    assert info.value.source == str(tmp_path / "d.pddl")
+    lines = (tmp_path / "d.pddl").read_text().splitlines()
+    assert info.value.line is not None and "-block" in lines[info.value.line - 1]
+    assert "'-block' in a typed list" in str(info.value) and "'- block'" in str(info.value)
+
+
 def test_parse_goal_checks_predicates_arity_objects() -> None:
     p = parse_problem(BLOCKS_DOMAIN, blocks_problem("(arm-empty)", "(on a b)", "a b"))
     g = parse_goal("(:goal (and (on-table a) (not (holding b))))", p)

@@ -477,3 +477,24 @@ def test_score_says_that_no_agent_predicates_means_every_fact_is_shared(
         capture_output=True, text=True, timeout=120,
     )  # fmt: skip
     assert explicit.stdout == silent.stdout and explicit.stderr == ""
+
+
+def test_an_unquoted_on_in_a_yaml_domain_config_is_named_with_the_fix() -> None:
+    # YAML reads `agent_predicates: [on, holding]` as [True, "holding"] (the config then
+    # holds "True"): refused with the reason and the fix. Quoted, `on` is blocksworld's own.
+    from omegaconf import OmegaConf
+
+    from flows.build import JobError, check_task
+    from twostep.benchmark import load_task
+
+    task = load_task("blocksworld", 1, REPO / "data")
+    cfg = _compose("domain=blocksworld")
+    unquoted = OmegaConf.merge(cfg, OmegaConf.create("domain:\n  agent_predicates: [on, holding]"))
+    with pytest.raises(JobError) as raised:
+        check_task(unquoted, task)
+    assert str(raised.value).startswith("domain.agent_predicates: True not in domain")
+    assert "reads unquoted on/off/yes/no/true/false as booleans: quote the name" in str(
+        raised.value
+    )
+    quoted = OmegaConf.merge(cfg, OmegaConf.create("domain:\n  agent_predicates: ['on', holding]"))
+    check_task(quoted, task)

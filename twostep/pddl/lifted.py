@@ -46,8 +46,20 @@ def type_name(spec: str | tuple[str, ...]) -> str:
     return spec if isinstance(spec, str) else "(either " + " ".join(spec) + ")"
 
 
-def typed_pairs(items: list[SExp]) -> tuple[tuple[str, str], ...]:
-    return tuple((name, type_name(spec)) for name, spec in typed_list(items))
+def typed_pairs(items: list[SExp], where: _Source | None = None) -> tuple[tuple[str, str], ...]:
+    """A typed list as (name, type) pairs; a name that starts with ``-`` (``?c -compressor``:
+    no space after the dash) is an error, as Fast Downward has it, naming file and line."""
+    pairs = tuple((name, type_name(spec)) for name, spec in typed_list(items))
+    for name, _ in pairs:
+        if name.startswith("-") and len(name) > 1:
+            message = (
+                f"'{name}' in a typed list: a type follows '-' and a space ('- {name[1:]}'); "
+                "Fast Downward rejects it"
+            )
+            if where is None:
+                raise PDDLError(message)
+            raise where.error(message, rf"(?<![\w?-]){re.escape(name)}(?![\w-])")
+    return pairs
 
 
 def line_of(
@@ -189,12 +201,12 @@ def _atom(expr: list[SExp]) -> Atom:
 # ----------------------------------------------------------------- the domain
 
 
-def _declarations(items: list[SExp]) -> dict[str, tuple[str, ...]]:
+def _declarations(items: list[SExp], where: _Source) -> dict[str, tuple[str, ...]]:
     """``(name ?x - t ...)`` entries (predicates, functions); ``- number`` types skipped."""
     found: dict[str, tuple[str, ...]] = {}
     for item in items:
         if isinstance(item, list) and item and isinstance(item[0], str):
-            found[item[0]] = tuple(t for _, t in typed_pairs(item[1:]))
+            found[item[0]] = tuple(t for _, t in typed_pairs(item[1:], where))
     return found
 
 
@@ -235,9 +247,9 @@ def read_domain(body: list[SExp], text: str | None, source: str | None) -> Domai
         types[type_] = parent if isinstance(parent, str) and parent != "object" else None
     if not types:
         types["object"] = None
-    constants = dict(typed_pairs((section(body, ":constants") or [":c"])[1:]))
-    predicates = _declarations((section(body, ":predicates") or [":p"])[1:])
-    functions = _declarations((section(body, ":functions") or [":f"])[1:])
+    constants = dict(typed_pairs((section(body, ":constants") or [":c"])[1:], where))
+    predicates = _declarations((section(body, ":predicates") or [":p"])[1:], where)
+    functions = _declarations((section(body, ":functions") or [":f"])[1:], where)
     derived: list[DerivedPredicate] = []
     for item in body[2:]:
         if isinstance(item, list) and item[:1] == [":derived"]:
@@ -245,7 +257,7 @@ def read_domain(body: list[SExp], text: str | None, source: str | None) -> Domai
                 raise where.error("a :derived rule needs a head and a formula", r"\(:derived")
             head = item[1]
             derived_name = str(head[0])
-            parameters = typed_pairs(head[1:])
+            parameters = typed_pairs(head[1:], where)
             if derived_name not in predicates:
                 predicates[derived_name] = tuple(t for _, t in parameters)
             derived.append(DerivedPredicate(derived_name, parameters, item[2]))
@@ -330,7 +342,7 @@ def _read_action(
     for key, value in zip(rest[::2], rest[1::2], strict=False):
         keys[str(key)] = value
     raw_parameters = keys.get(":parameters", [])
-    parameters = typed_pairs(raw_parameters if isinstance(raw_parameters, list) else [])
+    parameters = typed_pairs(raw_parameters if isinstance(raw_parameters, list) else [], where)
     for variable, type_ in parameters:
         if type_.startswith("(either"):
             raise where.error(
@@ -445,7 +457,7 @@ def read_problem(
     where = _Source(text, source)
     header = body[1] if len(body) > 1 else None
     name = str(header[1]) if isinstance(header, list) and len(header) > 1 else "problem"
-    objects = dict(typed_pairs((section(body, ":objects") or [":o"])[1:]))
+    objects = dict(typed_pairs((section(body, ":objects") or [":o"])[1:], where))
     for obj, obj_type in objects.items():
         known_type = obj_type in domain.types or obj_type in domain.types.values()
         if obj_type != "object" and not known_type and "(" not in obj_type:
