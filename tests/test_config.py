@@ -161,3 +161,18 @@ def test_sweep_callback_is_configured() -> None:
     cfg = make(hydra=True)
     callback = OmegaConf.to_container(cfg.hydra.callbacks.twostep)
     assert callback == {"_target_": "flows.sweep_callback.SweepCallback"}
+
+
+def test_every_registered_decomposer_has_a_config_and_composes() -> None:
+    # conf/decomposer/<name>.yaml for each name the registry runs (portfolio-lite included),
+    # and each composes with its own name; nothing in conf/decomposer that the registry
+    # does not know.
+    from flows.checks import value_problems
+    from twostep.methods.registry import DECOMPOSERS, method_for
+
+    files = {p.stem for p in (CONF / "decomposer").glob("*.yaml")}
+    assert files == set(DECOMPOSERS)
+    for name in DECOMPOSERS:
+        cfg = make("method=twostep", f"decomposer={name}")
+        assert cfg.decomposer.name == name and not value_problems(cfg), name
+        assert callable(method_for("twostep", name)), name

@@ -247,3 +247,38 @@ def test_portfolio_skips_a_concatenation_that_does_not_apply(tmp_path: Path) -> 
     assert rows[0]["exec_length"] == 7 and rows[2]["exec_length"] == 9
     assert run.exec_length == 7 and run.extra["candidate"] == 0 and run.fallback is None
     _check(task.problem, run, CUPS)
+
+
+def test_portfolio_lite_runs_two_members_with_n_agents_beside_plan_deal(data_root: Path) -> None:
+    # barman p01 (one shot glass carries every ingredient in the SA plan): portfolio-lite's
+    # candidates are plan-split cut by holding and goal-split, with N = 3 agents only, then
+    # plan-deal, then the two TwoStep candidates' plans dealt again. Its schedule is the
+    # shortest candidate's, never longer than plan-deal's own run (a candidate), and here
+    # shorter: the re-planned glasses deal into more than one chain. Checked by check_run,
+    # unified-planning, and the independent validator on the original files.
+    from bench.independent import IndependentValidator
+    from twostep.methods import run_single_agent
+    from twostep.methods.plan_deal import run_plan_deal
+    from twostep.methods.registry import method_for
+
+    preds = ["handempty", "holding"]
+    task = load_task("barman", 1, data_root)
+    sa_plan = run_single_agent(MethodRequest(task, planner=FAST)).planner_calls[0].result
+    request = MethodRequest(task, 3, FAST, preds, sa_plan=sa_plan)
+    run = method_for("twostep", "portfolio-lite")(request)
+    names = [(row["decomposer"], row["agents"]) for row in run.extra["candidates"]]
+    assert names == [
+        ("plan-split-holding", 3), ("goal-split", 3), ("plan-deal", 3),
+        ("plan-deal<plan-split-holding>", 3), ("plan-deal<goal-split>", 3),
+    ]  # fmt: skip
+    assert run.decomposer == "portfolio-lite" and run.agents == 3
+    lengths = [row["exec_length"] for row in run.extra["candidates"] if row["exec_length"]]
+    assert run.exec_length == min(lengths)
+    deal = run_plan_deal(request)
+    assert deal.exec_length is not None and run.exec_length is not None
+    assert run.exec_length < deal.exec_length
+    _check(task.problem, run, preds)
+    verdict = IndependentValidator(task.domain_path, task.problem_path).check_schedule(
+        run.agent_order, run.plans, run.schedule, preds
+    )
+    assert verdict.valid, verdict

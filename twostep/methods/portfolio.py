@@ -89,6 +89,17 @@ class Proposed:
         return self.proposals
 
 
+def lite_members(agent_predicates: Collection[str], link_degree: int = 2) -> list[Decomposer]:
+    """``portfolio-lite``'s members: plan-split cut by what the agent holds, and
+    goal-split; of every pair of :func:`default_members`, the one with the lowest mean
+    macro exec/SA over N = 2-4 on the 100 tasks when the portfolio's runs are replayed
+    with that pair beside plan-deal (``bench/bench_portfolio_members.py``)."""
+    return [
+        PlanSplitDecomposer(agent_predicates, cut="holding"),
+        GoalSplitDecomposer(agent_predicates, link_degree),
+    ]
+
+
 def default_members(agent_predicates: Collection[str], link_degree: int = 2) -> list[Decomposer]:
     """plan-split cut at free states, cut by what the agent holds (with partial progress,
     and with goal literals only), goal-split, and the three plan-splits again with
@@ -106,10 +117,9 @@ def default_members(agent_predicates: Collection[str], link_degree: int = 2) -> 
 
 class Portfolio:
     """The candidates: every member (default: :func:`default_members`) with N, N-1, ..., 2
-    agents, then plan-deal with each cut of ``deals`` and N agents, then (``redeal``) the
-    solved TwoStep candidates' plans, concatenated, dealt with each cut of ``deals``."""
-
-    name = "portfolio"
+    agents (``fewer_agents``; else with N only), then plan-deal with each cut of ``deals``
+    and N agents, then (``redeal``) the solved TwoStep candidates' plans, concatenated,
+    dealt with each cut of ``deals``. ``name`` is the runs' ``decomposer``."""
 
     def __init__(
         self,
@@ -117,11 +127,23 @@ class Portfolio:
         members: Sequence[Decomposer] | None = None,
         deals: Sequence[str] = (BEST,),
         redeal: bool = True,
+        fewer_agents: bool = True,
+        name: str = "portfolio",
     ):
         self.link_degree = link_degree
         self.members = None if members is None else list(members)
         self.deals = tuple(deals)
         self.redeal = redeal
+        self.fewer_agents = fewer_agents
+        self.name = name
+
+    @classmethod
+    def lite(cls, agent_predicates: Collection[str], link_degree: int = 2) -> Portfolio:
+        """``portfolio-lite``: plan-deal, and the re-deals of two TwoStep candidates
+        (:func:`lite_members`) with N agents only; a fraction of the portfolio's planning
+        time for most of its gain (README, Methods)."""
+        members = lite_members(agent_predicates, link_degree)
+        return cls(link_degree, members, fewer_agents=False, name="portfolio-lite")
 
     def candidates(self, request: MethodRequest) -> list[Candidate]:
         """Members first, with N agents down to 2, then plan-deal with N (its list schedule
@@ -131,9 +153,10 @@ class Portfolio:
         if members is None:
             members = default_members(request.agent_predicates, self.link_degree)
         agents = request.agents
-        return [
-            Candidate(d.name, n, decomposer=d) for n in range(agents, 1, -1) for d in members
-        ] + [Candidate(deal_name(cut), agents, deal_cut=cut) for cut in self.deals]
+        counts = range(agents, 1, -1) if self.fewer_agents else range(agents, agents - 1, -1)
+        return [Candidate(d.name, n, decomposer=d) for n in counts for d in members] + [
+            Candidate(deal_name(cut), agents, deal_cut=cut) for cut in self.deals
+        ]
 
 
 def run_portfolio(request: MethodRequest, portfolio: Portfolio | None = None) -> RunResult:

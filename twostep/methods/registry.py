@@ -4,7 +4,7 @@ A method is a function from a :class:`~twostep.methods.request.MethodRequest` to
 :class:`~twostep.methods.result.RunResult`. ``sa`` and ``ma`` are the paper's baselines;
 ``twostep`` is the paper's hand-off with a subgoal source (:data:`SUBGOAL_SOURCES`, the
 request's decomposer), or one of the methods that go beyond it, chosen by the same
-``decomposer`` name (:data:`TWOSTEP_METHODS`: plan-deal, the portfolio). The library,
+``decomposer`` name (:data:`TWOSTEP_METHODS`: plan-deal, the portfolio and its lite form). The library,
 ``flows/`` and ``bench/`` all ask here.
 """
 
@@ -23,7 +23,7 @@ Method = Callable[[MethodRequest], RunResult]
 
 SUBGOAL_SOURCES = ("goal-split", "expert", "llm", "plan-split")
 """Decomposers that propose helper subgoals for TwoStep's hand-off (the request's)."""
-TWOSTEP_METHODS = ("plan-deal", "portfolio")
+TWOSTEP_METHODS = ("plan-deal", "portfolio", "portfolio-lite")
 """``decomposer`` names that are methods of their own (no subgoal source needed)."""
 DECOMPOSERS = (*SUBGOAL_SOURCES, *TWOSTEP_METHODS)
 METHODS = tuple(MethodName)
@@ -58,6 +58,16 @@ def method_for(
         from twostep.methods.portfolio import Portfolio, run_portfolio
 
         return partial(run_portfolio, portfolio=Portfolio(link_degree))
+    if decomposer == "portfolio-lite":
+        return partial(run_lite, link_degree=link_degree)
     if decomposer is None or decomposer in SUBGOAL_SOURCES:
         return run_twostep
     raise UnknownMethod(f"unknown decomposer '{decomposer}' (known: {', '.join(DECOMPOSERS)})")
+
+
+def run_lite(request: MethodRequest, link_degree: int = 2) -> RunResult:
+    """``portfolio-lite`` (:meth:`~twostep.methods.portfolio.Portfolio.lite`): its members
+    need the request's agent predicates, so the portfolio is made per request."""
+    from twostep.methods.portfolio import Portfolio, run_portfolio
+
+    return run_portfolio(request, Portfolio.lite(request.agent_predicates, link_degree))

@@ -1,0 +1,129 @@
+"""Which portfolio members are worth their planning time: read from the portfolio's rows.
+
+The portfolio (``twostep/methods/portfolio.py``) records every candidate of every run:
+each TwoStep member with N, N-1, ..., 2 agents, plan-deal, and each TwoStep candidate's
+plans dealt again (``candidates`` in the rows of ``bench/bench_methods.py``). This script
+replays, without planning anything, what a smaller portfolio would have chosen: plan-deal
+plus the members of a subset, each with N agents only (its TwoStep run and the re-deal of
+its plans). For every member alone and every pair it prints the macro exec/SA per N (mean
+over domains of the per-task mean, as the methods bench) and the planning time the subset
+adds to plan-deal's (its candidates' ``planning_time_s``: median per domain, the largest of
+those medians shown). A member whose candidate was not planned because an earlier one had
+the same subgoals (``same_as``) takes that candidate's length and adds no time.
+
+    .venv/bin/python bench/bench_portfolio_members.py docs/bench/methods_portfolio.json
+
+Last, the pairs by their mean macro over the N: ``portfolio-lite`` takes the first
+(``docs/bench/methods_lite.txt``), and ``bench/bench_methods.py --methods portfolio-lite``
+then runs it for real.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import json
+import statistics
+from collections import defaultdict
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+PLAN_DEAL = "plan-deal"
+
+
+def members(rows: Sequence[dict[str, Any]]) -> list[str]:
+    """The TwoStep members the rows hold, in their order of appearance."""
+    seen: dict[str, None] = {}
+    for row in rows:
+        for c in row["candidates"]:
+            if "dealt_from" not in c and c["decomposer"] != PLAN_DEAL:
+                seen.setdefault(c["decomposer"], None)
+    return list(seen)
+
+
+def replay(row: dict[str, Any], subset: Sequence[str]) -> tuple[float, float]:
+    """The length a portfolio of plan-deal and ``subset`` (N agents) would have kept for
+    one run, and the planning time ``subset`` adds to plan-deal's."""
+    candidates = row["candidates"]
+    deal = next(c for c in candidates if c["decomposer"] == PLAN_DEAL)
+    best, added = float(deal["exec_length"]), 0.0
+    for index, c in enumerate(candidates):
+        if c["decomposer"] not in subset or c["agents"] != row["agents"]:
+            continue
+        added += c.get("planning_time_s") or 0.0
+        if c.get("exec_length") is not None:
+            best = min(best, c["exec_length"])
+        source = c.get("same_as", index)
+        for again in candidates:
+            if again.get("dealt_from") == source and "same_as" not in again:
+                added += again.get("planning_time_s") or 0.0
+                if again.get("exec_length") is not None:
+                    best = min(best, again["exec_length"])
+    return best, added
+
+
+def evaluate(rows: Sequence[dict[str, Any]], agents: int, subset: Sequence[str]) -> dict[str, Any]:
+    ratios: dict[str, list[float]] = defaultdict(list)
+    times: dict[str, list[float]] = defaultdict(list)
+    for row in rows:
+        if row["agents"] != agents or not row.get("sa_length"):
+            continue
+        best, added = replay(row, subset)
+        ratios[row["domain"]].append(best / row["sa_length"])
+        times[row["domain"]].append(added)
+    medians = {d: statistics.median(t) for d, t in times.items()}
+    return {
+        "macro": statistics.mean(statistics.mean(r) for r in ratios.values()),
+        "domains": {d: statistics.mean(r) for d, r in ratios.items()},
+        "added_s": max(medians.values()),
+        "added_by_domain": medians,
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("rows", type=Path, help="rows of bench_methods.py with portfolio runs")
+    parser.add_argument("--top", type=int, default=5, help="subsets shown per N (default 5)")
+    args = parser.parse_args(argv)
+    rows = [r for r in json.loads(args.rows.read_text()) if r.get("method") == "portfolio"]
+    names = members(rows)
+    subsets = [(), *((m,) for m in names), *itertools.combinations(names, 2), tuple(names)]
+    print(f"# {len(rows)} portfolio runs; members: {', '.join(names)}")
+    for agents in sorted({r["agents"] for r in rows}):
+        results = [(evaluate(rows, agents, s), s) for s in subsets]
+        results.sort(key=lambda item: (item[0]["macro"], item[0]["added_s"]))
+        print(f"\nN = {agents}: plan-deal + subset, macro exec/SA, largest per-domain median of "
+              "the added planning time (s)")  # fmt: skip
+        shown = results[: args.top] + [r for r in results if len(r[1]) in (0, len(names))]
+        for result, subset in _unique(shown):
+            label = " + ".join(subset) if subset else "(plan-deal alone)"
+            if len(subset) == len(names):
+                label = "(all members, N agents only)"
+            domains = " ".join(f"{d} {v:.3f}" for d, v in sorted(result["domains"].items()))
+            print(f"  {result['macro']:.3f}  +{result['added_s']:.2f} s  {label}  [{domains}]")
+    counts = sorted({r["agents"] for r in rows})
+    pairs = [s for s in subsets if len(s) == 2]
+    overall = sorted(
+        (statistics.mean(evaluate(rows, n, s)["macro"] for n in counts), s) for s in pairs
+    )
+    print(f"\npairs by their mean macro exec/SA over N = {', '.join(map(str, counts))}:")
+    for macro, subset in overall[: args.top]:
+        print(f"  {macro:.4f}  {' + '.join(subset)}")
+    return 0
+
+
+def _unique(
+    items: Sequence[tuple[dict[str, Any], tuple[str, ...]]],
+) -> list[tuple[dict[str, Any], tuple[str, ...]]]:
+    seen: set[tuple[str, ...]] = set()
+    kept = []
+    for result, subset in items:
+        if subset not in seen:
+            seen.add(subset)
+            kept.append((result, subset))
+    return kept
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
