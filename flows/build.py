@@ -12,6 +12,7 @@ the LLM client's settings; :func:`search_budget` maps ``score_max_nodes`` and
 
 from __future__ import annotations
 
+import sys
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -96,8 +97,15 @@ def executor_settings(cfg: TwostepConfig) -> ExecutorSettings:
 
 
 def load_job_task(cfg: TwostepConfig) -> BenchmarkTask:
+    """The job's task; says so on stderr when the data root's folder has no domain file
+    and the tasks are read with twostep's own (:func:`twostep.benchmark.domain_file`)."""
     cache = Path(cfg.output.root) / "cache" / "tasks"  # parsed PDDL: see load_problem
-    return load_task(cfg.domain.name, int(cfg.task), Path(cfg.data.root), cache)
+    task = load_task(cfg.domain.name, int(cfg.task), Path(cfg.data.root), cache)
+    folder = Path(cfg.data.root) / cfg.domain.name
+    if task.domain_path.parent != folder:
+        print(f"note: {folder} has no domain.pddl: its tasks are read with twostep's own "
+              f"{task.domain_path}", file=sys.stderr)  # fmt: skip
+    return task
 
 
 def check_job(cfg: TwostepConfig) -> None:

@@ -173,3 +173,44 @@ def test_the_cross_check_reads_both_domains_and_checks_each_plan_on_the_other(
     assert any(line.startswith("blocksworld p02: no plan on ours domain") for line in said)
     (row,) = [line for line in cross_table(summary) if line.startswith("| blocksworld ")]
     assert "theirs: no domain file" in row
+
+
+def test_a_data_root_whose_folder_has_tasks_but_no_domain_file_reads_them_with_ours(
+    tmp_path: Path,
+) -> None:
+    # The paper's blocksworld folder ships problems only. A data root in that shape lists
+    # the domain, loads its tasks with twostep's own domain file, and a job's inputs name
+    # that file; a folder of a domain twostep does not ship stays unknown.
+    from twostep.benchmark import (
+        DEFAULT_DATA_ROOT,
+        BenchmarkError,
+        domain_file,
+        list_domains,
+        load_task,
+    )
+    from twostep.identity import job_input_files
+
+    (tmp_path / "blocksworld").mkdir()
+    (tmp_path / "blocksworld" / "p01.pddl").write_text(BLOCKSWORLD)
+    (tmp_path / "sokoban").mkdir()
+    (tmp_path / "sokoban" / "p01.pddl").write_text(BLOCKSWORLD)
+    ours = DEFAULT_DATA_ROOT / "blocksworld" / "domain.pddl"
+    assert domain_file("blocksworld", tmp_path) == ours
+    assert list_domains(tmp_path) == ["blocksworld"]
+    task = load_task("blocksworld", 1, tmp_path)
+    assert task.domain_path == ours and task.problem_path == tmp_path / "blocksworld" / "p01.pddl"
+    result = plan(task.problem, PlannerSettings("lama-first", 20))
+    assert result.solved and result.plan
+    verdict = IndependentValidator(ours, task.problem_path).check_plan(list(result.plan))
+    assert verdict.valid, verdict.reason
+    config = {"data": {"root": str(tmp_path)}, "domain": {"name": "blocksworld"},
+              "method": {"name": "sa"}}  # fmt: skip
+    assert job_input_files(config, task.problem_path)["domain"] == ours
+    with pytest.raises(BenchmarkError, match="unknown domain 'sokoban'"):
+        load_task("sokoban", 1, tmp_path)
+    # a folder with its own domain file keeps it
+    (tmp_path / "blocksworld" / "domain.pddl").write_text(ours.read_text())
+    assert (
+        load_task("blocksworld", 1, tmp_path).domain_path
+        == tmp_path / "blocksworld" / "domain.pddl"
+    )

@@ -102,10 +102,23 @@ def _deepest(path: Path) -> tuple[int, int]:
     return deepest, deepest_line
 
 
+def domain_file(domain: str, root: Path = DEFAULT_DATA_ROOT) -> Path:
+    """The domain file of ``domain`` in ``root``: the folder's own ``domain.pddl``; for a
+    folder of tasks without one (the LLM+P benchmark's blocksworld ships problems only),
+    the domain of that name installed with twostep, which reads those tasks as they are."""
+    folder = Path(root) / domain
+    own = folder / "domain.pddl"
+    shipped = DEFAULT_DATA_ROOT / domain / "domain.pddl"
+    if own.exists() or not shipped.is_file() or not folder.is_dir():
+        return own
+    has_tasks = any(_TASK_FILE.match(p.name) and p.is_file() for p in folder.iterdir())
+    return shipped if has_tasks else own
+
+
 def list_domains(root: Path = DEFAULT_DATA_ROOT) -> list[str]:
     if not root.is_dir():
         raise BenchmarkError(f"data root {root} does not exist")
-    return sorted(p.name for p in root.iterdir() if (p / "domain.pddl").is_file())
+    return sorted(p.name for p in root.iterdir() if domain_file(p.name, root).is_file())
 
 
 def list_tasks(domain: str, root: Path = DEFAULT_DATA_ROOT) -> list[int]:
@@ -119,7 +132,7 @@ def domain_dir(domain: str, root: Path = DEFAULT_DATA_ROOT) -> Path:
     folder = Path(root) / domain
     if (folder / "domain.pddl").exists() and not (folder / "domain.pddl").is_file():
         raise BenchmarkError(f"{folder / 'domain.pddl'}: not a file (a directory?)")
-    if not (folder / "domain.pddl").is_file():
+    if not domain_file(domain, root).is_file():
         known = ", ".join(list_domains(Path(root))) or "none"
         raise BenchmarkError(f"unknown domain '{domain}' in {root}; domains: {known}")
     return folder
@@ -173,7 +186,8 @@ def load_task(
     root = Path(root)
     folder = domain_dir(domain, root)
     path = task_path(domain, task, root)
-    problem = load_pddl_files(folder / "domain.pddl", path, cache_dir)
+    domain_path = domain_file(domain, root)
+    problem = load_pddl_files(domain_path, path, cache_dir)
     plan_text = _read(folder / "p_example.sol")
     example_plan = tuple(
         line.split(";", 1)[0].strip()
@@ -185,7 +199,7 @@ def load_task(
         task_id=task,
         problem=problem,
         problem_path=path,
-        domain_path=folder / "domain.pddl",
+        domain_path=domain_path,
         task_nl=_read(path.with_suffix(".nl")).strip(),
         domain_nl=_read(folder / "domain.nl").strip(),
         example_nl=_read(folder / "p_example.nl").strip(),
@@ -200,6 +214,7 @@ __all__ = [
     "BenchmarkTask",
     "PDDLError",
     "domain_dir",
+    "domain_file",
     "list_domains",
     "list_tasks",
     "load_pddl_files",

@@ -117,13 +117,15 @@ def job_input_files(config: Mapping[str, Any], problem_path: Path | None) -> dic
 
     ``problem_path`` is the task's problem file (``None``: unknown, e.g. no such task).
     """
+    from twostep.benchmark import domain_file  # the rule of which domain file a task reads
+
     method, decomposer = _method_of(config)
     data = config.get("data")
     root = Path(str(data.get("root", "data"))) if isinstance(data, Mapping) else Path("data")
     domain = config.get("domain")
     domain_name = str(domain.get("name", "")) if isinstance(domain, Mapping) else str(domain)
     folder = root / domain_name
-    files: dict[str, Path] = {"domain": folder / "domain.pddl"}
+    files: dict[str, Path] = {"domain": domain_file(domain_name, root)}
     if problem_path is not None:
         files["problem"] = problem_path
     if method == "twostep" and decomposer == "expert":
