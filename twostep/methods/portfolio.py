@@ -31,7 +31,7 @@ candidate; the comparison with SA and ``fallback_if_longer`` use the true SA pla
 from __future__ import annotations
 
 import time
-from collections.abc import Collection, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -115,11 +115,16 @@ def default_members(agent_predicates: Collection[str], link_degree: int = 2) -> 
     ]
 
 
+Members = Callable[[Collection[str], int], list[Decomposer]]
+"""The members a portfolio makes per request, from its agent predicates and link degree."""
+
+
 class Portfolio:
-    """The candidates: every member (default: :func:`default_members`) with N, N-1, ..., 2
-    agents (``fewer_agents``; else with N only), then plan-deal with each cut of ``deals``
-    and N agents, then (``redeal``) the solved TwoStep candidates' plans, concatenated,
-    dealt with each cut of ``deals``. ``name`` is the runs' ``decomposer``."""
+    """The candidates: every member (``members``, or those ``make_members`` makes for the
+    request: :func:`default_members`) with N, N-1, ..., 2 agents (``fewer_agents``; else
+    with N only), then plan-deal with each cut of ``deals`` and N agents, then (``redeal``)
+    the solved TwoStep candidates' plans, concatenated, dealt with each cut of ``deals``.
+    ``name`` is the runs' ``decomposer``."""
 
     def __init__(
         self,
@@ -129,6 +134,7 @@ class Portfolio:
         redeal: bool = True,
         fewer_agents: bool = True,
         name: str = "portfolio",
+        make_members: Members = default_members,
     ):
         self.link_degree = link_degree
         self.members = None if members is None else list(members)
@@ -136,14 +142,16 @@ class Portfolio:
         self.redeal = redeal
         self.fewer_agents = fewer_agents
         self.name = name
+        self.make_members = make_members
 
     @classmethod
-    def lite(cls, agent_predicates: Collection[str], link_degree: int = 2) -> Portfolio:
+    def lite(cls, link_degree: int = 2) -> Portfolio:
         """``portfolio-lite``: plan-deal, and the re-deals of two TwoStep candidates
         (:func:`lite_members`) with N agents only; a fraction of the portfolio's planning
         time for most of its gain (README, Methods)."""
-        members = lite_members(agent_predicates, link_degree)
-        return cls(link_degree, members, fewer_agents=False, name="portfolio-lite")
+        return cls(
+            link_degree, fewer_agents=False, name="portfolio-lite", make_members=lite_members
+        )
 
     def candidates(self, request: MethodRequest) -> list[Candidate]:
         """Members first, with N agents down to 2, then plan-deal with N (its list schedule
@@ -151,9 +159,9 @@ class Portfolio:
         TwoStep's own hand-off wins a tie."""
         members = self.members
         if members is None:
-            members = default_members(request.agent_predicates, self.link_degree)
+            members = self.make_members(request.agent_predicates, self.link_degree)
         agents = request.agents
-        counts = range(agents, 1, -1) if self.fewer_agents else range(agents, agents - 1, -1)
+        counts = range(agents, 1, -1) if self.fewer_agents else (agents,)
         return [Candidate(d.name, n, decomposer=d) for n in counts for d in members] + [
             Candidate(deal_name(cut), agents, deal_cut=cut) for cut in self.deals
         ]

@@ -59,15 +59,9 @@ def method_for(
 
         return partial(run_portfolio, portfolio=Portfolio(link_degree))
     if decomposer == "portfolio-lite":
-        return partial(run_lite, link_degree=link_degree)
+        from twostep.methods.portfolio import Portfolio, run_portfolio
+
+        return partial(run_portfolio, portfolio=Portfolio.lite(link_degree))
     if decomposer is None or decomposer in SUBGOAL_SOURCES:
         return run_twostep
     raise UnknownMethod(f"unknown decomposer '{decomposer}' (known: {', '.join(DECOMPOSERS)})")
-
-
-def run_lite(request: MethodRequest, link_degree: int = 2) -> RunResult:
-    """``portfolio-lite`` (:meth:`~twostep.methods.portfolio.Portfolio.lite`): its members
-    need the request's agent predicates, so the portfolio is made per request."""
-    from twostep.methods.portfolio import Portfolio, run_portfolio
-
-    return run_portfolio(request, Portfolio.lite(request.agent_predicates, link_degree))
