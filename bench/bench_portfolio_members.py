@@ -90,39 +90,27 @@ def main(argv: list[str] | None = None) -> int:
     names = members(rows)
     subsets = [(), *((m,) for m in names), *itertools.combinations(names, 2), tuple(names)]
     print(f"# {len(rows)} portfolio runs; members: {', '.join(names)}")
-    for agents in sorted({r["agents"] for r in rows}):
-        results = [(evaluate(rows, agents, s), s) for s in subsets]
-        results.sort(key=lambda item: (item[0]["macro"], item[0]["added_s"]))
+    counts = sorted({r["agents"] for r in rows})
+    evaluated = {(n, s): evaluate(rows, n, s) for n in counts for s in subsets}
+    for agents in counts:
+        ranked = sorted(subsets, key=lambda s: (evaluated[agents, s]["macro"],
+                                                evaluated[agents, s]["added_s"]))  # fmt: skip
         print(f"\nN = {agents}: plan-deal + subset, macro exec/SA, largest per-domain median of "
               "the added planning time (s)")  # fmt: skip
-        shown = results[: args.top] + [r for r in results if len(r[1]) in (0, len(names))]
-        for result, subset in _unique(shown):
+        ends = [s for s in ranked if len(s) in (0, len(names))]  # plan-deal alone, and all
+        for subset in dict.fromkeys([*ranked[: args.top], *ends]):
+            result = evaluated[agents, subset]
             label = " + ".join(subset) if subset else "(plan-deal alone)"
             if len(subset) == len(names):
                 label = "(all members, N agents only)"
             domains = " ".join(f"{d} {v:.3f}" for d, v in sorted(result["domains"].items()))
             print(f"  {result['macro']:.3f}  +{result['added_s']:.2f} s  {label}  [{domains}]")
-    counts = sorted({r["agents"] for r in rows})
     pairs = [s for s in subsets if len(s) == 2]
-    overall = sorted(
-        (statistics.mean(evaluate(rows, n, s)["macro"] for n in counts), s) for s in pairs
-    )
+    overall = sorted((statistics.mean(evaluated[n, s]["macro"] for n in counts), s) for s in pairs)
     print(f"\npairs by their mean macro exec/SA over N = {', '.join(map(str, counts))}:")
     for macro, subset in overall[: args.top]:
         print(f"  {macro:.4f}  {' + '.join(subset)}")
     return 0
-
-
-def _unique(
-    items: Sequence[tuple[dict[str, Any], tuple[str, ...]]],
-) -> list[tuple[dict[str, Any], tuple[str, ...]]]:
-    seen: set[tuple[str, ...]] = set()
-    kept = []
-    for result, subset in items:
-        if subset not in seen:
-            seen.add(subset)
-            kept.append((result, subset))
-    return kept
 
 
 if __name__ == "__main__":
