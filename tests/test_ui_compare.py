@@ -30,7 +30,7 @@ from urllib.parse import parse_qs, urlsplit
 import pytest
 
 from flows import services
-from tests.browser import Browser
+from tests.browser import Browser, poll
 from tests.ui_sweep import ui_sweep
 
 SWEEP = ["domain=grippers", "task=1,2", "method=sa,twostep", "agents=2,3", "decomposer=goal-split"]
@@ -151,9 +151,12 @@ def compare_in_mlflow(
     browser.press("Escape")
     # A wider "Run Name" column shows the groups' names whole.
     browser.drag('.ag-header-cell[col-id="attributes.`Run Name`"] .ag-header-cell-resize', 160, 0)
-    deadline = time.monotonic() + 60
-    while len(groups := table_groups(browser)) < 3 and time.monotonic() < deadline:
-        time.sleep(1)
+    groups = poll(
+        lambda: found if len(found := table_groups(browser)) >= 3 else None,
+        lambda: f"three groups in the runs table (read: {sorted(table_groups(browser))})",
+        timeout_s=60,
+        interval_s=1.0,
+    )
     browser.screenshot(shots / "ui-mlflow-compare.png")
 
     # 4. Chart view: a bar chart per metric (one bar per group); add a scatter chart,
