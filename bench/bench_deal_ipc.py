@@ -1,20 +1,25 @@
-"""plan-deal on real IPC domains the project never tuned for (beyond the sample's agents.yaml).
+"""plan-deal on real IPC domains the project never tuned for, and on the sample's agents.yaml.
 
 For each domain of the IPC sample (read in place, ``--sample``, default ../shared/ipc-sample)
 and the agent predicates chosen below from its domain file (the facts that say what the
-acting object's own state is, none shared with other objects), the SA plan (lama-first,
-``--time-limit`` s) is dealt to N = 2 and 3 agents by plan-deal. Every schedule, a fallback
-to the SA plan included, is re-validated twice: by ``check_run`` (our simulator) and by
-unified-planning's validator on the N-agent compilation of the task, with the schedule's
-parallel steps laid out one after the other (as in tests/test_plan_split.py).
+acting object's own state is, none shared with other objects), or given by the sample's
+``agents.yaml`` (``--agents-file``), the SA plan (lama-first, ``--time-limit`` s) is dealt
+to N = 2 and 3 agents (``--agents``) by plan-deal. Every schedule, a fallback to the SA plan
+included, is re-validated twice: by ``check_run`` (our simulator) and by the independent
+validator on the original files (``bench/independent``: Fast Downward's grounding run by a
+simulator of its own, and unified-planning's N-agent formulation where its reader accepts
+the files; the column names the checkers that read them).
 
-Prints one row per domain, agent predicates and N: SA length, plan-deal length, the
+Prints one row per domain, task, agent predicates and N: SA length, plan-deal length, the
 fallback reason if any, both verdicts, the dealing CPU seconds (every phase after the SA
 plan, scoring included). A crash (an exception out of plan-deal) or a deal that takes more
 than ``--deal-limit`` s is a row too. Domains whose SA plan takes longer than the limit are
-skipped.
+skipped. ``--every-problem`` deals every problem file of each domain folder (any file name),
+not only p01.
 
     .venv/bin/python bench/bench_deal_ipc.py > docs/bench/deal_ipc.txt
+    .venv/bin/python bench/bench_deal_ipc.py --sample DIR --domains storage \\
+        termes-sat18-strips --agents 2 3 4 --no-own --every-problem
 """
 
 from __future__ import annotations
@@ -33,11 +38,13 @@ from types import FrameType
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+import yaml
+
+from bench.independent import IndependentValidator
 from twostep.benchmark import BenchmarkTask, load_task
 from twostep.methods import MethodRequest, RunResult, check_run, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
 from twostep.planner import PlannerSettings
-from twostep.validation import validate_schedule
 
 REPO = Path(__file__).resolve().parent.parent
 SAMPLE = REPO.parent / "shared" / "ipc-sample"
@@ -201,13 +208,17 @@ def time_limit(seconds: int) -> Iterator[None]:
         signal.signal(signal.SIGALRM, previous)
 
 
-def up_verdict(task: BenchmarkTask, run: RunResult, preds: Sequence[str]) -> str:
-    """unified-planning's verdict on the schedule in the N-agent compilation."""
+def independent_verdict(task: BenchmarkTask, run: RunResult, preds: Sequence[str]) -> str:
+    """The independent validator's verdict on the schedule, on the original files
+    (``bench/independent``: Fast Downward's grounding with a simulator of its own, and
+    unified-planning where its reader accepts the files), and which checkers agreed."""
     try:
-        verdict = validate_schedule(task.problem, run.agent_order, run.schedule, preds)
-    except Exception as error:  # a reader that cannot read the task: no verdict
+        validator = IndependentValidator(task.domain_path, task.problem_path)
+        verdict = validator.check_schedule(run.agent_order, run.plans, run.schedule, preds)
+    except Exception as error:  # no checker could read the task: no verdict
         return f"n/a ({type(error).__name__}: {str(error).splitlines()[0][:60]})"
-    return "ok" if verdict.valid else f"INVALID ({verdict.message[:80]})"
+    readers = verdict.checkers.split(" (", 1)[0]  # the checkers that read the files
+    return f"ok ({readers})" if verdict.valid else f"INVALID ({verdict.reason[:80]})"
 
 
 def our_verdict(task: BenchmarkTask, run: RunResult, preds: Sequence[str]) -> str:
@@ -232,11 +243,26 @@ def fallback_text(run: RunResult) -> str:
     return str(reason) + (f" [{'; '.join(errors)}]" if errors else "")
 
 
+def problem_files(folder: Path) -> list[Path]:
+    """Every problem file of a domain folder: the ``.pddl`` files but its domain file."""
+    return sorted(p for p in folder.glob("*.pddl") if p.name != "domain.pddl")
+
+
 def tasks_of(
-    domain: str, sample: Path, scratch: Path, own: bool
+    domain: str, sample: Path, scratch: Path, own: bool, every: bool = False
 ) -> list[tuple[str, BenchmarkTask]]:
-    """The sample's p01 of ``domain``, and our own problem for it (:data:`OWN`)."""
-    tasks = [("p01", load_task(domain, 1, sample))]
+    """The sample's p01 of ``domain`` (``every``: each problem file of its folder, whatever
+    its name, read beside the folder's domain file), and our own problem for it (:data:`OWN`)."""
+    if every:
+        tasks = []
+        for number, problem in enumerate(problem_files(sample / domain), 1):
+            folder = scratch / "every" / domain
+            folder.mkdir(parents=True, exist_ok=True)
+            shutil.copy(sample / domain / "domain.pddl", folder / "domain.pddl")
+            shutil.copy(problem, folder / f"p{number:02d}.pddl")
+            tasks.append((problem.stem, load_task(domain, number, scratch / "every")))
+    else:
+        tasks = [("p01", load_task(domain, 1, sample))]
     if own and domain in OWN:
         folder = scratch / domain
         folder.mkdir(parents=True, exist_ok=True)
@@ -250,24 +276,41 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sample", type=Path, default=SAMPLE)
     parser.add_argument("--domains", nargs="*", default=list(CASES))
+    parser.add_argument(
+        "--agents-file",
+        type=Path,
+        default=SAMPLE / "agents.yaml",
+        help="agent predicates of further domains (the sample's agents.yaml)",
+    )
     parser.add_argument("--agents", type=int, nargs="*", default=[2, 3])
     parser.add_argument("--time-limit", type=float, default=30.0, help="SA planner seconds")
     parser.add_argument("--deal-limit", type=int, default=60, help="seconds per plan-deal run")
     parser.add_argument("--no-own", action="store_true", help="the sample's p01 files only")
+    parser.add_argument(
+        "--every-problem",
+        action="store_true",
+        help="every problem file of each domain folder (any name), not only p01",
+    )
     args = parser.parse_args(argv)
     planner = PlannerSettings("lama-first", args.time_limit)
+    if args.agents_file.is_file():
+        given = yaml.safe_load(args.agents_file.read_text()) or {}
+        CASES.update({domain: [list(map(str, preds))] for domain, preds in given.items()})
     shown = " ".join(a for a in (argv if argv is not None else sys.argv[1:]))
     print(f".venv/bin/python bench/bench_deal_ipc.py {shown}".rstrip())
-    print(f"sample: {args.sample.name}, p01 of each domain and our own problems (own); "
+    which = "every problem" if args.every_problem else "p01"
+    print(f"sample: {args.sample.name}, {which} of each domain and our own problems (own); "
           f"SA lama-first {args.time_limit:g} s")  # fmt: skip
     header = ("domain", "task", "agent predicates", "N", "SA", "deal", "fallback", "check_run",
-              "unified-planning", "deal CPU s")  # fmt: skip
+              "independent validator", "deal CPU s")  # fmt: skip
     print(" | ".join(header))
     began = time.perf_counter()
     lines = []
     with tempfile.TemporaryDirectory() as scratch:
         for domain in args.domains:
-            for name, task in tasks_of(domain, args.sample, Path(scratch), not args.no_own):
+            tasks = tasks_of(domain, args.sample, Path(scratch), not args.no_own,
+                             args.every_problem)  # fmt: skip
+            for name, task in tasks:
                 for line in rows(domain, name, task, planner, args.agents, args.deal_limit):
                     print(line, flush=True)
                     lines.append(line.split(" | "))
@@ -276,7 +319,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"{len(runs)} runs: {len(dealt)} dealt shorter than SA, "
           f"{sum(c[5] == 'CRASH' for c in runs)} crashed, "
           f"{sum('INVALID' in c[7] or 'INVALID' in c[8] for c in runs)} invalid, "
-          f"{sum(c[8].startswith('n/a') for c in runs)} not read by unified-planning; "
+          f"{sum('unified-planning' not in c[8] for c in runs)} not read by unified-planning; "
           f"total {time.perf_counter() - began:.0f} s")  # fmt: skip
     return 0
 
@@ -316,7 +359,8 @@ def rows(
                 continue
             yield " | ".join(str(x) for x in (
                 domain, name, label, agents, sa.exec_length, run.exec_length,
-                fallback_text(run), our_verdict(task, run, preds), up_verdict(task, run, preds),
+                fallback_text(run), our_verdict(task, run, preds),
+                independent_verdict(task, run, preds),
                 f"{deal_seconds(run):.2f}",
             ))  # fmt: skip
 
