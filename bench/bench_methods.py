@@ -628,9 +628,14 @@ def deal_report(rows: Iterable[Row], ns: Sequence[int], method: str) -> list[str
 
 
 def report_all(
-    rows: Sequence[Row], methods: Sequence[str], ns: Sequence[int], default: str | None
+    rows: Sequence[Row],
+    methods: Sequence[str],
+    ns: Sequence[int],
+    default: str | None,
+    plot: Path | None = None,
 ) -> str:
-    """One :func:`report` per data root (the issue's targets apply to the 100 tasks only)."""
+    """One :func:`report` per data root (the issue's targets apply to the 100 tasks only);
+    ``plot``: :func:`plot_methods` of the 100 tasks' rows to that PNG."""
     out = []
     for label in sorted({row_data(r) for r in rows}):
         part = [r for r in rows if row_data(r) == label]
@@ -643,7 +648,62 @@ def report_all(
         targets = TARGETS if label == LEGACY["data"] else None
         present = [m for m in methods if any(r["method"] == m for r in part)]
         out.append(report(part, present, ns, targets, default) + "\n")
+        if plot is not None and label == LEGACY["data"]:
+            plot_methods(summarise(part, present, ns), present, ns, targets, default, plot)
+            out.append(f"(plot: {plot})\n")
     return "\n".join(out)
+
+
+def plot_methods(
+    table: Mapping[tuple[str, int, str], Cell],
+    methods: Sequence[str],
+    ns: Sequence[int],
+    targets: Mapping[int, float] | None,
+    default: str | None,
+    path: Path,
+) -> Any:
+    """Two panels to ``path`` (PNG; the figure is returned): the macro exec/SA of each method against N, with the
+    targets; and the same macro against the macro planning time (one point per method and
+    N, SA's planning time as a line), where the trade-off between the methods shows."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    shown = [m for m in methods if any((d, n, m) in table for (d, n, _) in table if n > 1)]
+    colours = {m: f"C{k}" for k, m in enumerate(shown)}
+    figure = Figure(figsize=(10.0, 4.0), layout="constrained")
+    FigureCanvasAgg(figure)
+    by_n, by_time = figure.subplots(1, 2)
+    sa_time = macro_time(table, "sa", 1)
+    for m in shown:
+        name = f"{m}*" if m == default else m
+        points = [(n, macro_ratio(table, m, n), macro_time(table, m, n)) for n in ns if n > 1]
+        points = [(1, 1.0, sa_time), *[p for p in points if p[1] == p[1]]]
+        style = {"color": colours[m], "marker": "o", "linewidth": 2.5 if m == default else 1.2}
+        by_n.plot([p[0] for p in points], [p[1] for p in points], label=name, **style)
+        by_time.plot([p[2] for p in points[1:]], [p[1] for p in points[1:]], **style)
+        for n, ratio, seconds in points[1:]:
+            by_time.annotate(f"N={n}", (seconds, ratio), textcoords="offset points",
+                             xytext=(4, 3), fontsize=7, color=colours[m])  # fmt: skip
+    if targets:
+        xs = sorted(targets)
+        by_n.scatter(xs, [targets[n] for n in xs], marker="_", s=400, color="black", zorder=5,
+                     label="target (offline default)")  # fmt: skip
+    by_n.set_xticks(list(ns))
+    by_n.set_xlabel("agents N")
+    by_n.set_ylabel("macro exec length / SA length")
+    by_n.set_title("Quality against N (N = 1: the SA plan)")
+    by_n.grid(alpha=0.3)
+    by_n.legend(fontsize=8)
+    by_time.axvline(sa_time, color="grey", linestyle="--", linewidth=1)
+    by_time.text(sa_time, 0.5, " SA planning time", transform=by_time.get_xaxis_transform(),
+                 rotation=90, fontsize=7, color="grey", va="center")  # fmt: skip
+    by_time.set_xscale("log")
+    by_time.set_xlabel("macro planning time s (SA plan included; log scale)")
+    by_time.set_ylabel("macro exec length / SA length")
+    by_time.set_title("Quality against planning time (N = 2, 3, 4)")
+    by_time.grid(alpha=0.3, which="both")
+    figure.savefig(path, dpi=120)
+    return figure
 
 
 # ---------------------------------------------------------------------------- running
@@ -698,6 +758,9 @@ def main() -> int:
     parser.add_argument(
         "--report", nargs="*", help="print the tables of these rows JSON files, run nothing"
     )
+    parser.add_argument(
+        "--plot", type=Path, help="with --report: the macro exec/SA against N and time (PNG)"
+    )
     args = parser.parse_args()
     ns = sorted(set(args.agents) | {1})
     if args.report:
@@ -706,7 +769,8 @@ def main() -> int:
         if args.domains:
             shown = [r for r in shown if r["domain"] in args.domains]
         print(f"# {' '.join(sys.argv)}\n")
-        print(report_all(shown, [m for m in METHODS if m in args.methods], ns, offline_default()))
+        methods = [m for m in METHODS if m in args.methods]
+        print(report_all(shown, methods, ns, offline_default(), args.plot))
         return 0
 
     fallback, out = not args.no_fallback, Path(args.out)

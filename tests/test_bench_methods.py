@@ -289,3 +289,27 @@ def test_tyreworld_one_jack_floor_line() -> None:
     ]
     (line,) = bm.one_jack_floor(rows, rows[1:])
     assert "reached in 1 of 2 runs" in line and "floor / SA, mean over tasks: 0.600" in line
+
+
+def test_the_plot_draws_the_macro_against_n_and_against_planning_time(tmp_path: Path) -> None:
+    methods = ["ma", "goal-split", "plan-split"]
+    table = bm.summarise(ROWS, methods, [1, 2])
+    path = tmp_path / "methods.png"
+    figure = bm.plot_methods(table, methods, [1, 2], {2: 0.55}, "goal-split", path)
+    assert path.read_bytes().startswith(b"\x89PNG")
+    by_n, by_time = figure.axes
+    lines = {line.get_label(): line for line in by_n.get_lines()}
+    # against N: (1, the SA plan) then N = 2; MA's macro (0.75 + 0.8) / 2, goal-split's
+    # ((1.0 + 0.5) / 2 + 0.9) / 2 = 0.825, the default decomposer starred
+    assert list(lines["ma"].get_xdata()) == [1, 2]
+    assert list(lines["ma"].get_ydata()) == pytest.approx([1.0, 0.775])
+    assert list(lines["goal-split*"].get_ydata()) == pytest.approx([1.0, 0.825])
+    # against time, one point per method at N = 2: MA's macro planning time (A (2 + 6) / 2
+    # = 4, B 4), goal-split's (A 1, B 2: 1.5), plan-split's (1: its failed run's time
+    # counts; macro (0.75 + 1.2) / 2); SA's (A (1 + 3) / 2 = 2, B 2) is the vertical line
+    timed = [line for line in by_time.get_lines() if len(line.get_xdata()) == 1]
+    points = sorted((line.get_xdata()[0], line.get_ydata()[0]) for line in timed)
+    flat = [x for point in points for x in point]
+    assert flat == pytest.approx([1.0, 0.975, 1.5, 0.825, 4.0, 0.775])
+    sa_line = [line for line in by_time.get_lines() if line.get_linestyle() == "--"]
+    assert list(sa_line[0].get_xdata()) == pytest.approx([2.0, 2.0])
