@@ -14,7 +14,7 @@ action's possible effects count, conditional ones included.
 
 from __future__ import annotations
 
-from collections import defaultdict, deque
+from collections import Counter, defaultdict, deque
 from collections.abc import Callable, Collection, Sequence
 
 from twostep.dealing.encoding import FactSpace, GoalBits, Step
@@ -134,13 +134,20 @@ class Walker:
         # index: an agent fact a move needs -> the move as bits, with its rank in the
         # order above (moves that need none: anywhere)
         steps = [space.step(a) for a in moves]
-        self._needing: dict[Fact, list[tuple[int, Step]]] = defaultdict(list)
+        self._needing: dict[Fact, list[tuple[int, int, Step]]] = defaultdict(list)
         self._anywhere: list[tuple[int, Step]] = []
-        for rank, (action, step) in enumerate(zip(moves, steps, strict=True)):
+        # each under the agent fact it needs that the fewest moves need (a car's place,
+        # not that some other car stands at the curb): the fewest candidates to look at
+        needs = [sorted(f for f in a.pre_positive if f[0] in agent) for a in moves]
+        needed_by = Counter(f for facts in needs for f in facts)
+        for rank, (facts, step) in enumerate(zip(needs, steps, strict=True)):
             if step.exact and step.pre_env & ~self.universe_env:
                 continue  # it needs a fact no state met has: never a candidate
-            needs = sorted(f for f in action.pre_positive if f[0] in agent)
-            (self._needing[needs[0]] if needs else self._anywhere).append((rank, step))
+            if not facts:
+                self._anywhere.append((rank, step))
+                continue
+            key = min(facts, key=lambda f: (needed_by[f], f))
+            self._needing[key].append((rank, step.pre_own if step.exact else 0, step))
         # what moves can change at all: a walk never makes true what no move adds (a
         # tent put up, a car at the curb), nor false what no move deletes
         self.adds_env = self.adds_own = self.dels_env = self.dels_own = 0
@@ -164,8 +171,8 @@ class Walker:
             pool = [
                 (rank, step)
                 for fact in self.space.own_facts(own)
-                for rank, step in self._needing.get(fact, ())
-                if not step.exact or not step.pre_own & ~own
+                for rank, needs_own, step in self._needing.get(fact, ())
+                if not needs_own & ~own
             ]
             # a move not exact as bits reads more than it needs: the state decides
             steps = [step for _, step in sorted([*self._anywhere, *pool], key=_rank)]
