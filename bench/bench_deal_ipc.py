@@ -20,6 +20,9 @@ not only p01.
     .venv/bin/python bench/bench_deal_ipc.py > docs/bench/deal_ipc.txt
     .venv/bin/python bench/bench_deal_ipc.py --sample DIR --domains storage \\
         termes-sat18-strips --agents 2 3 4 --no-own --every-problem
+    .venv/bin/python bench/bench_deal_ipc.py --sample DIR --domains ferry tsp --no-own
+
+The last deals further real domains (a scratch folder per domain, ``docs/bench/deal_ipc_extra.txt``).
 """
 
 from __future__ import annotations
