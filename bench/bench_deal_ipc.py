@@ -20,6 +20,9 @@ not only p01.
     .venv/bin/python bench/bench_deal_ipc.py > docs/bench/deal_ipc.txt
     .venv/bin/python bench/bench_deal_ipc.py --sample DIR --domains storage \\
         termes-sat18-strips --agents 2 3 4 --no-own --every-problem
+    .venv/bin/python bench/bench_deal_ipc.py --sample DIR --domains ferry tsp --no-own
+
+The last deals further real domains (a scratch folder per domain, ``docs/bench/deal_ipc_extra.txt``).
 """
 
 from __future__ import annotations
@@ -88,6 +91,46 @@ CASES: dict[str, list[list[str]]] = {
     "assembly": [["committed"]],
     "pipesworld-notankage": [["on"]],
 }
+# Further real domains with acting agents (the scratch folders of
+# docs/bench/conformance_extra*.txt; docs/bench/deal_ipc_extra.txt). trucks-strips is
+# grounded: its truck's state is 0-ary facts named after it (where it is, which of its
+# areas is free, which package is in which area).
+TRUCK = ["at_truck1_l1", "at_truck1_l2", "at_truck1_l3", "free_a1_truck1", "free_a2_truck1"]
+TRUCK += [f"in_package{k}_truck1_a{a}" for k in range(1, 5) for a in (1, 2)]
+CASES.update({
+    # the robot's base, gripper and cart grasp (base-obstacle also marks carts: shared)
+    "tidybot-opt11-strips": [
+        ["parked", "base-pos", "gripper-rel", "gripper-empty", "holding", "pushing",
+         "not-pushing"],
+    ],
+    # each robot's place, battery and stop (guarded and config-fullfilled are the team's)
+    "recharging-robots-sat23-adl": [["at", "battery", "stopped"]],
+    # a robot's cell and motion; free marks cells (shared); nothing-is-moving is 0-ary, global
+    "ricochet-robots-opt23-adl": [["at", "is-moving"]],
+    "trucks-strips": [TRUCK],
+    # the briefcase's place and contents; the second row gives each agent its own copy of
+    # where the portables are (at), as depot's second row; is-at is also a goal
+    "briefcaseworld": [["is-at", "in"], ["is-at", "in", "at"]],
+    # a hiker's place; the second row adds the couple's walked (a pair's own progress)
+    "hiking-sequential-multi-core": [["at_person"], ["at_person", "walked"]],
+    # no acting object: the crew's day (today) is the one state its action reads: a probe
+    # with a conditional effect under forall
+    "maintenance-opt14-adl": [["today"]],
+    # a car's place: on a curb or behind a car (car-clear and curb-clear are set by others)
+    "parking-ipc11-learning-target": [["at-curb", "at-curb-num", "behind-car"]],
+    # a server's memory: its usage; the second row adds what it caches
+    "data-network": [["usage"], ["usage", "cached"]],
+    # a vehicle's load; the second row adds at, which also places packages (driverlog's)
+    "logistics": [["in"], ["at", "in"]],
+    # the snake's body (blocked also marks walls: shared)
+    "snake": [["headsnake", "tailsnake", "nextsnake"]],
+    # the README's one-agent choices for ferry, tsp and nurikabe
+    "ferry": [["at-ferry", "empty-ferry", "on"]],
+    "tsp": [["at"]],
+    "nurikabe-sat18": [["robot-pos", "moving"]],
+    # a saw's board (empty is only the saw's); the other machines keep no state: a probe
+    "woodworking": [["in-highspeed-saw", "empty"]],
+})  # fmt: skip
 
 
 # Larger problems of our own for sample domains whose p01 has one object of the agent's
@@ -275,7 +318,9 @@ def tasks_of(
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sample", type=Path, default=SAMPLE)
-    parser.add_argument("--domains", nargs="*", default=list(CASES))
+    parser.add_argument(
+        "--domains", nargs="*", help="default: the domains of CASES that --sample has"
+    )
     parser.add_argument(
         "--agents-file",
         type=Path,
@@ -293,6 +338,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     planner = PlannerSettings("lama-first", args.time_limit)
+    if args.domains is None:
+        args.domains = [d for d in CASES if (args.sample / d).is_dir()]
     if args.agents_file.is_file():
         given = yaml.safe_load(args.agents_file.read_text()) or {}
         CASES.update({domain: [list(map(str, preds))] for domain, preds in given.items()})

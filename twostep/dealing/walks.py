@@ -14,7 +14,7 @@ action's possible effects count, conditional ones included.
 
 from __future__ import annotations
 
-from collections import defaultdict, deque
+from collections import Counter, defaultdict, deque
 from collections.abc import Callable, Collection, Sequence
 
 from twostep.dealing.encoding import FactSpace, GoalBits, Step
@@ -95,6 +95,10 @@ def is_move(action: GroundAction, space: FactSpace) -> bool:
     )
 
 
+def _rank(entry: tuple[int, Step]) -> int:
+    return entry[0]
+
+
 def slot(fact: Fact) -> Fact:
     """What an agent fact is about, leaving out where: ``(robot-at robot1 t3)`` is about
     ``robot-at robot1``, termes' ``(at p3)`` about ``at``."""
@@ -127,15 +131,35 @@ class Walker:
         )
         universe = universe.union(*(a.possible_add for a in moves))
         self.universe_env, _ = space.bits(f for f in universe if f[0] not in agent)
-        # index: an agent fact a move needs -> the move (moves that need none: anywhere)
-        self._needing: dict[Fact, list[GroundAction]] = defaultdict(list)
-        self._anywhere: list[GroundAction] = []
-        for action in moves:
-            needs = sorted(f for f in action.pre_positive if f[0] in agent)
-            (self._needing[needs[0]] if needs else self._anywhere).append(action)
+        # index: an agent fact a move needs -> the move as bits, with its rank in the
+        # order above (moves that need none: anywhere)
+        steps = [space.step(a) for a in moves]
+        self._needing: dict[Fact, list[tuple[int, int, Step]]] = defaultdict(list)
+        self._anywhere: list[tuple[int, Step]] = []
+        # each under the agent fact it needs that the fewest moves need (a car's place,
+        # not that some other car stands at the curb): the fewest candidates to look at
+        needs = [sorted(f for f in a.pre_positive if f[0] in agent) for a in moves]
+        needed_by = Counter(f for facts in needs for f in facts)
+        for rank, (facts, step) in enumerate(zip(needs, steps, strict=True)):
+            if step.exact and step.pre_env & ~self.universe_env:
+                continue  # it needs a fact no state met has: never a candidate
+            if not facts:
+                self._anywhere.append((rank, step))
+                continue
+            key = min(facts, key=lambda f: (needed_by[f], f))
+            self._needing[key].append((rank, step.pre_own if step.exact else 0, step))
+        # what moves can change at all: a walk never makes true what no move adds (a
+        # tent put up, a car at the curb), nor false what no move deletes
+        self.adds_env = self.adds_own = self.dels_env = self.dels_own = 0
+        for step in steps:
+            self.adds_env |= step.add_env
+            self.adds_own |= step.add_own
+            self.dels_env |= step.del_env
+            self.dels_own |= step.del_own
         self._candidates: dict[int, tuple[list[Step], int]] = {}
         self._successors: dict[tuple[int, int], list[Step]] = {}
         self._moved: dict[Step, frozenset[Fact]] = {}  # per move: the slots it changes
+        self._walks: dict[tuple[int, int, Step], list[Step] | None] = {}
         self.search_s = 0.0
         """Seconds spent in :meth:`walk_to` so far."""
 
@@ -144,19 +168,14 @@ class Walker:
         the environment bits they read."""
         found = self._candidates.get(own)
         if found is None:
-            space, universe = self.space, self.universe_env
-            pool = [*self._anywhere]
-            for fact in space.own_facts(own):
-                pool += self._needing.get(fact, ())
+            pool = [
+                (rank, step)
+                for fact in self.space.own_facts(own)
+                for rank, needs_own, step in self._needing.get(fact, ())
+                if not needs_own & ~own
+            ]
             # a move not exact as bits reads more than it needs: the state decides
-            steps = sorted(
-                (
-                    step
-                    for step in map(space.step, pool)
-                    if not step.exact or not (step.pre_own & ~own or step.pre_env & ~universe)
-                ),
-                key=str,
-            )
+            steps = [step for _, step in sorted([*self._anywhere, *pool], key=_rank)]
             reads = 0
             for step in steps:
                 reads |= step.pre_env | step.neg_env
@@ -182,19 +201,46 @@ class Walker:
             found = self._successors[key] = [s for s in steps if s.applicable(env, own)]
         return found
 
+    def out_of_reach(self, env: int, own: int, pos: tuple[int, int], neg: tuple[int, int]) -> bool:
+        """Whether no walk from ``env`` and ``own`` can make the facts ``pos`` (environment
+        and own bits) true and ``neg`` false: one of them needs a change no move makes."""
+        return bool(
+            pos[0] & ~env & ~self.adds_env
+            | pos[1] & ~own & ~self.adds_own
+            | neg[0] & env & ~self.dels_env
+            | neg[1] & own & ~self.dels_own
+        )
+
     def walk_to(self, env: int, own: int, target: Step) -> list[Step]:
-        """The shortest walk after which ``target`` applies (raise :class:`DealError`)."""
-        began = cpu_seconds()
+        """The shortest walk after which ``target`` applies (raise :class:`DealError`).
+        Remembered: the deals of one plan ask for the same walks again and again, and a
+        walk that is not there costs a whole search."""
+        key = (env, own, target)
+        if key not in self._walks:
+            began = cpu_seconds()
+            try:
+                self._walks[key] = self._walk_to(env, own, target)
+            except DealError:
+                self._walks[key] = None
+            finally:
+                self.search_s += cpu_seconds() - began
+        found = self._walks[key]
+        if found is None:
+            raise DealError(f"no walk to where {target} applies")
+        return list(found)
+
+    def _walk_to(self, env: int, own: int, target: Step) -> list[Step]:
         agent = self.space.agent_predicates
         needed = {slot(f) for f in target.action.pre_positive if f[0] in agent}
+        pos, neg = (target.pre_env, target.pre_own), (target.neg_env, target.neg_own)
+        if target.exact and self.out_of_reach(env, own, pos, neg):
+            raise DealError(f"no walk to where {target} applies")
         try:
             return self._search(env, own, target.applicable, needed, str(target))
         except DealError:
             if all(needed >= self.moved(s) for s in self.candidates(own)[0]):
                 raise  # every move was tried already
             return self._search(env, own, target.applicable, None, str(target))
-        finally:
-            self.search_s += cpu_seconds() - began
 
     def walk_until(self, env: int, own: int, reached: Callable[[int, int], bool]) -> list[Step]:
         """The shortest walk (any move) to a state where ``reached`` holds (raise
@@ -271,12 +317,17 @@ def closing_walk(
 
     if goal.space is None:
         for a in order:
-            if not goal.own_holds(owns[a]) and not walk(a, lambda _, own: goal.own_holds(own)):
+            if goal.own_holds(owns[a]):
+                continue
+            hopeless = walker.out_of_reach(env, owns[a], (0, goal.pos_own), (0, goal.neg_own))
+            if hopeless or not walk(a, lambda _, own: goal.own_holds(own)):
                 raise DealError("the dealt plans do not reach the goal")
         missing = (goal.pos_env | goal.neg_env) & ~goal.env_met(env)
         while missing:
             bit = missing & -missing
             missing &= ~bit
+            if walker.out_of_reach(env, 0, (bit & goal.pos_env, 0), (bit & goal.neg_env, 0)):
+                raise DealError("the dealt plans do not reach the goal")
             want = goal.env_met(env) | bit
 
             def kept(env: int, own: int, want: int = want) -> bool:

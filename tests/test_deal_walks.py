@@ -1,0 +1,114 @@
+"""plan-deal's walking search on a task whose acting actions need facts only other acting
+actions make (a lamp must be trimmed before it is lit; walking trims nothing).
+
+Real domains of this shape (a tent put up before a couple walks on, a car parked behind
+another) made plan-deal search the whole walking space again and again for walks that
+cannot exist, for minutes. A walk is now not searched for when the target needs a fact no
+move adds, and each walk is searched once per SA plan. The deals are checked by
+``check_run`` and by the independent validator on the files.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from bench.independent import IndependentValidator
+from tests.test_plan_split import FAST, sa_result
+from twostep.benchmark import BenchmarkTask, load_task
+from twostep.dealing import Dealer, DealError, walks
+from twostep.methods import MethodRequest, check_run
+from twostep.methods.plan_deal import run_plan_deal
+from twostep.strips import Grounder
+
+DOMAIN = """(define (domain lamplighters)
+ (:requirements :strips :typing)
+ (:types lighter spot lamp)
+ (:predicates (stands ?p - lighter ?s - spot) (road ?a ?b - spot)
+              (lamp-at ?l - lamp ?s - spot) (dark ?l - lamp) (trimmed ?l - lamp)
+              (lit ?l - lamp))
+ (:action go :parameters (?p - lighter ?a ?b - spot)
+  :precondition (and (stands ?p ?a) (road ?a ?b))
+  :effect (and (stands ?p ?b) (not (stands ?p ?a))))
+ (:action trim :parameters (?p - lighter ?l - lamp ?s - spot)
+  :precondition (and (stands ?p ?s) (lamp-at ?l ?s) (dark ?l))
+  :effect (trimmed ?l))
+ (:action light :parameters (?p - lighter ?l - lamp ?s - spot)
+  :precondition (and (stands ?p ?s) (lamp-at ?l ?s) (dark ?l) (trimmed ?l))
+  :effect (and (lit ?l) (not (dark ?l)))))
+"""
+
+# a street of five spots, s0 to s4, the lighter at s0, a dark lamp at each of s1..s4
+ROADS = " ".join(f"(road s{k} s{k + 1}) (road s{k + 1} s{k})" for k in range(4))
+LAMPS = " ".join(f"(lamp-at l{k} s{k}) (dark l{k})" for k in range(1, 5))
+PROBLEM = f"""(define (problem evening) (:domain lamplighters)
+ (:objects ann - lighter s0 s1 s2 s3 s4 - spot l1 l2 l3 l4 - lamp)
+ (:init (stands ann s0) {ROADS} {LAMPS})
+ (:goal (and (lit l1) (lit l2) (lit l3) (lit l4))))
+"""
+PLAN = tuple(
+    step
+    for k in range(1, 5)
+    for step in (f"(go ann s{k - 1} s{k})", f"(trim ann l{k} s{k})", f"(light ann l{k} s{k})")
+)
+AGENT = ["stands"]
+
+
+@pytest.fixture
+def task(tmp_path: Path) -> BenchmarkTask:
+    folder = tmp_path / "lamplighters"
+    folder.mkdir()
+    (folder / "domain.pddl").write_text(DOMAIN)
+    (folder / "domain.nl").write_text("lamplighters")
+    (folder / "p01.pddl").write_text(PROBLEM)
+    return load_task("lamplighters", 1, tmp_path)
+
+
+def test_no_walk_is_searched_for_a_fact_no_move_adds(
+    task: BenchmarkTask, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    dealer = Dealer(task.problem, PLAN, AGENT)
+    walker, space = dealer.walker, dealer.space
+    env, own = dealer.init
+    ground = Grounder(task.problem).ground
+    light = space.step(ground("(light ann l3 s3)"))  # l3 is not trimmed: no walk helps
+    trim = space.step(ground("(trim ann l3 s3)"))  # three steps of go away
+    # the search itself, over every move, finds no walk to the light either
+    with pytest.raises(DealError):
+        walker._search(env, own, light.applicable, None, str(light))
+    searched: list[str] = []
+    search = walks.Walker._search
+
+    def counted(self: walks.Walker, *args: object, **kwargs: object) -> list[walks.Step]:
+        searched.append(str(args[-1]))
+        return search(self, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(walks.Walker, "_search", counted)
+    with pytest.raises(DealError, match="no walk"):
+        walker.walk_to(env, own, light)
+    assert searched == []
+    path = walker.walk_to(env, own, trim)
+    assert [str(s) for s in path] == ["(go ann s0 s1)", "(go ann s1 s2)", "(go ann s2 s3)"]
+    for step in path:
+        env, own = step.apply(env, own)
+    assert trim.applicable(env, own) and not light.applicable(env, own)
+    # asked again (the deals of one plan do): the same walk, not searched again
+    assert walker.walk_to(*dealer.init, trim) == path
+    assert searched == [str(trim)]
+
+
+@pytest.mark.parametrize("agents", [2, 3])
+def test_lamps_dealt_and_validated(task: BenchmarkTask, agents: int) -> None:
+    run = run_plan_deal(MethodRequest(task, agents, FAST, AGENT, sa_plan=sa_result(PLAN)))
+    assert run.success and run.exec_length is not None
+    check_run(task.problem, run, AGENT)
+    verdict = IndependentValidator(task.domain_path, task.problem_path).check_schedule(
+        run.agent_order, run.plans, run.schedule, AGENT
+    )
+    assert verdict.valid, verdict.reason
+    # the second lighter walks to the far lamps while the first lights the near ones
+    assert run.fallback is None and run.exec_length < len(PLAN)
+    assert sorted(a for plan in run.plans.values() for a in plan if "go" not in a) == sorted(
+        a for a in PLAN if "go" not in a
+    )
