@@ -346,7 +346,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     shown = " ".join(a for a in (argv if argv is not None else sys.argv[1:]))
     print(f".venv/bin/python bench/bench_deal_ipc.py {shown}".rstrip())
     which = "every problem" if args.every_problem else "p01"
-    print(f"sample: {args.sample.name}, {which} of each domain and our own problems (own); "
+    own = "" if args.no_own else " and our own problems (own)"
+    print(f"sample: {args.sample.name}, {which} of each domain{own}; "
           f"SA lama-first {args.time_limit:g} s")  # fmt: skip
     header = ("domain", "task", "agent predicates", "N", "SA", "deal", "fallback", "check_run",
               "independent validator", "deal CPU s")  # fmt: skip
