@@ -96,10 +96,21 @@ class ServerSettings:
         )
 
 
+_HANDED_OUT: set[int] = set()
+"""Ports :func:`free_port` gave this process already."""
+
+
 def free_port(host: str = "127.0.0.1") -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-        sock.bind((host, 0))
-        return int(sock.getsockname()[1])
+    """A port the system has free now, never one this process was given before: two servers
+    started one after the other (Prefect, then MLflow) are each given a port before either
+    has bound its own, and the system may offer the same free port twice."""
+    while True:
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
+            sock.bind((host, 0))
+            port = int(sock.getsockname()[1])
+        if port not in _HANDED_OUT:
+            _HANDED_OUT.add(port)
+            return port
 
 
 def server_environment(

@@ -101,3 +101,36 @@ def test_up_status_run_down_round_trip(tmp_path: Path, capsys: pytest.CaptureFix
     assert not is_healthy(prefect.url) and not is_healthy(mlflow.url)
     assert not (root / "services.json").exists()
     print(f"round trip {time.perf_counter() - start:.1f} s", file=sys.stderr)
+
+
+def test_two_servers_started_back_to_back_get_different_ports(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # `twostep-services` asks a port for Prefect, then one for MLflow, before either server
+    # has bound its own; the system may offer the same free port twice (it did: MLflow took
+    # the port and Prefect stopped with "address already in use"). A system that offers
+    # 41001 twice, then 41002: the second server is given 41002.
+    from flows import servers
+
+    offered = iter([41001, 41001, 41002])
+
+    class System:
+        def __init__(self, *args: object) -> None:
+            self.port = 0
+
+        def __enter__(self) -> System:
+            return self
+
+        def __exit__(self, *args: object) -> None:
+            pass
+
+        def bind(self, address: tuple[str, int]) -> None:
+            assert address[1] == 0  # the system chooses
+            self.port = next(offered)
+
+        def getsockname(self) -> tuple[str, int]:
+            return ("127.0.0.1", self.port)
+
+    monkeypatch.setattr(servers, "_HANDED_OUT", set(), raising=False)
+    monkeypatch.setattr(servers.socket, "socket", System)
+    assert [servers.free_port(), servers.free_port()] == [41001, 41002]
