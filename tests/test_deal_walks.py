@@ -112,3 +112,48 @@ def test_lamps_dealt_and_validated(task: BenchmarkTask, agents: int) -> None:
     assert sorted(a for plan in run.plans.values() for a in plan if "go" not in a) == sorted(
         a for a in PLAN if "go" not in a
     )
+
+
+# A one-way street: roads lead from s0 to s4 only. Walking adds `stands` at every spot, so
+# once the lighter has walked past a lamp, nothing rules the lamp out but where walks go.
+ONE_WAY = PROBLEM.replace(ROADS, " ".join(f"(road s{k} s{k + 1})" for k in range(4)))
+
+
+def test_no_walk_is_searched_for_a_place_no_road_leads_back_to(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    folder = tmp_path / "lamplighters"
+    folder.mkdir()
+    (folder / "domain.pddl").write_text(DOMAIN)
+    (folder / "p01.pddl").write_text(ONE_WAY)
+    task = load_task("lamplighters", 1, tmp_path)
+    dealer = Dealer(task.problem, PLAN, AGENT)
+    walker, space = dealer.walker, dealer.space
+    ground = Grounder(task.problem).ground
+    env, own = dealer.init
+    for move in ("(go ann s0 s1)", "(go ann s1 s2)", "(go ann s2 s3)"):
+        env, own = space.step(ground(move)).apply(env, own)
+    behind = space.step(ground("(trim ann l1 s1)"))  # at s1, walked past
+    ahead = space.step(ground("(trim ann l4 s4)"))
+    # a move adds (stands ann s1) (going from s0), so that alone rules nothing out
+    assert not walker.out_of_reach(env, own, (behind.pre_env, behind.pre_own), (0, 0))
+    # the search itself, over every move, finds no walk back
+    with pytest.raises(DealError):
+        walker._search(env, own, behind.applicable, None, str(behind))
+    # from s3, even without deletes, walks reach s3 and s4 only
+    _, reach_own = walker.relaxed(env, own)
+    stands = {f for f in space.own_facts(reach_own) if f[0] == "stands"}
+    assert stands == {("stands", "ann", "s3"), ("stands", "ann", "s4")}
+    searched: list[str] = []
+    search = walks.Walker._search
+
+    def counted(self: walks.Walker, *args: object, **kwargs: object) -> list[walks.Step]:
+        searched.append(str(args[-1]))
+        return search(self, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(walks.Walker, "_search", counted)
+    with pytest.raises(DealError, match="no walk"):
+        walker.walk_to(env, own, behind)
+    assert searched == []
+    assert [str(s) for s in walker.walk_to(env, own, ahead)] == ["(go ann s3 s4)"]
+    assert searched == [str(ahead)]

@@ -160,6 +160,8 @@ class Walker:
         self._successors: dict[tuple[int, int], list[Step]] = {}
         self._moved: dict[Step, frozenset[Fact]] = {}  # per move: the slots it changes
         self._walks: dict[tuple[int, int, Step], list[Step] | None] = {}
+        self._moves = steps
+        self._relaxed: dict[tuple[int, int], tuple[int, int]] = {}
         self.search_s = 0.0
         """Seconds spent in :meth:`walk_to` so far."""
 
@@ -201,6 +203,27 @@ class Walker:
             found = self._successors[key] = [s for s in steps if s.applicable(env, own)]
         return found
 
+    def relaxed(self, env: int, own: int) -> tuple[int, int]:
+        """The facts (environment, own bits) that moves may make true from ``env`` and
+        ``own`` if they deleted nothing and forbade nothing (a move not exact as bits: as
+        if it always applied), and those already true: a superset of what any walk
+        reaches, so a fact outside it needs no search. Kept per state."""
+        found = self._relaxed.get((env, own))
+        if found is None:
+            reached, pending = (env, own), list(self._moves)
+            while True:
+                waiting = []
+                for step in pending:
+                    if step.exact and (step.pre_env & ~reached[0] or step.pre_own & ~reached[1]):
+                        waiting.append(step)
+                    else:
+                        reached = (reached[0] | step.add_env, reached[1] | step.add_own)
+                if len(waiting) == len(pending):
+                    break
+                pending = waiting
+            found = self._relaxed[(env, own)] = reached
+        return found
+
     def out_of_reach(self, env: int, own: int, pos: tuple[int, int], neg: tuple[int, int]) -> bool:
         """Whether no walk from ``env`` and ``own`` can make the facts ``pos`` (environment
         and own bits) true and ``neg`` false: one of them needs a change no move makes."""
@@ -235,6 +258,10 @@ class Walker:
         pos, neg = (target.pre_env, target.pre_own), (target.neg_env, target.neg_own)
         if target.exact and self.out_of_reach(env, own, pos, neg):
             raise DealError(f"no walk to where {target} applies")
+        if target.exact:  # a fact it needs that no walk reaches, even without deletes
+            reach_env, reach_own = self.relaxed(env, own)
+            if target.pre_env & ~reach_env or target.pre_own & ~reach_own:
+                raise DealError(f"no walk to where {target} applies")
         try:
             return self._search(env, own, target.applicable, needed, str(target))
         except DealError:
