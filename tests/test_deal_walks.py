@@ -55,18 +55,37 @@ PLAN = tuple(
 AGENT = ["stands"]
 
 
-@pytest.fixture
-def task(tmp_path: Path) -> BenchmarkTask:
-    folder = tmp_path / "lamplighters"
+def lamplighters(root: Path, problem: str) -> BenchmarkTask:
+    """``problem`` in a lamplighters folder of ``root``, read as task 1."""
+    folder = root / "lamplighters"
     folder.mkdir()
     (folder / "domain.pddl").write_text(DOMAIN)
     (folder / "domain.nl").write_text("lamplighters")
-    (folder / "p01.pddl").write_text(PROBLEM)
-    return load_task("lamplighters", 1, tmp_path)
+    (folder / "p01.pddl").write_text(problem)
+    return load_task("lamplighters", 1, root)
+
+
+@pytest.fixture
+def task(tmp_path: Path) -> BenchmarkTask:
+    return lamplighters(tmp_path, PROBLEM)
+
+
+@pytest.fixture
+def searched(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """The targets the walking search is run for from now on, in order."""
+    targets: list[str] = []
+    search = walks.Walker._search
+
+    def counted(self: walks.Walker, *args: object, **kwargs: object) -> list[walks.Step]:
+        targets.append(str(args[-1]))
+        return search(self, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(walks.Walker, "_search", counted)
+    return targets
 
 
 def test_no_walk_is_searched_for_a_fact_no_move_adds(
-    task: BenchmarkTask, monkeypatch: pytest.MonkeyPatch
+    task: BenchmarkTask, searched: list[str]
 ) -> None:
     dealer = Dealer(task.problem, PLAN, AGENT)
     walker, space = dealer.walker, dealer.space
@@ -77,14 +96,7 @@ def test_no_walk_is_searched_for_a_fact_no_move_adds(
     # the search itself, over every move, finds no walk to the light either
     with pytest.raises(DealError):
         walker._search(env, own, light.applicable, None, str(light))
-    searched: list[str] = []
-    search = walks.Walker._search
-
-    def counted(self: walks.Walker, *args: object, **kwargs: object) -> list[walks.Step]:
-        searched.append(str(args[-1]))
-        return search(self, *args, **kwargs)  # type: ignore[arg-type]
-
-    monkeypatch.setattr(walks.Walker, "_search", counted)
+    searched.clear()  # the searches from here on
     with pytest.raises(DealError, match="no walk"):
         walker.walk_to(env, own, light)
     assert searched == []
@@ -120,13 +132,9 @@ ONE_WAY = PROBLEM.replace(ROADS, " ".join(f"(road s{k} s{k + 1})" for k in range
 
 
 def test_no_walk_is_searched_for_a_place_no_road_leads_back_to(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path, searched: list[str]
 ) -> None:
-    folder = tmp_path / "lamplighters"
-    folder.mkdir()
-    (folder / "domain.pddl").write_text(DOMAIN)
-    (folder / "p01.pddl").write_text(ONE_WAY)
-    task = load_task("lamplighters", 1, tmp_path)
+    task = lamplighters(tmp_path, ONE_WAY)
     dealer = Dealer(task.problem, PLAN, AGENT)
     walker, space = dealer.walker, dealer.space
     ground = Grounder(task.problem).ground
@@ -144,14 +152,7 @@ def test_no_walk_is_searched_for_a_place_no_road_leads_back_to(
     _, reach_own = walker.relaxed(env, own)
     stands = {f for f in space.own_facts(reach_own) if f[0] == "stands"}
     assert stands == {("stands", "ann", "s3"), ("stands", "ann", "s4")}
-    searched: list[str] = []
-    search = walks.Walker._search
-
-    def counted(self: walks.Walker, *args: object, **kwargs: object) -> list[walks.Step]:
-        searched.append(str(args[-1]))
-        return search(self, *args, **kwargs)  # type: ignore[arg-type]
-
-    monkeypatch.setattr(walks.Walker, "_search", counted)
+    searched.clear()  # the searches from here on
     with pytest.raises(DealError, match="no walk"):
         walker.walk_to(env, own, behind)
     assert searched == []
