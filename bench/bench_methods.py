@@ -453,10 +453,14 @@ def report(
     ns: Sequence[int],
     targets: Mapping[int, float] | None = None,
     default: str | None = None,
+    plot: Path | None = None,
 ) -> str:
     """The per-domain side-by-side table, then the macro exec/SA per N (``targets``: the
-    goals of the offline ``default`` decomposer) and the domains no longer than MA."""
+    goals of the offline ``default`` decomposer) and the domains no longer than MA
+    (``plot``: :func:`plot_methods` of the same table to that PNG)."""
     table = summarise(rows, methods, ns)
+    if plot is not None:
+        plot_methods(table, methods, ns, targets, default, plot)
     domains = sorted({d for d, _, _ in table})
     ts = [m for m in methods if m != "ma"]
     has_ma = "ma" in methods
@@ -647,10 +651,10 @@ def report_all(
                    + ", ".join(f"{d} {k}" for d, k in sorted(counts.items())) + ")\n")  # fmt: skip
         targets = TARGETS if label == LEGACY["data"] else None
         present = [m for m in methods if any(r["method"] == m for r in part)]
-        out.append(report(part, present, ns, targets, default) + "\n")
-        if plot is not None and label == LEGACY["data"]:
-            plot_methods(summarise(part, present, ns), present, ns, targets, default, plot)
-            out.append(f"(plot: {plot})\n")
+        drawn = plot if label == LEGACY["data"] else None
+        out.append(report(part, present, ns, targets, default, drawn) + "\n")
+        if drawn is not None:
+            out.append(f"(plot: {drawn})\n")
     return "\n".join(out)
 
 
