@@ -251,12 +251,14 @@ def time_limit(seconds: int) -> Iterator[None]:
         signal.signal(signal.SIGALRM, previous)
 
 
-def independent_verdict(task: BenchmarkTask, run: RunResult, preds: Sequence[str]) -> str:
+def independent_verdict(
+    validator: IndependentValidator, run: RunResult, preds: Sequence[str]
+) -> str:
     """The independent validator's verdict on the schedule, on the original files
     (``bench/independent``: Fast Downward's grounding with a simulator of its own, and
-    unified-planning where its reader accepts the files), and which checkers agreed."""
+    unified-planning where its reader accepts the files), and which checkers agreed. One
+    validator per task: it reads the files once for all of the task's rows."""
     try:
-        validator = IndependentValidator(task.domain_path, task.problem_path)
         verdict = validator.check_schedule(run.agent_order, run.plans, run.schedule, preds)
     except Exception as error:  # no checker could read the task: no verdict
         return f"n/a ({type(error).__name__}: {str(error).splitlines()[0][:60]})"
@@ -390,6 +392,7 @@ def rows(
         yield f"{domain} | {name} | - | - | no SA plan ({sa.message[:80]})"
         return
     sa_plan = sa.planner_calls[0].result
+    validator = IndependentValidator(task.domain_path, task.problem_path)
     for preds in CASES[domain]:
         for agents in agent_counts:
             label = ",".join(preds)
@@ -408,7 +411,7 @@ def rows(
             yield " | ".join(str(x) for x in (
                 domain, name, label, agents, sa.exec_length, run.exec_length,
                 fallback_text(run), our_verdict(task, run, preds),
-                independent_verdict(task, run, preds),
+                independent_verdict(validator, run, preds),
                 f"{deal_seconds(run):.2f}",
             ))  # fmt: skip
 
