@@ -300,10 +300,10 @@ def tasks_of(
     its name, read beside the folder's domain file), and our own problem for it (:data:`OWN`)."""
     if every:
         tasks = []
+        folder = scratch / "every" / domain
+        folder.mkdir(parents=True, exist_ok=True)
+        shutil.copy(sample / domain / "domain.pddl", folder / "domain.pddl")
         for number, problem in enumerate(problem_files(sample / domain), 1):
-            folder = scratch / "every" / domain
-            folder.mkdir(parents=True, exist_ok=True)
-            shutil.copy(sample / domain / "domain.pddl", folder / "domain.pddl")
             shutil.copy(problem, folder / f"p{number:02d}.pddl")
             tasks.append((problem.stem, load_task(domain, number, scratch / "every")))
     else:
