@@ -23,7 +23,7 @@ from hydra.types import RunMode
 from omegaconf import DictConfig
 
 from flows.artifacts import picture_paths
-from flows.config import register
+from flows.config import agents_run, register
 from flows.console import format_schedule, format_summary
 from flows.environment import quiet_defaults
 from flows.sweep_callback import SweepCallback
@@ -124,7 +124,7 @@ def _sweep_record(outcome: JobOutcome) -> dict[str, Any]:
         "task": result.get("task"),
         "method": method,
         "decomposer": result.get("decomposer") if method == "twostep" else None,
-        "agents": 1 if method == "sa" else result.get("agents"),
+        "agents": agents_run(str(method), result.get("agents")),
         "seed": result.get("seed"),
         "success": result.get("success") is True,
         "exec_length": result.get("exec_length"),

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any, cast
 
 from hydra.core.config_store import ConfigStore
+from omegaconf import OmegaConf
 
 from twostep.benchmark import DEFAULT_DATA_ROOT
 from twostep.embodied import ExecutorSettings
@@ -177,8 +178,16 @@ class TwostepConfig:
     compare_sa: bool = True
 
 
+def agents_run(method: str, agents: int | None) -> int | None:
+    """The number of agents a job runs: SA plans for one agent whatever ``agents`` says."""
+    return 1 if method == "sa" else agents
+
+
 def register() -> None:
+    """The schema in Hydra's ConfigStore, and the ``twostep_agents`` resolver the run and
+    sweep directory names use (``_sa_n1``, not the ``agents`` SA ignores)."""
     ConfigStore.instance().store(name="twostep_schema", node=TwostepConfig)
+    OmegaConf.register_new_resolver("twostep_agents", agents_run, replace=True)
 
 
 def typed(cfg: object) -> TwostepConfig:

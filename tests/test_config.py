@@ -176,3 +176,18 @@ def test_every_registered_decomposer_has_a_config_and_composes() -> None:
         cfg = make("method=twostep", f"decomposer={name}")
         assert cfg.decomposer.name == name and not value_problems(cfg), name
         assert callable(method_for("twostep", name)), name
+
+
+@pytest.mark.parametrize(
+    ("method", "agents", "named"),
+    [("sa", 3, "_sa_n1"), ("sa", 1, "_sa_n1"), ("ma", 3, "_ma_n3"), ("twostep", 2, "_twostep_n2")],
+)
+def test_run_and_sweep_directories_name_the_agents_the_job_runs(
+    method: str, agents: int, named: str
+) -> None:
+    # SA plans for one agent whatever ``agents`` says: its directories say n1, as the
+    # sweep's job records do; the other methods run the N they are given.
+    overrides = (f"method={method}", f"agents={agents}", "domain=grippers", "task=7")
+    cfg = make(*overrides, "hydra.job.num=4", hydra=True)
+    assert cfg.hydra.run.dir.endswith(f"_grippers_p7{named}")
+    assert cfg.hydra.sweep.subdir == f"4_grippers_p7{named}_s0"
