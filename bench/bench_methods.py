@@ -47,6 +47,7 @@ from typing import Any
 import yaml
 
 from twostep.benchmark import DEFAULT_DATA_ROOT, BenchmarkError, list_domains, list_tasks, load_task
+from twostep.dealing import PHASES as DEALER_PHASES
 from twostep.dealing.cleanup import clean_plan
 from twostep.decomposers.base import Decomposer
 from twostep.decomposers.goal_split import GoalSplitDecomposer
@@ -535,7 +536,7 @@ def report(
 
 
 DEAL_LIMIT_S = 5.0  # issue 18: dealing time on any task
-PHASES = ("clean-up", "order", "dealing", "walks", "replay", "joint clean-up", "scoring")
+PHASES = (*DEALER_PHASES, "rebinding", "scoring")  # plan-deal's own, beside the dealer's
 
 
 def tyreworld_floor(data: str, task: int) -> int | None:

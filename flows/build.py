@@ -256,6 +256,7 @@ def build_job(cfg: TwostepConfig) -> Iterator[Job]:
             cfg.decomposer.name,
             cut=cfg.decomposer.cut,
             link_degree=cfg.decomposer.link_degree,
+            rebind=bool(cfg.decomposer.rebind),
         )
     except ValueError as error:  # UnknownMethod, or an option out of range
         raise JobError(str(error)) from None

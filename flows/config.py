@@ -49,6 +49,7 @@ class DecomposerConfig:
     name: str = "plan-deal"  # goal-split | expert | llm | plan-split | plan-deal | portfolio
     link_degree: int = 2
     cut: str = "best"  # plan-deal: free | holding | best (both, the shorter kept)
+    rebind: bool = True  # plan-deal (and the portfolios' plan-deal): deal the rebound plan too
 
 
 class ExecutorName(enum.StrEnum):

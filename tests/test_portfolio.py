@@ -199,7 +199,9 @@ def test_portfolio_deals_the_twostep_plans_again(tmp_path: Path) -> None:
     request = MethodRequest(
         task, 3, FAST, CUPS, steps=scripted_planner(helper), sa_plan=sa_result(CUPS_SA_PLAN)
     )
-    run = run_portfolio(request, Portfolio(members=[scripted]))
+    # plan-deal without rebinding: rebinding spreads the chain over the three cups itself
+    # (tests/test_rebind.py), and this test is about the re-deal
+    run = run_portfolio(request, Portfolio(members=[scripted], rebind=False))
     rows = run.extra["candidates"]
     assert [(r["decomposer"], r["agents"]) for r in rows] == [
         ("serve-g1", 3), ("serve-g1", 2), ("plan-deal", 3), ("plan-deal<serve-g1>", 3)
@@ -216,7 +218,7 @@ def test_portfolio_deals_the_twostep_plans_again(tmp_path: Path) -> None:
     assert "deal" not in run.extra and run.extra["redeal"][0]["cleaned_sa_length"] == 11
     _check(task.problem, run, CUPS)
     # without the re-deal the TwoStep run wins
-    alone = run_portfolio(request, Portfolio(members=[scripted], redeal=False))
+    alone = run_portfolio(request, Portfolio(members=[scripted], redeal=False, rebind=False))
     assert alone.exec_length == 7 and len(alone.extra["candidates"]) == 3
     _check(task.problem, alone, CUPS)
 
@@ -232,7 +234,7 @@ def test_portfolio_skips_a_concatenation_that_does_not_apply(tmp_path: Path) -> 
     request = MethodRequest(
         task, 3, FAST, CUPS, steps=scripted_planner(helper), sa_plan=sa_result(CUPS_SA_PLAN)
     )
-    run = run_portfolio(request, Portfolio(members=[scripted]))
+    run = run_portfolio(request, Portfolio(members=[scripted], rebind=False))  # as above
     rows = run.extra["candidates"]
     assert [r["decomposer"] for r in rows] == ["serve-g1", "serve-g1", "plan-deal",
                                                "plan-deal<serve-g1>"]  # fmt: skip

@@ -24,6 +24,7 @@ from typing import Any
 
 from twostep.dealing import CUTS, Dealer, DealError, Way, ways
 from twostep.dealing.model import cpu_seconds
+from twostep.dealing.rebind import rebind
 from twostep.execution import ParallelExecution, ScheduleError, check_schedule
 from twostep.methods.request import MethodRequest
 from twostep.methods.result import (
@@ -78,9 +79,10 @@ def check_cut(cut: str) -> None:
         raise ValueError(f"plan-deal cut must be one of {(*CUTS, BEST)}, not {cut!r}")
 
 
-def run_plan_deal(request: MethodRequest, cut: str = BEST) -> RunResult:
+def run_plan_deal(request: MethodRequest, cut: str = BEST, rebind: bool = True) -> RunResult:
     """Deal the SA plan with ``cut`` (``free``, ``holding`` or ``best``: both) and each
-    order to every number of agents up to N; the shortest schedule wins (module docstring)."""
+    order to every number of agents up to N, and (``rebind``) the rebound plan too; the
+    shortest schedule wins (module docstring)."""
     check_cut(cut)
     start = time.perf_counter()
     run = new_run(request, MethodName.TWOSTEP)
@@ -91,7 +93,7 @@ def run_plan_deal(request: MethodRequest, cut: str = BEST) -> RunResult:
         run.sa_length = len(sa_steps)
     trials = Trials()
     if sa_steps is not None and request.agents > 1:
-        try_deals(request, sa_steps, ways(None if cut == BEST else cut), trials)
+        try_deals(request, sa_steps, ways(None if cut == BEST else cut), trials, rebind)
     run.score_time_s = trials.seconds.get("scoring", 0.0)
     run.extra["deal"] = trials.rows
     run.extra["deal_seconds"] = {phase: round(s, 6) for phase, s in trials.seconds.items()}
@@ -121,10 +123,16 @@ def run_plan_deal(request: MethodRequest, cut: str = BEST) -> RunResult:
 
 
 def try_deals(
-    request: MethodRequest, sa_steps: Sequence[str], tried: Sequence[Way], trials: Trials
+    request: MethodRequest,
+    sa_steps: Sequence[str],
+    tried: Sequence[Way],
+    trials: Trials,
+    rebinding: bool = True,
 ) -> None:
-    """The cleaned SA plan (one agent), then every way for 2..N agents; the shortest
-    schedule is kept, ties to fewer agents (its row is marked ``chosen``)."""
+    """The cleaned SA plan (one agent), then every way for 2..N agents, of the cleaned SA
+    plan and, with ``rebinding`` when it changes the plan (:mod:`~twostep.dealing.rebind`),
+    of the rebound plan too; the shortest schedule is kept, ties to fewer agents, then to the SA plan's
+    deal (its row is marked ``chosen``)."""
     problem = request.problem
     try:
         dealer = Dealer(problem, sa_steps, request.agent_predicates)
@@ -132,28 +140,40 @@ def try_deals(
         trials.rows.append({"agents": 1, "error": str(error)})
         trials.invalid = str(error)
         return
-    trials.seconds = dealer.seconds  # the dealer's phases, and scoring beside them
     cleaned = [str(a) for a in dealer.cleaned]
     first = {"agents": 1, "pieces": 1, "walks": sum(dealer.walking),
              "cleaned_sa_length": len(cleaned), "agents_used": 1}  # fmt: skip
     trials.rows.append(first)
     candidates = [(first, [cleaned], [[(0, a)] for a in cleaned])]
+    dealers = [dealer]
+    start = cpu_seconds()
+    rebound = rebind(problem, cleaned, request.agent_predicates) if rebinding else None
+    spent = cpu_seconds() - start
+    if rebound is not None:
+        dealers.append(Dealer(problem, rebound, request.agent_predicates))
     for agents in range(2, request.agents + 1):
-        for way in tried:
-            row: dict[str, Any] = {"agents": agents, "cut": way.cut, "order": way.order,
-                                   "steal": way.steal}  # fmt: skip
-            trials.rows.append(row)
-            try:
-                dealt = dealer.deal(agents, way.cut, way.order, way.steal)
-            except DealError as error:
-                row["error"] = str(error)
-                continue
-            plans, schedule = used_agents(dealt.plans, dealt.schedule)
-            row.update(pieces=len(dealt.pieces), walks=dealt.walks,
-                       cleaned_sa_length=dealt.cleaned, agents_used=len(plans))  # fmt: skip
-            if dealt.offloaded:
-                row["offloaded"] = True
-            candidates.append((row, plans, schedule))
+        for plan, one in enumerate(dealers):
+            for way in tried:
+                row: dict[str, Any] = {"agents": agents, "cut": way.cut, "order": way.order,
+                                       "steal": way.steal}  # fmt: skip
+                if plan:
+                    row["rebound"] = True
+                trials.rows.append(row)
+                try:
+                    dealt = one.deal(agents, way.cut, way.order, way.steal)
+                except DealError as error:
+                    row["error"] = str(error)
+                    continue
+                plans, schedule = used_agents(dealt.plans, dealt.schedule)
+                row.update(pieces=len(dealt.pieces), walks=dealt.walks,
+                           cleaned_sa_length=dealt.cleaned, agents_used=len(plans))  # fmt: skip
+                if dealt.offloaded:
+                    row["offloaded"] = True
+                candidates.append((row, plans, schedule))
+    for one in dealers:  # the dealers' phases, and rebinding and scoring beside them
+        for phase, seconds in one.seconds.items():
+            trials.seconds[phase] = trials.seconds.get(phase, 0.0) + seconds
+    trials.seconds["rebinding"] = spent
     choose_deal(request, candidates, trials)
 
 

@@ -135,6 +135,7 @@ class Portfolio:
         fewer_agents: bool = True,
         name: str = "portfolio",
         make_members: Members = default_members,
+        rebind: bool = True,
     ):
         self.link_degree = link_degree
         self.members = None if members is None else list(members)
@@ -143,14 +144,19 @@ class Portfolio:
         self.fewer_agents = fewer_agents
         self.name = name
         self.make_members = make_members
+        self.rebind = rebind
 
     @classmethod
-    def lite(cls, link_degree: int = 2) -> Portfolio:
+    def lite(cls, link_degree: int = 2, rebind: bool = True) -> Portfolio:
         """``portfolio-lite``: plan-deal, and the re-deals of two TwoStep candidates
         (:func:`lite_members`) with N agents only; a fraction of the portfolio's planning
         time for most of its gain (README, Methods)."""
         return cls(
-            link_degree, fewer_agents=False, name="portfolio-lite", make_members=lite_members
+            link_degree,
+            fewer_agents=False,
+            name="portfolio-lite",
+            make_members=lite_members,
+            rebind=rebind,
         )
 
     def candidates(self, request: MethodRequest) -> list[Candidate]:
@@ -181,7 +187,7 @@ def run_portfolio(request: MethodRequest, portfolio: Portfolio | None = None) ->
     for candidate in portfolio.candidates(request):
         one = replace(request, agents=candidate.agents, sa_plan=sa_plan, fallback_if_longer=False)
         if candidate.deal_cut is not None:
-            run = run_plan_deal(one, candidate.deal_cut)
+            run = run_plan_deal(one, candidate.deal_cut, portfolio.rebind)
         else:
             assert candidate.decomposer is not None
             read = reads_sa_plan(candidate.decomposer)
@@ -200,7 +206,7 @@ def run_portfolio(request: MethodRequest, portfolio: Portfolio | None = None) ->
         run.extra["candidate"] = len(rows) - 1
         runs.append(run)
     if portfolio.redeal and request.agents > 1:
-        planning += redeal_all(request, portfolio.deals, planned, sa_plan, rows, runs)
+        planning += redeal_all(request, portfolio, planned, sa_plan, rows, runs)
     best = choose(request, runs, rows, sa_plan)
     best.agents = request.agents
     best.decomposer = portfolio.name
@@ -231,14 +237,16 @@ def concatenation(request: MethodRequest, run: RunResult) -> tuple[str, ...] | s
 
 def redeal_all(
     request: MethodRequest,
-    cuts: Sequence[str],
+    portfolio: Portfolio,
     planned: Sequence[tuple[int, RunResult]],
     sa_plan: PlanResult,
     rows: list[dict[str, Any]],
     runs: list[RunResult],
 ) -> float:
-    """Deal each TwoStep candidate's concatenated plans with each cut (module docstring):
-    the rows and the runs are appended to ``rows`` and ``runs``; returns the time spent."""
+    """Deal each TwoStep candidate's concatenated plans with each of the portfolio's cuts
+    (module docstring): the rows and the runs are appended to ``rows`` and ``runs``;
+    returns the time spent."""
+    cuts = portfolio.deals
     sa_steps = solved_steps(sa_plan)
     sa_length = request.sa_length
     if sa_length is None and sa_steps is not None:
@@ -272,7 +280,7 @@ def redeal_all(
                 continue
             dealt[(cut, plan)] = len(rows)
             start = cpu_seconds()
-            run = redeal(one, plan, cut)
+            run = redeal(one, plan, cut, portfolio.rebind)
             if isinstance(run, str):
                 seconds = cpu_seconds() - start
                 row.update(exec_length=None, planning_time_s=round(seconds, 4), skipped=run)
@@ -289,13 +297,15 @@ def redeal_all(
     return spent
 
 
-def redeal(request: MethodRequest, plan: tuple[str, ...], cut: str) -> RunResult | str:
+def redeal(
+    request: MethodRequest, plan: tuple[str, ...], cut: str, rebind: bool = True
+) -> RunResult | str:
     """plan-deal of ``plan`` as if it were the SA plan (planned in no time): the run, or
     why ``plan`` cannot be dealt (not a valid plan for one agent, or no deal of it
     re-validates). The run's deals are its ``redeal`` rows (``deal`` stays the SA
     plan's: the bench reads the cleaned SA length there)."""
     made = PlanResult(Status.SOLVED, plan, 0.0, 0.0, message="agents' plans concatenated")
-    run = run_plan_deal(replace(request, sa_plan=made), cut)  # records a plan that fails
+    run = run_plan_deal(replace(request, sa_plan=made), cut, rebind)  # records a failing plan
     deals = run.extra.pop("deal")
     run.extra["redeal"] = deals
     run.extra["redeal_seconds"] = run.extra.pop("deal_seconds")

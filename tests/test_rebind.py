@@ -1,0 +1,121 @@
+"""twostep.dealing.rebind: an object's rounds in the SA plan spread over idle objects of its
+kind, and plan-deal dealing the rebound plan beside the SA plan.
+
+The cups bar of tests/test_portfolio.py: the SA plan serves three guests from one cup,
+washing it between guests, so every deal of it is one chain. Rebound plans and makespans
+are derived by hand in each test's comment; every schedule is checked by ``check_run`` and
+by the independent validator on the task's files.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from bench.independent import IndependentValidator
+from tests.test_plan_split import FAST, sa_result
+from tests.test_portfolio import CUPS, CUPS_SA_PLAN, _cups
+from twostep.benchmark import BenchmarkTask
+from twostep.dealing.rebind import handling_predicates, rebind
+from twostep.methods import MethodRequest, RunResult, check_run, run_single_agent
+from twostep.methods.plan_deal import run_plan_deal
+
+
+def _valid(task: BenchmarkTask, run: RunResult, predicates: list[str]) -> None:
+    check_run(task.problem, run, predicates)
+    verdict = IndependentValidator(task.domain_path, task.problem_path).check_schedule(
+        run.agent_order, run.plans, run.schedule, predicates
+    )
+    assert verdict.valid, verdict
+
+
+def test_one_cups_rounds_go_to_the_idle_cups(tmp_path: Path) -> None:
+    # Handling predicates: take and put change the hand (agent facts) and ``shelf``, so a
+    # cup's own facts are clean / full / used. c1 starts clean; fill, serve g1, wash make it
+    # clean again: round 1 (steps 2-4); fill, serve g2, wash: round 2; fill, serve g3 leave
+    # it used: no round. Round 1 goes to c2 (mentioned never, before c1's take): put c1,
+    # take c2 are inserted before it, and put c2, take c1 after it, where (fill c1) needs
+    # c1 in hand. Round 2: c2 (its put) and c3 (never) were both mentioned before c1 last
+    # was (its take again); c3 longest ago, so it goes to c3.
+    task = _cups(tmp_path)
+    assert handling_predicates(task.problem, CUPS) == {"shelf"}
+    assert rebind(task.problem, CUPS_SA_PLAN, CUPS) == [
+        "(take c1)", "(put c1)",
+        "(take c2)", "(fill c2)", "(serve c2 g1)", "(wash c2)", "(put c2)",
+        "(take c1)", "(put c1)",
+        "(take c3)", "(fill c3)", "(serve c3 g2)", "(wash c3)", "(put c3)",
+        "(take c1)", "(fill c1)", "(serve c1 g3)",
+    ]  # fmt: skip
+
+
+def test_a_single_cup_or_a_plan_without_rounds_is_not_rebound(tmp_path: Path) -> None:
+    # With c2 and c3 dirty from the start (used, not clean) no cup is in c1's state when
+    # its rounds begin: nothing to rebind. A plan with one serve has no round at all.
+    task = _cups(tmp_path)
+    text = task.problem_path.read_text().replace("(clean c2) (clean c3)", "(used c2) (used c3)")
+    task.problem_path.write_text(text)
+    from twostep.benchmark import load_task
+
+    dirty = load_task("cups", 1, tmp_path)
+    assert rebind(dirty.problem, CUPS_SA_PLAN, CUPS) is None
+    one = _one_guest(tmp_path)
+    assert rebind(one.problem, ("(take c1)", "(fill c1)", "(serve c1 g1)"), CUPS) is None
+
+
+def _one_guest(tmp_path: Path) -> BenchmarkTask:
+    from twostep.benchmark import load_task
+
+    folder = tmp_path / "one" / "cups"
+    folder.mkdir(parents=True)
+    for name in ("domain.pddl", "domain.nl"):
+        (folder / name).write_text((tmp_path / "cups" / name).read_text())
+    text = (tmp_path / "cups" / "p01.pddl").read_text()
+    text = text.replace("(:goal (and (served g1) (served g2) (served g3)))", "(:goal (served g1))")
+    (folder / "p01.pddl").write_text(text)
+    return load_task("cups", 1, tmp_path / "one")
+
+
+@pytest.mark.parametrize(("agents", "length"), [(2, 7), (3, 3), (4, 3)])
+def test_plan_deal_deals_the_rebound_plan(tmp_path: Path, agents: int, length: int) -> None:
+    # The rebound plan, cleaned (the washes serve nothing later, nor do c1's take-put
+    # pairs): take, fill, serve, put for c2 and c3, then take, fill, serve c1: three
+    # pieces of 4, 4 and 3 actions. Three agents take one cup each: 3 steps (the puts go
+    # in the joint clean-up); two: one agent does two cups, 4 + 3 = 7 steps; a fourth agent
+    # has nothing to do. Without rebinding every deal is the one chain: 9 steps.
+    task = _cups(tmp_path)
+    request = MethodRequest(task, agents, FAST, CUPS, sa_plan=sa_result(CUPS_SA_PLAN))
+    run = run_plan_deal(request)
+    assert run.exec_length == length and run.fallback is None
+    (chosen,) = [row for row in run.extra["deal"] if row.get("chosen")]
+    assert chosen["rebound"] is True and chosen["agents_used"] == min(agents, 3)
+    assert chosen["cleaned_sa_length"] == 11
+    assert "rebinding" in run.extra["deal_seconds"]
+    _valid(task, run, CUPS)
+    plain = run_plan_deal(request, rebind=False)
+    assert plain.exec_length == 9 and plain.fallback == "no deal shorter than the cleaned SA plan"
+    assert not any(row.get("rebound") for row in plain.extra["deal"])
+
+
+def test_barman_glass_rounds_deal_shorter_and_stay_monotone(data_root: Path) -> None:
+    # barman p01: Fast Downward's SA plan carries every ingredient in one shot glass.
+    # Rebinding spreads its rounds over the goal glasses that stand clean until their
+    # cocktail is poured. With it plan-deal is never longer (the SA plan's deals are still
+    # candidates), shorter at N = 3 and 4, never longer with more agents, and valid.
+    from twostep.benchmark import load_task
+
+    preds = ["handempty", "holding"]
+    task = load_task("barman", 1, data_root)
+    sa_plan = run_single_agent(MethodRequest(task, planner=FAST)).planner_calls[0].result
+    lengths = {}
+    for agents in (2, 3, 4):
+        request = MethodRequest(task, agents, FAST, preds, sa_plan=sa_plan)
+        run = run_plan_deal(request)
+        plain = run_plan_deal(request, rebind=False)
+        assert run.exec_length is not None and plain.exec_length is not None
+        assert run.exec_length <= plain.exec_length
+        if agents > 2:
+            assert run.exec_length < plain.exec_length
+        _valid(task, run, preds)
+        lengths[agents] = run.exec_length
+    assert lengths[2] >= lengths[3] >= lengths[4]
