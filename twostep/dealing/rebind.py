@@ -27,9 +27,11 @@ time, so the result is the same on every machine.
 
 from __future__ import annotations
 
+import itertools
 from collections import defaultdict, deque
 from collections.abc import Collection, Sequence
 
+from twostep.decomposers.goal_split import positional_predicates
 from twostep.pddl import Fact, Problem
 from twostep.strips import GroundAction, Grounder, PlanError, effects_along
 
@@ -39,6 +41,8 @@ REPAIR_DEPTH = 4
 """Handling actions inserted before one action, at most."""
 REPAIR_STATES = 2_000
 """States one repair search may visit."""
+MATCHED = 4
+"""A mover's further objects matched to another mover's, at most (a robot's grippers)."""
 
 
 def handling_predicates(problem: Problem, agent_predicates: Collection[str]) -> frozenset[str]:
@@ -56,9 +60,23 @@ def _args(action: str) -> list[str]:
     return action.strip("()").split()[1:]
 
 
-def _renamed(action: str, old: str, new: str) -> str:
+def _renamed(action: str, names: dict[str, str]) -> str:
     name, *args = action.strip("()").split()
-    return "(" + " ".join([name, *(new if a == old else a for a in args)]) + ")"
+    return "(" + " ".join([name, *(names.get(a, a) for a in args)]) + ")"
+
+
+def movers(problem: Problem, positional: Collection[str]) -> frozenset[str]:
+    """Objects that stay in a positional fact an action moves: ``robot1`` in
+    ``(at-robby robot1 room1)`` -> ``(at-robby robot1 room2)``; termes' ``(at p)`` has none."""
+    found: set[str] = set()
+    for action in problem.grounded.actions.values():
+        added = [f for f in action.possible_add if f[0] in positional]
+        for fact in action.possible_delete:
+            if fact[0] in positional:
+                for other in added:
+                    if other[0] == fact[0]:
+                        found |= set(fact[1:]) & set(other[1:])
+    return frozenset(found)
 
 
 class Rebinder:
@@ -79,6 +97,8 @@ class Rebinder:
             key=str,
         )
         self.types = problem.all_objects
+        self.positional = frozenset(positional_predicates(problem.domain)) & self.agent
+        self.movers = movers(problem, self.positional)
 
     def rebind(self, plan: Sequence[str]) -> list[str] | None:
         """The plan with rounds rebound and handling repaired; None when no round could be
@@ -91,10 +111,10 @@ class Rebinder:
                 if first < start:
                     continue
                 start = first + 1
-                for other in self._candidates(current, states, first, last, obj, facts):
+                for names in self._candidates(current, states, first, last, obj, facts):
                     trials += 1
                     renamed = [
-                        _renamed(a, obj, other) if obj in _args(a) else a
+                        _renamed(a, names) if names.keys() & set(_args(a)) else a
                         for a in current[first : last + 1]
                     ]
                     repaired = self._repair(states[first], renamed, current[last + 1 :])
@@ -122,8 +142,15 @@ class Rebinder:
             states.append(state)
         return states
 
+    def _counts(self, fact: Fact, obj: str) -> bool:
+        """Whether ``fact`` is one of ``obj``'s own: an environment fact, or for a mover
+        an agent fact that says more than where it is (a robot's gripper free)."""
+        if fact[0] not in self.left_out:
+            return True
+        return obj in self.movers and fact[0] in self.agent and fact[0] not in self.positional
+
     def _facts(self, state: frozenset[Fact], obj: str) -> frozenset[Fact]:
-        return frozenset(f for f in state if obj in f[1:] and f[0] not in self.left_out)
+        return frozenset(f for f in state if obj in f[1:] and self._counts(f, obj))
 
     def _rounds(
         self, plan: Sequence[str], states: Sequence[frozenset[Fact]]
@@ -132,22 +159,21 @@ class Rebinder:
         plan order. Each object's environment facts are kept along the plan."""
         facts: defaultdict[str, set[Fact]] = defaultdict(set)
         for fact in self.problem.init:
-            if fact[0] not in self.left_out:
-                for obj in fact[1:]:
+            for obj in fact[1:]:
+                if self._counts(fact, obj):
                     facts[obj].add(fact)
         seen: defaultdict[str, list[tuple[int, frozenset[Fact], frozenset[Fact]]]]
         seen = defaultdict(list)
         fired = effects_along(self.problem.init, self.grounder.ground_plan(plan))
         for t, (action, (add, delete)) in enumerate(zip(plan, fired, strict=True)):
-            env_add = [f for f in add if f[0] not in self.left_out]
-            env_delete = [f for f in delete if f[0] not in self.left_out]
-            touched = set(_args(action)).union(*(f[1:] for f in (*env_add, *env_delete)))
+            changed = [(f, o) for f in add | delete for o in f[1:] if self._counts(f, o)]
+            touched = set(_args(action)) | {o for _, o in changed}
             before = {obj: frozenset(facts[obj]) for obj in touched}
-            for fact in env_delete:
-                for obj in fact[1:]:
+            for fact, obj in changed:
+                if fact in delete:
                     facts[obj].discard(fact)
-            for fact in env_add:
-                for obj in fact[1:]:
+            for fact, obj in changed:
+                if fact in add:
                     facts[obj].add(fact)
             for obj in touched:
                 seen[obj].append((t, before[obj], frozenset(facts[obj])))
@@ -174,9 +200,11 @@ class Rebinder:
         last: int,
         obj: str,
         facts: frozenset[Fact],
-    ) -> list[str]:
+    ) -> list[dict[str, str]]:
         """Objects that can do the round ``first``..``last`` of ``obj``, the one mentioned
-        longest ago first; only those mentioned before ``obj`` last was."""
+        longest ago first; only those mentioned before ``obj`` last was. Each as the
+        renaming of the round's actions: ``obj`` to the other, and for a mover the objects
+        its own facts name (a robot's grippers) to the other's."""
         busy = {o for a in plan[first : last + 1] for o in _args(a)}
         seen: dict[str, int] = {}
         for t, action in enumerate(plan[:first]):
@@ -189,13 +217,39 @@ class Rebinder:
                 continue
             if seen.get(other, -1) >= own:
                 continue
-            mapped = {
-                (f[0], *(obj if x == other else other if x == obj else x for x in f[1:]))
-                for f in self._facts(states[first], other)
-            }
-            if mapped == facts:
-                found.append((seen.get(other, -1), other))
-        return [other for _, other in sorted(found)]
+            names = self._matching(facts, self._facts(states[first], other), obj, other, busy)
+            if names is not None:
+                found.append((seen.get(other, -1), other, names))
+        return [names for *_, names in sorted(found, key=lambda entry: entry[:2])]
+
+    def _matching(
+        self,
+        facts: frozenset[Fact],
+        others: frozenset[Fact],
+        obj: str,
+        other: str,
+        busy: Collection[str],
+    ) -> dict[str, str] | None:
+        """A renaming from ``obj``'s objects to ``other``'s under which ``others`` are
+        ``facts``: ``obj`` to ``other``, and (a mover) its own facts' further objects to
+        the other's, of the same types, none of them busy."""
+        swap = {obj: other, other: obj}
+        if {(f[0], *(swap.get(x, x) for x in f[1:])) for f in others} == facts:
+            return {obj: other}
+        if obj not in self.movers:
+            return None
+        mine = sorted({x for f in facts for x in f[1:]} - {obj})
+        theirs = sorted({x for f in others for x in f[1:]} - {other})
+        if len(mine) != len(theirs) or len(mine) > MATCHED or set(theirs) & set(busy):
+            return None
+        for order in itertools.permutations(theirs):
+            names = {obj: other, **dict(zip(mine, order, strict=True))}
+            if any(self.types[a] != self.types[b] for a, b in names.items()):
+                continue
+            back = {b: a for a, b in names.items()}
+            if {(f[0], *(back.get(x, x) for x in f[1:])) for f in others} == facts:
+                return names
+        return None
 
     def _repair(
         self, state: frozenset[Fact], renamed: Sequence[str], rest: Sequence[str]
