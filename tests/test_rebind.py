@@ -88,7 +88,7 @@ def test_plan_deal_deals_the_rebound_plan(tmp_path: Path, agents: int, length: i
     run = run_plan_deal(request)
     assert run.exec_length == length and run.fallback is None
     (chosen,) = [row for row in run.extra["deal"] if row.get("chosen")]
-    assert chosen["rebound"] is True and chosen["agents_used"] == min(agents, 3)
+    assert chosen["rebound"] == "rounds" and chosen["agents_used"] == min(agents, 3)
     assert chosen["cleaned_sa_length"] == 11
     assert "rebinding" in run.extra["deal_seconds"]
     _valid(task, run, CUPS)

@@ -2,27 +2,38 @@
 
 One agent has no reason to use two things where one will do. Barman's SA plan carries every
 ingredient in one shot glass, cleaning it between ingredients, so every deal of that plan
-is one chain through the glass, however many agents there are. Rebinding gives the deal a
-second plan to work with, in which the glass's rounds are spread over the glasses that
+is one chain through the glass, however many agents there are. Rebinding gives the deal
+other plans to work with, in which the glass's rounds are spread over the glasses that
 stand idle.
 
-An object's *environment facts* are the facts that mention it, leaving out agent facts
-and the *handling* predicates: those that actions which change agent facts change too
-(``ontable``: grasping a glass takes it off the table). A *round* of an object is a
-stretch of the plan from one of its actions that changes those facts to the first of its
-actions after which they are as they were before the round began (a glass filled, poured
-and cleaned again). Another object of the same type whose environment facts, renamed,
-are the same as the round's object's when the round begins, and that no action of the
-stretch mentions, can do the round instead: every later action meets the same facts.
-Only who holds what can differ; where an action then does not apply, the shortest
-sequence of handling actions on the objects involved that makes it apply (put the old
-glass down, pick the new one up) is inserted before it.
+An object's *own facts* are the environment facts that mention it, leaving out the
+*handling* predicates: those that actions which change agent facts change too
+(``ontable``: grasping a glass takes it off the table). A *mover* (an object that stays in
+an agent fact an action moves: a robot, not a room) also owns the agent facts that say
+more than where it is (a robot's gripper ``free``). A *round* of an object is a stretch of
+the plan from one of its actions that changes its own facts to the first of its actions
+after which they are as they were before the round began (a glass filled, poured and
+cleaned again; a robot's grippers free again). Another object of the same type whose own
+facts, renamed, are the same as the round's object's when the round begins, and that no
+action of the stretch mentions, can do the round instead: every later action meets the
+same facts. A mover's round is renamed with the objects its own facts name (a robot's
+grippers to the other robot's). Where an action then does not apply, because of who
+holds what or where a mover stands, the shortest sequence of handling actions on the
+objects involved that makes it apply is inserted before it (put the old glass down, pick
+the new one up; drive the other robot over).
+
+With ``tails``, a round's *tails* are candidates too: from where the object comes back to
+a state it had earlier in the round (a glass poured out, to be filled again with the same
+ingredient) to the round's end. The object keeps the tail's last actions from that state
+on (it is cleaned where it stands), and the other object does the whole tail; an action
+that no longer applies there gives way to one on the same arguments that applies and adds
+all it adds (a glass filled afresh where the plan refilled it).
 
 The rounds are taken in plan order. Each goes to the interchangeable object mentioned
-longest ago, if that is longer ago than the round's own object; a rename is kept only
-when the whole plan, repaired, still applies and reaches the goal. The searches are
-bounded by counts (:data:`TRIALS`, :data:`REPAIR_DEPTH`, :data:`REPAIR_STATES`), never by
-time, so the result is the same on every machine.
+longest ago, if that is longer ago than the round's own object; a rename is kept only when
+the whole plan, repaired, still applies and reaches the goal. The searches are bounded by
+counts (:data:`TRIALS`, :data:`REPAIR_DEPTH`, :data:`REPAIR_STATES`, :data:`MATCHED`),
+never by time, so the result is the same on every machine.
 """
 
 from __future__ import annotations
@@ -80,9 +91,10 @@ def movers(problem: Problem, positional: Collection[str]) -> frozenset[str]:
 
 
 class Rebinder:
-    """Rebinding of plans of one task (module docstring)."""
+    """Rebinding of plans of one task (module docstring); ``tails``: tails too."""
 
-    def __init__(self, problem: Problem, agent_predicates: Collection[str]):
+    def __init__(self, problem: Problem, agent_predicates: Collection[str], tails: bool = False):
+        self.tails = tails
         self.problem = problem
         self.agent = frozenset(agent_predicates)
         self.grounder = Grounder(problem)
@@ -96,6 +108,9 @@ class Rebinder:
             ),
             key=str,
         )
+        self.siblings: defaultdict[tuple[str, ...], list[GroundAction]] = defaultdict(list)
+        for action in sorted(problem.grounded.actions.values(), key=str):
+            self.siblings[action.args].append(action)
         self.types = problem.all_objects
         self.positional = frozenset(positional_predicates(problem.domain)) & self.agent
         self.movers = movers(problem, self.positional)
@@ -107,13 +122,13 @@ class Rebinder:
         changed, start, trials = False, 0, 0
         while trials < TRIALS:
             states = self._states(current)
-            for first, last, obj, facts in self._rounds(current, states):
+            for first, last, obj, facts, closing in self._rounds(current, states):
                 if first < start:
                     continue
                 start = first + 1
                 for names in self._candidates(current, states, first, last, obj, facts):
                     trials += 1
-                    renamed = [
+                    renamed = [*closing] + [
                         _renamed(a, names) if names.keys() & set(_args(a)) else a
                         for a in current[first : last + 1]
                     ]
@@ -154,9 +169,10 @@ class Rebinder:
 
     def _rounds(
         self, plan: Sequence[str], states: Sequence[frozenset[Fact]]
-    ) -> list[tuple[int, int, str, frozenset[Fact]]]:
-        """Every object's rounds: (first step, last step, object, its facts before), in
-        plan order. Each object's environment facts are kept along the plan."""
+    ) -> list[tuple[int, int, str, frozenset[Fact], tuple[str, ...]]]:
+        """Every object's rounds and tails: (first step, last step, object, its facts
+        before the round, the closing actions the object keeps), in plan order. Each
+        object's own facts are kept along the plan."""
         facts: defaultdict[str, set[Fact]] = defaultdict(set)
         for fact in self.problem.init:
             for obj in fact[1:]:
@@ -177,7 +193,7 @@ class Rebinder:
                     facts[obj].add(fact)
             for obj in touched:
                 seen[obj].append((t, before[obj], frozenset(facts[obj])))
-        found = []
+        found: list[tuple[int, int, str, frozenset[Fact], tuple[str, ...]]] = []
         for obj, steps in seen.items():
             k = 0
             while k < len(steps):
@@ -188,7 +204,19 @@ class Rebinder:
                 m = next((m for m in range(k + 1, len(steps)) if steps[m][2] == start), None)
                 if m is None:
                     break
-                found.append((first, steps[m][0], obj, start))
+                found.append((first, steps[m][0], obj, start, ()))
+                # its tails: from where it comes back to a state it had on the way (a glass
+                # poured out and filled again with the same ingredient) to its end; the
+                # object keeps the tail's last actions from that state on (cleaned)
+                reached = {after: k}  # each state on the way: where it was first met
+                for r in range(k + 1, m if self.tails else k + 1):
+                    back = steps[r][2]
+                    if back not in reached:
+                        reached[back] = r
+                    elif r == max(q for q in range(r, m) if steps[q][2] == back):
+                        closing = tuple(plan[steps[c][0]] for c in range(r + 1, m + 1))
+                        tail = steps[reached[back] + 1][0]
+                        found.append((tail, steps[m][0], obj, start, closing))
                 k = m + 1
         return sorted(found)
 
@@ -265,12 +293,16 @@ class Rebinder:
             except PlanError:
                 return None
             if not action.applicable(state):
-                path = self._handling_to(state, action, text)
-                if path is None:
-                    return None
-                for move in path:
-                    state = move.apply(state)
-                    out.append(str(move))
+                sibling = self._sibling(state, action)
+                if sibling is not None:
+                    action, text = sibling, str(sibling)
+                else:
+                    path = self._handling_to(state, action, text)
+                    if path is None:
+                        return None
+                    for move in path:
+                        state = move.apply(state)
+                        out.append(str(move))
             if k == 0:
                 begin = len(out)
             state = action.apply(state)
@@ -278,6 +310,14 @@ class Rebinder:
         if not self.problem.goal.holds(state):
             return None
         return out, begin
+
+    def _sibling(self, state: frozenset[Fact], action: GroundAction) -> GroundAction | None:
+        """An action on the same arguments that applies and adds all the action adds (a
+        glass filled afresh where the plan refilled it)."""
+        for other in self.siblings[action.args]:
+            if other is not action and other.add >= action.add and other.applicable(state):
+                return other
+        return None
 
     def _handling_to(
         self, state: frozenset[Fact], target: GroundAction, text: str
@@ -306,8 +346,8 @@ class Rebinder:
 
 
 def rebind(
-    problem: Problem, plan: Sequence[str], agent_predicates: Collection[str]
+    problem: Problem, plan: Sequence[str], agent_predicates: Collection[str], tails: bool = False
 ) -> list[str] | None:
-    """``plan`` with its objects' rounds spread over interchangeable objects (module
-    docstring), or None when nothing changes."""
-    return Rebinder(problem, agent_predicates).rebind(plan)
+    """``plan`` with its objects' rounds (and with ``tails`` their tails) spread over
+    interchangeable objects (module docstring), or None when nothing changes."""
+    return Rebinder(problem, agent_predicates, tails).rebind(plan)

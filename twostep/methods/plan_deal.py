@@ -129,10 +129,11 @@ def try_deals(
     trials: Trials,
     rebinding: bool = True,
 ) -> None:
-    """The cleaned SA plan (one agent), then every way for 2..N agents, of the cleaned SA
-    plan and, with ``rebinding`` when it changes the plan (:mod:`~twostep.dealing.rebind`),
-    of the rebound plan too; the shortest schedule is kept, ties to fewer agents, then to the SA plan's
-    deal (its row is marked ``chosen``)."""
+    """The cleaned SA plan (one agent), then every way for 2..N agents: of the cleaned SA
+    plan and, with ``rebinding``, of each different plan rebinding makes of it
+    (:mod:`~twostep.dealing.rebind`: its rounds, and its rounds and tails). The shortest
+    schedule is kept, ties to fewer agents, then to the earlier deal (its row is marked
+    ``chosen``; a rebound plan's rows say ``rebound``: ``rounds`` or ``tails``)."""
     problem = request.problem
     try:
         dealer = Dealer(problem, sa_steps, request.agent_predicates)
@@ -145,19 +146,22 @@ def try_deals(
              "cleaned_sa_length": len(cleaned), "agents_used": 1}  # fmt: skip
     trials.rows.append(first)
     candidates = [(first, [cleaned], [[(0, a)] for a in cleaned])]
-    dealers = [dealer]
     start = cpu_seconds()
-    rebound = rebind(problem, cleaned, request.agent_predicates) if rebinding else None
+    rebound: dict[str, list[str]] = {}
+    for tails in (False, True) if rebinding else ():
+        plan = rebind(problem, cleaned, request.agent_predicates, tails)
+        if plan is not None and plan not in rebound.values():
+            rebound["tails" if tails else "rounds"] = plan
     spent = cpu_seconds() - start
-    if rebound is not None:
-        dealers.append(Dealer(problem, rebound, request.agent_predicates))
+    dealers: list[tuple[str | None, Dealer]] = [(None, dealer)]
+    dealers += [(kind, Dealer(problem, plan, request.agent_predicates)) for kind, plan in rebound.items()]  # fmt: skip
     for agents in range(2, request.agents + 1):
-        for plan, one in enumerate(dealers):
+        for kind, one in dealers:
             for way in tried:
                 row: dict[str, Any] = {"agents": agents, "cut": way.cut, "order": way.order,
                                        "steal": way.steal}  # fmt: skip
-                if plan:
-                    row["rebound"] = True
+                if kind is not None:
+                    row["rebound"] = kind
                 trials.rows.append(row)
                 try:
                     dealt = one.deal(agents, way.cut, way.order, way.steal)
@@ -170,7 +174,7 @@ def try_deals(
                 if dealt.offloaded:
                     row["offloaded"] = True
                 candidates.append((row, plans, schedule))
-    for one in dealers:  # the dealers' phases, and rebinding and scoring beside them
+    for _, one in dealers:  # the dealers' phases, and rebinding and scoring beside them
         for phase, seconds in one.seconds.items():
             trials.seconds[phase] = trials.seconds.get(phase, 0.0) + seconds
     trials.seconds["rebinding"] = spent
