@@ -29,9 +29,10 @@ on (it is cleaned where it stands), and the other object does the whole tail; an
 that no longer applies there gives way to one on the same arguments that applies and adds
 all it adds (a glass filled afresh where the plan refilled it).
 
-The rounds are taken in plan order. Each goes to the interchangeable object mentioned
-longest ago, if that is longer ago than the round's own object; a rename is kept only when
-the whole plan, repaired, still applies and reaches the goal. The searches are bounded by
+The rounds are taken in plan order. Each may go to an interchangeable object mentioned
+longer ago than the round's own object; a rename counts only when the whole plan,
+repaired, still applies and reaches the goal, and of those the one that adds the fewest
+actions is kept (ties: the object mentioned longest ago). The searches are bounded by
 counts (:data:`TRIALS`, :data:`REPAIR_DEPTH`, :data:`REPAIR_STATES`, :data:`MATCHED`),
 never by time, so the result is the same on every machine.
 """
@@ -126,22 +127,27 @@ class Rebinder:
                 if first < start:
                     continue
                 start = first + 1
-                for names in self._candidates(current, states, first, last, obj, facts):
+                best: tuple[int, int, list[str], int] | None = None
+                for rank, names in enumerate(
+                    self._candidates(current, states, first, last, obj, facts)
+                ):
+                    if trials >= TRIALS:
+                        break
                     trials += 1
                     renamed = [*closing] + [
                         _renamed(a, names) if names.keys() & set(_args(a)) else a
                         for a in current[first : last + 1]
                     ]
                     repaired = self._repair(states[first], renamed, current[last + 1 :])
-                    if repaired is not None:  # on after the round's first action
+                    if repaired is not None:  # the fewest actions added, then the earliest
                         tail, begin = repaired
-                        current, changed = current[:first] + tail, True
-                        start = first + begin + 1
-                        break
-                    if trials >= TRIALS:
-                        break
-                else:
+                        if best is None or (len(tail), rank) < best[:2]:
+                            best = (len(tail), rank, tail, begin)
+                if best is None:
                     continue
+                *_, tail, begin = best
+                current, changed = current[:first] + tail, True
+                start = first + begin + 1  # on after the round's first action
                 break  # a round was rebound (or the trials ran out): the plan again
             else:
                 break  # every round was tried
