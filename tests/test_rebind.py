@@ -119,3 +119,110 @@ def test_barman_glass_rounds_deal_shorter_and_stay_monotone(data_root: Path) -> 
         _valid(task, run, preds)
         lengths[agents] = run.exec_length
     assert lengths[2] >= lengths[3] >= lengths[4]
+
+
+# Jugs: a jug is filled at the tap, poured into a pot, filled again with the same drink
+# (refill: it is used already), and washed. The SA plan fills both pots from jug j1.
+JUGS_DOMAIN = """(define (domain jugs)
+  (:requirements :strips)
+  (:predicates (hand-free) (holding ?c) (shelf ?c) (clean ?c) (empty ?c) (full ?c)
+    (used ?c) (filled ?p))
+  (:action take :parameters (?c)
+    :precondition (and (shelf ?c) (hand-free))
+    :effect (and (holding ?c) (not (shelf ?c)) (not (hand-free))))
+  (:action put :parameters (?c)
+    :precondition (holding ?c)
+    :effect (and (shelf ?c) (hand-free) (not (holding ?c))))
+  (:action fill :parameters (?c)
+    :precondition (and (holding ?c) (clean ?c) (empty ?c))
+    :effect (and (full ?c) (used ?c) (not (clean ?c)) (not (empty ?c))))
+  (:action refill :parameters (?c)
+    :precondition (and (holding ?c) (used ?c) (empty ?c))
+    :effect (and (full ?c) (not (empty ?c))))
+  (:action pour :parameters (?c ?p)
+    :precondition (and (holding ?c) (full ?c))
+    :effect (and (filled ?p) (empty ?c) (not (full ?c))))
+  (:action wash :parameters (?c)
+    :precondition (and (holding ?c) (used ?c) (empty ?c))
+    :effect (and (clean ?c) (not (used ?c)))))"""
+JUGS_TASK = """(define (problem two-pots) (:domain jugs)
+  (:objects j1 j2 p1 p2)
+  (:init (hand-free) (shelf j1) (shelf j2) (clean j1) (clean j2) (empty j1) (empty j2))
+  (:goal (and (filled p1) (filled p2) (clean j1) (clean j2))))"""
+JUGS = ["hand-free", "holding"]
+JUGS_SA_PLAN = ("(take j1)", "(fill j1)", "(pour j1 p1)", "(refill j1)", "(pour j1 p2)",
+                "(wash j1)")  # fmt: skip
+
+
+def _jugs(tmp_path: Path) -> BenchmarkTask:
+    from twostep.benchmark import load_task
+
+    folder = tmp_path / "jugs"
+    folder.mkdir()
+    (folder / "domain.pddl").write_text(JUGS_DOMAIN)
+    (folder / "domain.nl").write_text("A tap, two jugs, two pots.")
+    (folder / "p01.pddl").write_text(JUGS_TASK)
+    return load_task("jugs", 1, tmp_path)
+
+
+def test_a_tail_goes_to_the_idle_jug_and_the_jug_is_washed_where_it_stands(
+    tmp_path: Path,
+) -> None:
+    # j1's own facts (shelf is handling): clean empty -> fill: full used -> pour: empty
+    # used -> refill: full used -> pour: empty used -> wash: clean empty: one round, steps
+    # 1-5. Without tails the only rename is the whole round, to j2 (never mentioned, as
+    # clean and empty): put j1 and take j2 before it, still one chain. With tails, the
+    # plan after that: j2's state after the first pour (empty used) comes back after the
+    # second, so the tail from the refill on goes to j1 (mentioned before j2 was); j2
+    # keeps the tail's actions after its last return to that state (the wash); where j1
+    # is not used, refill gives way to fill (same arguments, adds all refill adds), after
+    # put j2, take j1.
+    task = _jugs(tmp_path)
+    rounds = rebind(task.problem, JUGS_SA_PLAN, JUGS)
+    assert rounds == ["(take j1)", "(put j1)", "(take j2)", "(fill j2)", "(pour j2 p1)",
+                      "(refill j2)", "(pour j2 p2)", "(wash j2)"]  # fmt: skip
+    assert rebind(task.problem, JUGS_SA_PLAN, JUGS, tails=True) == [
+        "(take j1)", "(put j1)", "(take j2)", "(fill j2)", "(pour j2 p1)", "(wash j2)",
+        "(put j2)", "(take j1)", "(fill j1)", "(pour j1 p2)", "(wash j1)",
+    ]  # fmt: skip
+    # Dealt to two agents: each jug's take, fill, pour, wash is a piece of its own: 4
+    # steps; the SA plan and the rounds-only plan are one chain of 6 acting steps.
+    request = MethodRequest(task, 2, FAST, JUGS, sa_plan=sa_result(JUGS_SA_PLAN))
+    run = run_plan_deal(request)
+    (chosen,) = [row for row in run.extra["deal"] if row.get("chosen")]
+    assert run.exec_length == 4 and chosen["rebound"] == "tails"
+    _valid(task, run, JUGS)
+    assert run_plan_deal(request, rebind=False).exec_length == 6
+
+
+# grippers p01 (ours): robot1 in room1, robot2 in room2, ball1 in room2 to room1, ball2
+# in room1 to room2. The SA plan has robot2 carry both.
+GRIPPERS_SA_PLAN = (
+    "(pick robot2 ball1 room2 lgripper2)", "(move robot2 room2 room1)",
+    "(drop robot2 ball1 room1 lgripper2)", "(pick robot2 ball2 room1 lgripper2)",
+    "(move robot2 room1 room2)", "(drop robot2 ball2 room2 lgripper2)",
+)  # fmt: skip
+
+
+def test_a_robots_second_trip_goes_to_the_idle_robot_with_its_grippers(data_root: Path) -> None:
+    # A robot is a mover (it stays in at-robby as it moves): its own facts are its
+    # grippers free or carrying. Its first trip (pick ... drop) is a round, so is its
+    # second; robot1 was never mentioned, so the second trip goes to robot1, lgripper2 to
+    # lgripper1 (robot1's free grippers, matched in order). robot1 stands in room1 where
+    # ball2 is: nothing to repair. Dealt to two agents (each has its own copy of both
+    # robots where they start): one trip each, 3 steps; without rebinding the second
+    # agent's robot2 must first drive to room1: 4.
+    from twostep.benchmark import load_task
+
+    preds = ["at-robby", "free", "carry"]
+    task = load_task("grippers", 1, data_root)
+    assert rebind(task.problem, GRIPPERS_SA_PLAN, preds) == [
+        *GRIPPERS_SA_PLAN[:3],
+        "(pick robot1 ball2 room1 lgripper1)", "(move robot1 room1 room2)",
+        "(drop robot1 ball2 room2 lgripper1)",
+    ]  # fmt: skip
+    request = MethodRequest(task, 2, FAST, preds, sa_plan=sa_result(GRIPPERS_SA_PLAN))
+    run = run_plan_deal(request)
+    assert run.exec_length == 3 and run.fallback is None
+    _valid(task, run, preds)
+    assert run_plan_deal(request, rebind=False).exec_length == 4

@@ -138,7 +138,9 @@ class Rebinder:
                         _renamed(a, names) if names.keys() & set(_args(a)) else a
                         for a in current[first : last + 1]
                     ]
-                    repaired = self._repair(states[first], renamed, current[last + 1 :])
+                    repaired = self._repair(
+                        states[first], renamed, current[last + 1 :], len(closing)
+                    )
                     if repaired is not None:  # the fewest actions added, then the earliest
                         tail, begin = repaired
                         if best is None or (len(tail), rank) < best[:2]:
@@ -286,11 +288,12 @@ class Rebinder:
         return None
 
     def _repair(
-        self, state: frozenset[Fact], renamed: Sequence[str], rest: Sequence[str]
+        self, state: frozenset[Fact], renamed: Sequence[str], rest: Sequence[str], at: int
     ) -> tuple[list[str], int] | None:
         """``renamed`` then ``rest`` from ``state``, with handling inserted where an action
-        does not apply, and where the first renamed action is in it; None when a repair
-        fails or the goal is not reached."""
+        does not apply, and where ``renamed[at]`` (the first renamed action, after the
+        object's closing ones) is in it; None when a repair fails or the goal is not
+        reached."""
         out: list[str] = []
         begin = 0
         for k, text in enumerate([*renamed, *rest]):
@@ -299,17 +302,15 @@ class Rebinder:
             except PlanError:
                 return None
             if not action.applicable(state):
-                sibling = self._sibling(state, action)
-                if sibling is not None:
-                    action, text = sibling, str(sibling)
-                else:
-                    path = self._handling_to(state, action, text)
-                    if path is None:
-                        return None
-                    for move in path:
-                        state = move.apply(state)
-                        out.append(str(move))
-            if k == 0:
+                found = self._handling_to(state, action, text)
+                if found is None:
+                    return None
+                path, action = found
+                text = str(action)
+                for move in path:
+                    state = move.apply(state)
+                    out.append(str(move))
+            if k == at:
                 begin = len(out)
             state = action.apply(state)
             out.append(text)
@@ -317,27 +318,27 @@ class Rebinder:
             return None
         return out, begin
 
-    def _sibling(self, state: frozenset[Fact], action: GroundAction) -> GroundAction | None:
-        """An action on the same arguments that applies and adds all the action adds (a
-        glass filled afresh where the plan refilled it)."""
-        for other in self.siblings[action.args]:
-            if other is not action and other.add >= action.add and other.applicable(state):
-                return other
-        return None
-
     def _handling_to(
         self, state: frozenset[Fact], target: GroundAction, text: str
-    ) -> list[GroundAction] | None:
+    ) -> tuple[list[GroundAction], GroundAction] | None:
         """The shortest sequence of handling actions on the target's objects and those the
-        agent facts mention, after which ``target`` applies."""
+        agent facts mention, after which ``target`` applies, or an action on the same
+        arguments that adds all it adds (a glass filled afresh where the plan refilled it);
+        and the action that then applies."""
         objects = set(_args(text)) | {o for f in state if f[0] in self.agent for o in f[1:]}
         moves = [m for m in self.handling if set(m.args) <= objects]
+        goals = [target] + [
+            other
+            for other in self.siblings[target.args]
+            if other is not target and other.add >= target.add
+        ]
         queue: deque[tuple[frozenset[Fact], list[GroundAction]]] = deque([(state, [])])
         seen = {state}
         while queue:
             here, path = queue.popleft()
-            if target.applicable(here):
-                return path
+            for goal in goals:
+                if goal.applicable(here):
+                    return path, goal
             if len(path) >= REPAIR_DEPTH:
                 continue
             for move in moves:
@@ -349,7 +350,6 @@ class Rebinder:
                         seen.add(there)
                         queue.append((there, [*path, move]))
         return None
-
 
 def rebind(
     problem: Problem, plan: Sequence[str], agent_predicates: Collection[str], tails: bool = False
