@@ -351,6 +351,7 @@ class Rebinder:
                         queue.append((there, [*path, move]))
         return None
 
+
 def rebind(
     problem: Problem, plan: Sequence[str], agent_predicates: Collection[str], tails: bool = False
 ) -> list[str] | None:
