@@ -40,7 +40,7 @@ never by time, so the result is the same on every machine.
 from __future__ import annotations
 
 import itertools
-from collections import defaultdict, deque
+from collections import Counter, defaultdict, deque
 from collections.abc import Collection, Sequence
 
 from twostep.decomposers.goal_split import positional_predicates
@@ -92,10 +92,9 @@ def movers(problem: Problem, positional: Collection[str]) -> frozenset[str]:
 
 
 class Rebinder:
-    """Rebinding of plans of one task (module docstring); ``tails``: tails too."""
+    """Rebinding of plans of one task (module docstring)."""
 
-    def __init__(self, problem: Problem, agent_predicates: Collection[str], tails: bool = False):
-        self.tails = tails
+    def __init__(self, problem: Problem, agent_predicates: Collection[str]):
         self.problem = problem
         self.agent = frozenset(agent_predicates)
         self.grounder = Grounder(problem)
@@ -109,6 +108,16 @@ class Rebinder:
             ),
             key=str,
         )
+        # each handling action under its argument the fewest of them have (a ball, not a
+        # room): an action whose arguments are all among some objects is under one of them
+        count = Counter(obj for action in self.handling for obj in set(action.args))
+        self._handling_of: defaultdict[str, list[int]] = defaultdict(list)
+        for rank, action in enumerate(self.handling):
+            if action.args:
+                rarest = min(action.args, key=lambda obj: (count[obj], obj))
+                self._handling_of[rarest].append(rank)
+            else:
+                self._handling_of[""].append(rank)
         self.siblings: defaultdict[tuple[str, ...], list[GroundAction]] = defaultdict(list)
         for action in sorted(problem.grounded.actions.values(), key=str):
             self.siblings[action.args].append(action)
@@ -116,14 +125,15 @@ class Rebinder:
         self.positional = frozenset(positional_predicates(problem.domain)) & self.agent
         self.movers = movers(problem, self.positional)
 
-    def rebind(self, plan: Sequence[str]) -> list[str] | None:
-        """The plan with rounds rebound and handling repaired; None when no round could be
-        (the plan must apply from the initial state and reach the goal)."""
+    def rebind(self, plan: Sequence[str], tails: bool = False) -> list[str] | None:
+        """The plan with rounds (and with ``tails`` their tails) rebound and handling
+        repaired; None when no round could be (the plan must apply from the initial state
+        and reach the goal)."""
         current = list(plan)
         changed, start, trials = False, 0, 0
         while trials < TRIALS:
             states = self._states(current)
-            for first, last, obj, facts, closing in self._rounds(current, states):
+            for first, last, obj, facts, closing in self._rounds(current, states, tails):
                 if first < start:
                     continue
                 start = first + 1
@@ -176,7 +186,7 @@ class Rebinder:
         return frozenset(f for f in state if obj in f[1:] and self._counts(f, obj))
 
     def _rounds(
-        self, plan: Sequence[str], states: Sequence[frozenset[Fact]]
+        self, plan: Sequence[str], states: Sequence[frozenset[Fact]], tails: bool
     ) -> list[tuple[int, int, str, frozenset[Fact], tuple[str, ...]]]:
         """Every object's rounds and tails: (first step, last step, object, its facts
         before the round, the closing actions the object keeps), in plan order. Each
@@ -217,7 +227,7 @@ class Rebinder:
                 # poured out and filled again with the same ingredient) to its end; the
                 # object keeps the tail's last actions from that state on (cleaned)
                 reached = {after: k}  # each state on the way: where it was first met
-                for r in range(k + 1, m if self.tails else k + 1):
+                for r in range(k + 1, m if tails else k + 1):
                     back = steps[r][2]
                     if back not in reached:
                         reached[back] = r
@@ -326,7 +336,8 @@ class Rebinder:
         arguments that adds all it adds (a glass filled afresh where the plan refilled it);
         and the action that then applies."""
         objects = set(_args(text)) | {o for f in state if f[0] in self.agent for o in f[1:]}
-        moves = [m for m in self.handling if set(m.args) <= objects]
+        ranks = {r for obj in (*objects, "") for r in self._handling_of.get(obj, ())}
+        moves = [self.handling[r] for r in sorted(ranks) if set(self.handling[r].args) <= objects]
         goals = [target] + [
             other
             for other in self.siblings[target.args]
@@ -357,4 +368,4 @@ def rebind(
 ) -> list[str] | None:
     """``plan`` with its objects' rounds (and with ``tails`` their tails) spread over
     interchangeable objects (module docstring), or None when nothing changes."""
-    return Rebinder(problem, agent_predicates, tails).rebind(plan)
+    return Rebinder(problem, agent_predicates).rebind(plan, tails)

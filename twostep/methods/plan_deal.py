@@ -24,7 +24,7 @@ from typing import Any
 
 from twostep.dealing import CUTS, Dealer, DealError, Way, ways
 from twostep.dealing.model import cpu_seconds
-from twostep.dealing.rebind import rebind
+from twostep.dealing.rebind import Rebinder
 from twostep.execution import ParallelExecution, ScheduleError, check_schedule
 from twostep.methods.request import MethodRequest
 from twostep.methods.result import (
@@ -148,10 +148,12 @@ def try_deals(
     candidates = [(first, [cleaned], [[(0, a)] for a in cleaned])]
     start = cpu_seconds()
     rebound: dict[str, list[str]] = {}
-    for tails in (False, True) if rebinding else ():
-        plan = rebind(problem, cleaned, request.agent_predicates, tails)
-        if plan is not None and plan not in rebound.values():
-            rebound["tails" if tails else "rounds"] = plan
+    if rebinding:
+        rebinder = Rebinder(problem, request.agent_predicates)
+        for tails in (False, True):
+            plan = rebinder.rebind(cleaned, tails)
+            if plan is not None and plan not in rebound.values():
+                rebound["tails" if tails else "rounds"] = plan
     spent = cpu_seconds() - start
     dealers: list[tuple[str | None, Dealer]] = [(None, dealer)]
     dealers += [(kind, Dealer(problem, plan, request.agent_predicates)) for kind, plan in rebound.items()]  # fmt: skip
