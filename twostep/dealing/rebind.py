@@ -337,7 +337,12 @@ class Rebinder:
         and the action that then applies."""
         objects = set(_args(text)) | {o for f in state if f[0] in self.agent for o in f[1:]}
         ranks = {r for obj in (*objects, "") for r in self._handling_of.get(obj, ())}
-        moves = [self.handling[r] for r in sorted(ranks) if set(self.handling[r].args) <= objects]
+        own = set(_args(text))  # moves that touch one of the target's own objects
+        moves = [
+            self.handling[r]
+            for r in sorted(ranks)
+            if set(self.handling[r].args) <= objects and own & set(self.handling[r].args)
+        ]
         goals = [target] + [
             other
             for other in self.siblings[target.args]
