@@ -118,12 +118,18 @@ class Rebinder:
                 self._handling_of[rarest].append(rank)
             else:
                 self._handling_of[""].append(rank)
+        self.positional = frozenset(positional_predicates(problem.domain)) & self.agent
+        self.movers = movers(problem, self.positional)
+        self._walking = {  # handling actions that only move agents
+            rank
+            for rank, a in enumerate(self.handling)
+            if {f[0] for f in a.possible_add | a.possible_delete if f[0] in self.agent}
+            <= self.positional
+        }
         self.siblings: defaultdict[tuple[str, ...], list[GroundAction]] = defaultdict(list)
         for action in sorted(problem.grounded.actions.values(), key=str):
             self.siblings[action.args].append(action)
         self.types = problem.all_objects
-        self.positional = frozenset(positional_predicates(problem.domain)) & self.agent
-        self.movers = movers(problem, self.positional)
 
     def rebind(self, plan: Sequence[str], tails: bool = False) -> list[str] | None:
         """The plan with rounds (and with ``tails`` their tails) rebound and handling
@@ -337,11 +343,12 @@ class Rebinder:
         and the action that then applies."""
         objects = set(_args(text)) | {o for f in state if f[0] in self.agent for o in f[1:]}
         ranks = {r for obj in (*objects, "") for r in self._handling_of.get(obj, ())}
-        own = set(_args(text))  # moves that touch one of the target's own objects
+        own = set(_args(text))  # walks only of the target's own movers (not every robot)
         moves = [
             self.handling[r]
             for r in sorted(ranks)
-            if set(self.handling[r].args) <= objects and own & set(self.handling[r].args)
+            if set(self.handling[r].args) <= objects
+            and (r not in self._walking or own & set(self.handling[r].args))
         ]
         goals = [target] + [
             other
