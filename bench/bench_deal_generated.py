@@ -521,8 +521,10 @@ def _verdicts(verdicts: dict[int, str], agent_counts: Sequence[int]) -> str:
 def summary(domain: str, rows: list[Row], agent_counts: Sequence[int]) -> list[str]:
     done = [r for r in rows if not r.skipped]
     runs = [(r, n) for r in done for n in agent_counts]
-    shorter = sum(
-        1 for r, n in runs if (k := r.lengths.get(n)) is not None and r.sa is not None and k < r.sa
+    shorter = sum(  # dealt: no fallback (the cleaned SA plan may be shorter than SA too)
+        1
+        for r, n in runs
+        if not r.fallbacks.get(n) and (k := r.lengths.get(n)) is not None and k < (r.sa or 0)
     )
     reasons = Counter(r.fallbacks[n].split(" [")[0] for r, n in runs if r.fallbacks.get(n))
     crashes = sum(1 for r, n in runs if r.lengths.get(n) is None)
