@@ -35,6 +35,7 @@ from twostep.dealing import (
     eliminate_joint,
     walks,
 )
+from twostep.dealing.replay import Replay
 from twostep.execution import ScheduleError
 from twostep.methods import MethodRequest, check_run, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
@@ -135,10 +136,23 @@ def test_no_walk_means_the_sa_plan(
 ) -> None:
     # With the walking search allowed no state, agent 0 cannot walk to p3: no deal to two
     # agents, so the one-agent deal is the result (the cleaned SA plan, here the SA plan
-    # itself: nothing to drop) and ``fallback`` says why.
+    # itself: nothing to drop) and ``fallback`` says why. (The offload in the plan's own
+    # order needs no search for the first agent, who walks the plan's own walks, and
+    # deals it: with it off here; on below.)
     monkeypatch.setattr(walks, "WALK_LIMIT", 0)
     task = _copy_task(tmp_path, data_root, "termes", TERMES_TOWER)
-    run = run_plan_deal(MethodRequest(task, 2, FAST, TERMES, sa_plan=sa_result(TERMES_PLAN)))
+    request = MethodRequest(task, 2, FAST, TERMES, sa_plan=sa_result(TERMES_PLAN))
+    dealt = run_plan_deal(request)
+    (chosen,) = [row for row in dealt.extra["deal"] if row.get("chosen")]
+    assert chosen.get("offloaded") and dealt.fallback is None
+    assert dealt.exec_length is not None and dealt.exec_length < len(TERMES_PLAN)
+    _check(task.problem, dealt, TERMES)
+
+    def stuck(*args: object) -> None:
+        raise DealError("stuck")
+
+    monkeypatch.setattr(Replay, "in_plan_order", stuck)
+    run = run_plan_deal(request)
     assert run.success and run.exec_length == len(TERMES_PLAN)
     assert run.fallback is not None and "walk" in run.fallback
     assert run.agent_order == ["agent0"] and run.plans["agent0"] == list(TERMES_PLAN)
@@ -778,3 +792,35 @@ def test_bits_agree_with_the_grounded_model_on_axioms_and_conditional_effects() 
                     seen.add(after)
                     queue.append(after)
     assert len(seen) > 8  # objects on the shelf, held, in the bin: many states were checked
+
+
+@needs_sample
+def test_a_walk_inside_another_piece_is_offloaded_in_plan_order(tmp_path: Path) -> None:
+    # storage, one depot, 8 crates, 3 hoists (bench/bench_deal_generated.py, seed 1): the
+    # SA plan has hoist1 lift a crate out of hoist0's way, hoist0 pass, and hoist1 put the
+    # crate back. Replaying whole pieces gets stuck for every way and owner, even with
+    # every piece the first agent's (hoist0 must pass in the middle of hoist1's piece), so
+    # plan-deal with 2 agents used to give the cleaned SA plan. The offload now starts from
+    # the plan's own run, action by action in its order, and hands pieces on from there:
+    # two agents deal it, shorter than SA, and the schedule re-validates (check_run, and
+    # the independent validator on the files).
+    from bench.bench_deal_generated import gen_storage
+    from bench.independent import IndependentValidator
+
+    folder = tmp_path / "storage"
+    folder.mkdir()
+    shutil.copy(SAMPLE / "storage" / "domain.pddl", folder / "domain.pddl")
+    (folder / "p01.pddl").write_text(gen_storage(1, 8, 3, 1).text)
+    task = load_task("storage", 1, tmp_path)
+    preds = ["at", "available", "lifting"]
+    sa = run_single_agent(MethodRequest(task, planner=FAST))
+    assert sa.exec_length is not None
+    run = run_plan_deal(MethodRequest(task, 2, FAST, preds, sa_plan=sa.planner_calls[0].result))
+    (chosen,) = [row for row in run.extra["deal"] if row.get("chosen")]
+    assert run.fallback is None and chosen["agents_used"] == 2 and chosen.get("offloaded")
+    assert run.exec_length is not None and run.exec_length < sa.exec_length
+    check_run(task.problem, run, preds)
+    verdict = IndependentValidator(task.domain_path, task.problem_path).check_schedule(
+        run.agent_order, run.plans, run.schedule, preds
+    )
+    assert verdict.valid, verdict

@@ -219,13 +219,18 @@ class Dealer:
         replay = Replay(self.walker, self.steps, pieces, piece_order.preds, self.goal, self.init)
         owner = [0] * len(pieces)
         with self._phase("replay"):
-            best, owner = self._replayed(replay, owner, start, agents)
+            try:
+                best, owner = self._replayed(replay, owner, start, agents)
+                replayed = self._replayed
+            except DealError:  # whole pieces get stuck: the plan's own run, action by action
+                best, owner = self._in_plan_order(replay, owner, start, agents)
+                replayed = self._in_plan_order
             length = len(earliest_steps(best, agents))
             for p in sorted(range(len(pieces)), key=lambda p: start[p]):
                 for a in range(1, agents):
                     trial = [*owner[:p], a, *owner[p + 1 :]]
                     try:
-                        run, got = self._replayed(replay, trial, start, agents)
+                        run, got = replayed(replay, trial, start, agents)
                     except DealError:
                         continue
                     steps = len(earliest_steps(run, agents))
@@ -243,6 +248,14 @@ class Dealer:
         it ended with (it hands a piece on where its agent cannot get there)."""
         run, got = replay.run(owner, start, agents)
         return self._joint_cleanup(run, agents), got
+
+    def _in_plan_order(
+        self, replay: Replay, owner: Sequence[int], start: Sequence[int], agents: int
+    ) -> tuple[JointRun, list[int]]:
+        """:meth:`_replayed` in the plan's own order, action by action
+        (:meth:`Replay.in_plan_order`); the owners stay as given."""
+        run = replay.in_plan_order(owner, agents, self.walking)
+        return self._joint_cleanup(run, agents), list(owner)
 
     def _joint_cleanup(self, run: JointRun, agents: int) -> JointRun:
         """What several agents no longer need of a joint run (a block parked for want of a

@@ -114,3 +114,38 @@ class Replay:
                 if found is not None:
                     return found
         return None
+
+    def in_plan_order(self, owner: Sequence[int], agents: int, walking: Sequence[bool]) -> JointRun:
+        """The plan's own run, action by action in its order, each acting action by the
+        agent that owns its piece, walking first where needed; the plan's own walks are the
+        first agent's. With every piece the first agent's this is the plan itself, walks
+        and all: the start :meth:`~twostep.dealing.deal.Dealer.offload` falls back on when
+        replaying whole pieces gets stuck (a hoist that must pass while another lifts the
+        crate in its way, in the middle of that piece). :class:`DealError` when an agent
+        cannot walk to where its action applies or the goal is missed."""
+        piece_of = {i: p for p, piece in enumerate(self.pieces) for i in piece}
+        env, own0 = self.start
+        owns = [own0] * agents
+        load = [0] * agents
+        joint: JointRun = []
+        for i, step in enumerate(self.steps):
+            if walking[i]:  # the plan's own walk, by the first agent, where it still applies
+                if step.applicable(env, owns[0]):
+                    env, owns[0] = step.apply(env, owns[0])
+                    joint.append((0, step))
+                    load[0] += 1
+                continue
+            if i not in piece_of:
+                continue
+            a = owner[piece_of[i]]
+            if not step.applicable(env, owns[a]):
+                for move in self.walker.walk_to(env, owns[a], step):
+                    env, owns[a] = move.apply(env, owns[a])
+                    joint.append((a, move))
+                    load[a] += 1
+            env, owns[a] = step.apply(env, owns[a])
+            joint.append((a, step))
+            load[a] += 1
+        if not self.goal.holds(env, owns):
+            joint.extend(closing_walk(self.walker, self.goal, env, owns, load))
+        return joint
