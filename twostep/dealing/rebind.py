@@ -20,7 +20,7 @@ same facts. A mover's round is renamed with the objects its own facts name (a ro
 grippers to the other robot's). Where an action then does not apply, because of who
 holds what or where a mover stands, the shortest sequence of handling actions on the
 objects involved that makes it apply is inserted before it (put the old glass down, pick
-the new one up; drive the other robot over).
+the new one up; drive the other robot over: walks move only the action's own movers).
 
 With ``tails``, a round's *tails* are candidates too: from where the object comes back to
 a state it had earlier in the round (a glass poured out, to be filled again with the same
