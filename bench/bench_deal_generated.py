@@ -41,7 +41,6 @@ import shutil
 import sys
 import tempfile
 import time
-import traceback
 from collections import Counter
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
@@ -51,14 +50,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from bench.bench_deal_ipc import (
     deal_seconds,
+    deal_within,
+    fallback_text,
     independent_verdict,
     our_verdict,
-    time_limit,
 )
 from bench.independent import IndependentValidator
 from twostep.benchmark import BenchmarkTask, load_task
-from twostep.methods import MethodRequest, RunResult, run_single_agent
-from twostep.methods.plan_deal import run_plan_deal
+from twostep.methods import MethodRequest, run_single_agent
 from twostep.planner import PlannerSettings
 
 REPO = Path(__file__).resolve().parent.parent
@@ -436,15 +435,6 @@ class Row:
     skipped: str = ""
 
 
-def fallback_reason(run: RunResult) -> str:
-    """The fallback's kind (its reason without details), with each distinct deal error."""
-    if not run.fallback:
-        return ""
-    reason = str(getattr(run.fallback, "reason", run.fallback))
-    errors = sorted({str(r["error"])[:90] for r in run.extra.get("deal", []) if "error" in r})
-    return reason + (f" [{'; '.join(errors)}]" if errors else "")
-
-
 def run_problem(
     task: BenchmarkTask,
     row: Row,
@@ -463,18 +453,14 @@ def run_problem(
     for agents in agent_counts:
         request = MethodRequest(task, agents, planner, preds, sa_plan=sa_plan)
         start = time.process_time()
-        try:
-            with time_limit(deal_limit):
-                run = run_plan_deal(request)
-        except Exception as error:
-            where = traceback.extract_tb(error.__traceback__)[-1]
+        run = deal_within(request, deal_limit, 90)
+        if isinstance(run, str):
             row.lengths[agents] = None
-            row.fallbacks[agents] = (f"CRASH {type(error).__name__}: {str(error)[:90]} "
-                                     f"({Path(where.filename).name}:{where.lineno})")  # fmt: skip
+            row.fallbacks[agents] = f"CRASH {run}"
             row.cpu[agents] = time.process_time() - start
             continue
         row.lengths[agents] = run.exec_length
-        row.fallbacks[agents] = fallback_reason(run)
+        row.fallbacks[agents] = fallback_text(run, none="", width=90)
         row.ours[agents] = our_verdict(task, run, preds)
         row.independent[agents] = independent_verdict(validator, run, preds)
         row.cpu[agents] = deal_seconds(run)

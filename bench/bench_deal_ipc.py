@@ -278,14 +278,27 @@ def deal_seconds(run: RunResult) -> float:
     return float(sum(run.extra.get("deal_seconds", {}).values()))
 
 
-def fallback_text(run: RunResult) -> str:
-    """The fallback's reason, and each distinct error of the deals once."""
+def fallback_text(run: RunResult, none: str = "-", width: int | None = None) -> str:
+    """The fallback's reason, and each distinct error of the deals once (cut to ``width``
+    characters); ``none`` when the run did not fall back."""
     fallback = run.fallback
     if not fallback:
-        return "-"
-    errors = sorted({str(r["error"]) for r in run.extra.get("deal", []) if "error" in r})
+        return none
+    errors = sorted({str(r["error"])[:width] for r in run.extra.get("deal", []) if "error" in r})
     reason = getattr(fallback, "reason", fallback)
     return str(reason) + (f" [{'; '.join(errors)}]" if errors else "")
+
+
+def deal_within(request: MethodRequest, seconds: int, width: int) -> RunResult | str:
+    """plan-deal on ``request`` within ``seconds``: the run, or what went wrong when it
+    raised (the exception, its message cut to ``width`` characters, and where)."""
+    try:
+        with time_limit(seconds):
+            return run_plan_deal(request)
+    except Exception as error:
+        where = traceback.extract_tb(error.__traceback__)[-1]
+        return (f"{type(error).__name__}: {str(error)[:width]} "
+                f"({Path(where.filename).name}:{where.lineno})")  # fmt: skip
 
 
 def problem_files(folder: Path) -> list[Path]:
@@ -398,15 +411,11 @@ def rows(
             label = ",".join(preds)
             request = MethodRequest(task, agents, planner, preds, sa_plan=sa_plan)
             start = time.process_time()
-            try:
-                with time_limit(deal_limit):
-                    run = run_plan_deal(request)
-            except Exception as error:
+            run = deal_within(request, deal_limit, 100)
+            if isinstance(run, str):
                 spent = time.process_time() - start
-                where = traceback.extract_tb(error.__traceback__)[-1]
                 yield (f"{domain} | {name} | {label} | {agents} | {sa.exec_length} | CRASH | "
-                       f"{type(error).__name__}: {str(error)[:100]} "
-                       f"({Path(where.filename).name}:{where.lineno}) | - | - | {spent:.2f}")  # fmt: skip
+                       f"{run} | - | - | {spent:.2f}")  # fmt: skip
                 continue
             yield " | ".join(str(x) for x in (
                 domain, name, label, agents, sa.exec_length, run.exec_length,
