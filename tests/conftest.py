@@ -6,8 +6,12 @@ import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
+
+if TYPE_CHECKING:
+    from twostep.benchmark import BenchmarkTask
 
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 os.environ.setdefault("MLFLOW_DISABLE_TELEMETRY", "true")
@@ -36,6 +40,19 @@ BLOCKS_DOMAIN = """
     :precondition (and (on ?b ?under) (clear ?b) (arm-empty))
     :effect (and (holding ?b) (clear ?under) (not (on ?b ?under)) (not (clear ?b)) (not (arm-empty)))))
 """
+
+
+def own_task(root: Path, name: str, domain: str, problem: str) -> BenchmarkTask:
+    """A domain of the test's own (``domain``, its PDDL text) with ``problem`` as task 1, in
+    folder ``name`` of ``root``."""
+    from twostep.benchmark import load_task  # after the environment above is set
+
+    folder = root / name
+    folder.mkdir(parents=True)
+    (folder / "domain.pddl").write_text(domain)
+    (folder / "domain.nl").write_text(name)
+    (folder / "p01.pddl").write_text(problem)
+    return load_task(name, 1, root)
 
 
 def blocks_problem(init: str, goal: str, objects: str = "a b c d") -> str:

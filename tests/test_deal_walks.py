@@ -15,8 +15,9 @@ from pathlib import Path
 import pytest
 
 from bench.independent import IndependentValidator
+from tests.conftest import own_task
 from tests.test_plan_split import FAST, sa_result
-from twostep.benchmark import BenchmarkTask, load_task
+from twostep.benchmark import BenchmarkTask
 from twostep.dealing import Dealer, DealError, walks
 from twostep.methods import MethodRequest, check_run
 from twostep.methods.plan_deal import run_plan_deal
@@ -57,12 +58,7 @@ AGENT = ["stands"]
 
 def lamplighters(root: Path, problem: str) -> BenchmarkTask:
     """``problem`` in a lamplighters folder of ``root``, read as task 1."""
-    folder = root / "lamplighters"
-    folder.mkdir()
-    (folder / "domain.pddl").write_text(DOMAIN)
-    (folder / "domain.nl").write_text("lamplighters")
-    (folder / "p01.pddl").write_text(problem)
-    return load_task("lamplighters", 1, root)
+    return own_task(root, "lamplighters", DOMAIN, problem)
 
 
 @pytest.fixture

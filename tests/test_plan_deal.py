@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.conftest import own_task
 from tests.test_plan_split import (
     BW,
     FAST,
@@ -327,15 +328,6 @@ def _line(names: list[str], relation: str) -> str:
     )
 
 
-def _own_task(tmp_path: Path, name: str, domain: str, problem: str) -> BenchmarkTask:
-    folder = tmp_path / name
-    folder.mkdir()
-    (folder / "domain.pddl").write_text(domain)
-    (folder / "domain.nl").write_text(name)
-    (folder / "p01.pddl").write_text(problem)
-    return load_task(name, 1, tmp_path)
-
-
 def test_walks_that_mark_spots_split_a_round(tmp_path: Path) -> None:
     # Nine spots in a line, the walker on the middle one; every spot must be seen. The SA
     # plan (by hand) goes to one end and back across to the other: 12 moves. Each move is
@@ -349,7 +341,7 @@ def test_walks_that_mark_spots_split_a_round(tmp_path: Path) -> None:
         f"(:init (here s4) (seen s4) {_line(spots, 'link')}) "
         f"(:goal (and {' '.join(f'(seen {s})' for s in spots)})))"
     )
-    task = _own_task(tmp_path, "rounds", ROUNDS, problem)
+    task = own_task(tmp_path, "rounds", ROUNDS, problem)
     plan = [f"(go s{i} s{i - 1})" for i in range(4, 0, -1)]
     plan += [f"(go s{i} s{i + 1})" for i in range(8)]
     for agents in (2, 3):
@@ -369,7 +361,7 @@ def _hall_task(tmp_path: Path, length: int, robot: int, goal: str) -> BenchmarkT
         f"(define (problem corridor) (:domain hall) (:objects {' '.join(cells)} - cell) "
         f"(:init (at c{robot}) {empty} {_line(cells, 'adj')}) (:goal (and {goal})))"
     )
-    return _own_task(tmp_path, "hall", HALL, problem)
+    return own_task(tmp_path, "hall", HALL, problem)
 
 
 def test_plans_of_agents_that_start_alike_are_stitched_with_walks(tmp_path: Path) -> None:
@@ -480,7 +472,7 @@ def test_a_lift_with_conditional_effects_deals(tmp_path: Path) -> None:
         f"(:init (at l2) {_line(levels, 'next')} (start a l1) (target a l0) "
         "(start b l3) (target b l4)) (:goal (and (done a) (done b))))"
     )
-    task = _own_task(tmp_path, "lift", LIFT, problem)
+    task = own_task(tmp_path, "lift", LIFT, problem)
     plan = (
         "(move l2 l1)", "(halt l1)", "(move l1 l0)", "(halt l0)", "(move l0 l1)",
         "(move l1 l2)", "(move l2 l3)", "(halt l3)", "(move l3 l4)", "(halt l4)",

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import blocks_problem
+from tests.conftest import blocks_problem, own_task
 from tests.test_plan_split import (
     BW,
     FAST,
@@ -166,12 +166,7 @@ CUPS_MAIN_PLAN = (
 
 
 def _cups(tmp_path: Path) -> BenchmarkTask:
-    folder = tmp_path / "cups"
-    folder.mkdir()
-    (folder / "domain.pddl").write_text(CUPS_DOMAIN)
-    (folder / "domain.nl").write_text("A bar with cups.")
-    (folder / "p01.pddl").write_text(CUPS_TASK)
-    return load_task("cups", 1, tmp_path)
+    return own_task(tmp_path, "cups", CUPS_DOMAIN, CUPS_TASK)
 
 
 def scripted_planner(helper: tuple[str, ...]) -> Steps:

@@ -14,9 +14,10 @@ from pathlib import Path
 import pytest
 
 from bench.independent import IndependentValidator
+from tests.conftest import own_task
 from tests.test_plan_split import FAST, sa_result
-from tests.test_portfolio import CUPS, CUPS_SA_PLAN, _cups
-from twostep.benchmark import BenchmarkTask
+from tests.test_portfolio import CUPS, CUPS_DOMAIN, CUPS_SA_PLAN, CUPS_TASK, _cups
+from twostep.benchmark import BenchmarkTask, load_task
 from twostep.dealing.rebind import handling_predicates, rebind
 from twostep.methods import MethodRequest, RunResult, check_run, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
@@ -55,8 +56,6 @@ def test_a_single_cup_or_a_plan_without_rounds_is_not_rebound(tmp_path: Path) ->
     task = _cups(tmp_path)
     text = task.problem_path.read_text().replace("(clean c2) (clean c3)", "(used c2) (used c3)")
     task.problem_path.write_text(text)
-    from twostep.benchmark import load_task
-
     dirty = load_task("cups", 1, tmp_path)
     assert rebind(dirty.problem, CUPS_SA_PLAN, CUPS) is None
     one = _one_guest(tmp_path)
@@ -64,16 +63,10 @@ def test_a_single_cup_or_a_plan_without_rounds_is_not_rebound(tmp_path: Path) ->
 
 
 def _one_guest(tmp_path: Path) -> BenchmarkTask:
-    from twostep.benchmark import load_task
-
-    folder = tmp_path / "one" / "cups"
-    folder.mkdir(parents=True)
-    for name in ("domain.pddl", "domain.nl"):
-        (folder / name).write_text((tmp_path / "cups" / name).read_text())
-    text = (tmp_path / "cups" / "p01.pddl").read_text()
-    text = text.replace("(:goal (and (served g1) (served g2) (served g3)))", "(:goal (served g1))")
-    (folder / "p01.pddl").write_text(text)
-    return load_task("cups", 1, tmp_path / "one")
+    text = CUPS_TASK.replace(
+        "(:goal (and (served g1) (served g2) (served g3)))", "(:goal (served g1))"
+    )
+    return own_task(tmp_path / "one", "cups", CUPS_DOMAIN, text)
 
 
 @pytest.mark.parametrize(("agents", "length"), [(2, 7), (3, 3), (4, 3)])
@@ -102,8 +95,6 @@ def test_barman_glass_rounds_deal_shorter_and_stay_monotone(data_root: Path) -> 
     # Rebinding spreads its rounds over the goal glasses that stand clean until their
     # cocktail is poured. With it plan-deal is never longer (the SA plan's deals are still
     # candidates), shorter at N = 3 and 4, never longer with more agents, and valid.
-    from twostep.benchmark import load_task
-
     preds = ["handempty", "holding"]
     task = load_task("barman", 1, data_root)
     sa_plan = run_single_agent(MethodRequest(task, planner=FAST)).planner_calls[0].result
@@ -155,14 +146,7 @@ JUGS_SA_PLAN = ("(take j1)", "(fill j1)", "(pour j1 p1)", "(refill j1)", "(pour 
 
 
 def _jugs(tmp_path: Path) -> BenchmarkTask:
-    from twostep.benchmark import load_task
-
-    folder = tmp_path / "jugs"
-    folder.mkdir()
-    (folder / "domain.pddl").write_text(JUGS_DOMAIN)
-    (folder / "domain.nl").write_text("A tap, two jugs, two pots.")
-    (folder / "p01.pddl").write_text(JUGS_TASK)
-    return load_task("jugs", 1, tmp_path)
+    return own_task(tmp_path, "jugs", JUGS_DOMAIN, JUGS_TASK)
 
 
 def test_a_tail_goes_to_the_idle_jug_and_the_jug_is_washed_where_it_stands(
@@ -212,8 +196,6 @@ def test_a_robots_second_trip_goes_to_the_idle_robot_with_its_grippers(data_root
     # ball2 is: nothing to repair. Dealt to two agents (each has its own copy of both
     # robots where they start): one trip each, 3 steps; without rebinding the second
     # agent's robot2 must first drive to room1: 4.
-    from twostep.benchmark import load_task
-
     preds = ["at-robby", "free", "carry"]
     task = load_task("grippers", 1, data_root)
     assert rebind(task.problem, GRIPPERS_SA_PLAN, preds) == [
