@@ -39,6 +39,7 @@ never by time, so the result is the same on every machine.
 
 from __future__ import annotations
 
+import functools
 import itertools
 from collections import Counter, defaultdict, deque
 from collections.abc import Collection, Sequence
@@ -126,10 +127,15 @@ class Rebinder:
             if {f[0] for f in a.possible_add | a.possible_delete if f[0] in self.agent}
             <= self.positional
         }
-        self.siblings: defaultdict[tuple[str, ...], list[GroundAction]] = defaultdict(list)
-        for action in sorted(problem.grounded.actions.values(), key=str):
-            self.siblings[action.args].append(action)
         self.types = problem.all_objects
+
+    @functools.cached_property
+    def siblings(self) -> dict[tuple[str, ...], list[GroundAction]]:
+        """The task's actions by their arguments (made when a repair first needs them)."""
+        found: defaultdict[tuple[str, ...], list[GroundAction]] = defaultdict(list)
+        for action in sorted(self.problem.grounded.actions.values(), key=str):
+            found[action.args].append(action)
+        return found
 
     def rebind(self, plan: Sequence[str], tails: bool = False) -> list[str] | None:
         """The plan with rounds (and with ``tails`` their tails) rebound and handling
@@ -138,8 +144,9 @@ class Rebinder:
         current = list(plan)
         changed, start, trials = False, 0, 0
         while trials < TRIALS:
-            states = self._states(current)
-            for first, last, obj, facts, closing in self._rounds(current, states, tails):
+            grounded = self.grounder.ground_plan(current)
+            states = self._states(grounded)
+            for first, last, obj, facts, closing in self._rounds(current, grounded, tails):
                 if first < start:
                     continue
                 start = first + 1
@@ -171,10 +178,10 @@ class Rebinder:
                 break  # every round was tried
         return current if changed else None
 
-    def _states(self, plan: Sequence[str]) -> list[frozenset[Fact]]:
+    def _states(self, plan: Sequence[GroundAction]) -> list[frozenset[Fact]]:
         state = self.problem.init
         states = [state]
-        for action in self.grounder.ground_plan(plan):
+        for action in plan:
             if not action.applicable(state):
                 raise PlanError(f"{action} does not apply")
             state = action.apply(state)
@@ -192,7 +199,7 @@ class Rebinder:
         return frozenset(f for f in state if obj in f[1:] and self._counts(f, obj))
 
     def _rounds(
-        self, plan: Sequence[str], states: Sequence[frozenset[Fact]], tails: bool
+        self, plan: Sequence[str], grounded: Sequence[GroundAction], tails: bool
     ) -> list[tuple[int, int, str, frozenset[Fact], tuple[str, ...]]]:
         """Every object's rounds and tails: (first step, last step, object, its facts
         before the round, the closing actions the object keeps), in plan order. Each
@@ -204,7 +211,7 @@ class Rebinder:
                     facts[obj].add(fact)
         seen: defaultdict[str, list[tuple[int, frozenset[Fact], frozenset[Fact]]]]
         seen = defaultdict(list)
-        fired = effects_along(self.problem.init, self.grounder.ground_plan(plan))
+        fired = effects_along(self.problem.init, grounded)
         for t, (action, (add, delete)) in enumerate(zip(plan, fired, strict=True)):
             changed = [(f, o) for f in add | delete for o in f[1:] if self._counts(f, o)]
             touched = set(_args(action)) | {o for _, o in changed}
@@ -352,7 +359,7 @@ class Rebinder:
         ]
         goals = [target] + [
             other
-            for other in self.siblings[target.args]
+            for other in self.siblings.get(target.args, ())
             if other is not target and other.add >= target.add
         ]
         queue: deque[tuple[frozenset[Fact], list[GroundAction]]] = deque([(state, [])])
