@@ -257,6 +257,7 @@ def build_job(cfg: TwostepConfig) -> Iterator[Job]:
             cut=cfg.decomposer.cut,
             link_degree=cfg.decomposer.link_degree,
             rebind=bool(cfg.decomposer.rebind),
+            owner_search=bool(cfg.decomposer.owner_search),
         )
     except ValueError as error:  # UnknownMethod, or an option out of range
         raise JobError(str(error)) from None

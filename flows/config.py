@@ -50,6 +50,7 @@ class DecomposerConfig:
     link_degree: int = 2
     cut: str = "best"  # plan-deal: free | holding | best (both, the shorter kept)
     rebind: bool = True  # plan-deal (and the portfolios' plan-deal): deal the rebound plan too
+    owner_search: bool = True  # plan-deal (and the portfolios'): search its deals' owners
 
 
 class ExecutorName(enum.StrEnum):

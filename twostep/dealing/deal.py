@@ -17,10 +17,11 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 
 from twostep.dealing.cleanup import Elimination, JointRun
+from twostep.dealing.improve import search_owners
 from twostep.dealing.model import Deal, DealError, cpu_seconds
 from twostep.dealing.replay import Replay
 from twostep.dealing.schedule import ListScheduler, PieceOrder, WalkEstimate
-from twostep.dealing.timeline import Timeline, earliest_steps
+from twostep.dealing.timeline import JointSteps, Timeline, earliest_steps
 from twostep.dealing.walks import Walker, is_walking, walking_space
 from twostep.decomposers.plan_split import (
     free_pieces,
@@ -60,9 +61,9 @@ def ways(cut: str | None = None) -> tuple[Way, ...]:
     )
 
 
-PHASES = ("clean-up", "order", "dealing", "walks", "replay", "joint clean-up")
+PHASES = ("clean-up", "order", "dealing", "walks", "replay", "joint clean-up", "owner search")
 """Where :class:`Dealer` spends its time (:attr:`Dealer.seconds`); walks are the walking
-searches of dealing and replay, counted apart from them."""
+searches of dealing, replay and the owner search, counted apart from them."""
 
 
 def order_edges(
@@ -239,6 +240,39 @@ class Dealer:
                         break
         deal = self._finish(pieces, owner, start, best, agents, length)
         deal.offloaded = True
+        return deal
+
+    def improve(
+        self, agents: int, cut: str = "free", order: str = "critical", steal: bool = True
+    ) -> Deal:
+        """The deal of :meth:`deal` in time steps (the order without walks), its owners
+        then searched for a shorter run (:mod:`~twostep.dealing.improve`); raise
+        :class:`DealError` when that deal fails. ``moves`` says how many pieces changed
+        agent; made once per way."""
+        key = ("improve", agents, cut, order, steal)
+        return self._once(key, lambda: self._improve(agents, cut, order, steal))
+
+    def _improve(self, agents: int, cut: str, order: str, steal: bool) -> Deal:
+        pieces, piece_order = self.pieces(cut, keep_walks=False)
+        with self._phase("owner search"):
+            before = walks_before(self.walking)
+            schedule = ListScheduler(pieces, piece_order, before, self.estimate, agents).run(order)
+            timeline = Timeline(self.walker, self.steps, pieces, piece_order.action_preds,
+                                self.goal, self.init)  # fmt: skip
+
+            def simulate(owner: Sequence[int]) -> JointSteps:
+                steps, _ = timeline.run(owner, schedule.start, schedule.level, agents, steal)
+                return steps
+
+            def cleaned_length(steps: JointSteps) -> int:
+                joint = self._joint_cleanup([pair for step in steps for pair in step], agents)
+                return len(earliest_steps(joint, agents))
+
+            found = search_owners(schedule.owner, schedule.start, agents, simulate, cleaned_length)
+            steps, owner = timeline.run(found.owner, schedule.start, schedule.level, agents, steal)
+            joint = self._joint_cleanup([pair for step in steps for pair in step], agents)
+        deal = self._finish(pieces, owner, schedule.start, joint, agents, schedule.makespan)
+        deal.moves = found.moves
         return deal
 
     def _replayed(

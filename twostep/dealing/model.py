@@ -30,3 +30,4 @@ class Deal:
     cleaned: int  # the SA plan's length after action elimination
     schedule: list[list[tuple[int, str]]]  # per time step: (agent, action), a valid joint schedule
     offloaded: bool = False  # every replay was stuck: pieces offloaded from the plan's run
+    moves: int | None = None  # the owner search's kept moves (None: not searched)

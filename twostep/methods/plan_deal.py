@@ -22,7 +22,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from twostep.dealing import CUTS, Dealer, DealError, Way, ways
+from twostep.dealing import CUTS, Deal, Dealer, DealError, Way, ways
 from twostep.dealing.model import cpu_seconds
 from twostep.dealing.rebind import Rebinder
 from twostep.execution import ParallelExecution, ScheduleError, check_schedule
@@ -79,10 +79,13 @@ def check_cut(cut: str) -> None:
         raise ValueError(f"plan-deal cut must be one of {(*CUTS, BEST)}, not {cut!r}")
 
 
-def run_plan_deal(request: MethodRequest, cut: str = BEST, rebind: bool = True) -> RunResult:
+def run_plan_deal(
+    request: MethodRequest, cut: str = BEST, rebind: bool = True, owner_search: bool = True
+) -> RunResult:
     """Deal the SA plan with ``cut`` (``free``, ``holding`` or ``best``: both) and each
-    order to every number of agents up to N, and (``rebind``) the rebound plan too; the
-    shortest schedule wins (module docstring)."""
+    order to every number of agents up to N, and (``rebind``) the rebound plan too, and
+    (``owner_search``) search the owners of each number's shortest deal; the shortest schedule
+    wins (module docstring)."""
     check_cut(cut)
     start = time.perf_counter()
     run = new_run(request, MethodName.TWOSTEP)
@@ -93,7 +96,9 @@ def run_plan_deal(request: MethodRequest, cut: str = BEST, rebind: bool = True) 
         run.sa_length = len(sa_steps)
     trials = Trials()
     if sa_steps is not None and request.agents > 1:
-        try_deals(request, sa_steps, ways(None if cut == BEST else cut), trials, rebind)
+        try_deals(
+            request, sa_steps, ways(None if cut == BEST else cut), trials, rebind, owner_search
+        )
     run.score_time_s = trials.seconds.get("scoring", 0.0)
     run.extra["deal"] = trials.rows
     run.extra["deal_seconds"] = {phase: round(s, 6) for phase, s in trials.seconds.items()}
@@ -128,12 +133,15 @@ def try_deals(
     tried: Sequence[Way],
     trials: Trials,
     rebinding: bool = True,
+    owner_search: bool = True,
 ) -> None:
     """The cleaned SA plan (one agent), then every way for 2..N agents: of the cleaned SA
     plan and, with ``rebinding``, of each different plan rebinding makes of it
-    (:mod:`~twostep.dealing.rebind`: its rounds, and its rounds and tails). The shortest
-    schedule is kept, ties to fewer agents, then to the earlier deal (its row is marked
-    ``chosen``; a rebound plan's rows say ``rebound``: ``rounds`` or ``tails``)."""
+    (:mod:`~twostep.dealing.rebind`: its rounds, and its rounds and tails); with
+    ``owner_search``, the owner search (:mod:`~twostep.dealing.improve`) from the shortest
+    deal to each number of agents. The shortest schedule is kept, ties to fewer agents,
+    then to the earlier deal (its row is marked ``chosen``; a rebound plan's rows say
+    ``rebound``: ``rounds`` or ``tails``, the owner search's ``improved``)."""
     problem = request.problem
     try:
         dealer = Dealer(problem, sa_steps, request.agent_predicates)
@@ -158,29 +166,58 @@ def try_deals(
     dealers: list[tuple[str | None, Dealer]] = [(None, dealer)]
     dealers += [(kind, Dealer(problem, plan, request.agent_predicates)) for kind, plan in rebound.items()]  # fmt: skip
     for agents in range(2, request.agents + 1):
+        made: list[tuple[int, int, str | None, Dealer, Way]] = []  # this number's deals
         for kind, one in dealers:
             for way in tried:
-                row: dict[str, Any] = {"agents": agents, "cut": way.cut, "order": way.order,
-                                       "steal": way.steal}  # fmt: skip
-                if kind is not None:
-                    row["rebound"] = kind
+                row = deal_row(agents, way, kind)
                 trials.rows.append(row)
                 try:
                     dealt = one.deal(agents, way.cut, way.order, way.steal)
                 except DealError as error:
                     row["error"] = str(error)
                     continue
-                plans, schedule = used_agents(dealt.plans, dealt.schedule)
-                row.update(pieces=len(dealt.pieces), walks=dealt.walks,
-                           cleaned_sa_length=dealt.cleaned, agents_used=len(plans))  # fmt: skip
-                if dealt.offloaded:
-                    row["offloaded"] = True
-                candidates.append((row, plans, schedule))
+                candidates.append(candidate(row, dealt))
+                made.append((len(dealt.schedule), len(made), kind, one, way))
+        if owner_search and made:  # the owner search, from this number's shortest deal
+            *_, kind, one, way = min(made, key=lambda entry: entry[:2])
+            row = {**deal_row(agents, way, kind), "improved": True}
+            trials.rows.append(row)
+            try:
+                candidates.append(
+                    candidate(row, one.improve(agents, way.cut, way.order, way.steal))
+                )
+            except DealError as error:
+                row["error"] = str(error)
     for _, one in dealers:  # the dealers' phases, and rebinding and scoring beside them
         for phase, seconds in one.seconds.items():
             trials.seconds[phase] = trials.seconds.get(phase, 0.0) + seconds
     trials.seconds["rebinding"] = spent
     choose_deal(request, candidates, trials)
+
+
+def deal_row(agents: int, way: Way, kind: str | None) -> dict[str, Any]:
+    """A deal's result.json row before it is dealt: its agents and way, and which
+    rebound plan it deals (``rebound``; none: the cleaned SA plan)."""
+    row: dict[str, Any] = {"agents": agents, "cut": way.cut, "order": way.order,
+                           "steal": way.steal}  # fmt: skip
+    if kind is not None:
+        row["rebound"] = kind
+    return row
+
+
+def candidate(
+    row: dict[str, Any], dealt: Deal
+) -> tuple[dict[str, Any], list[list[str]], list[list[tuple[int, str]]]]:
+    """A deal as a candidate of :func:`choose_deal`: its row filled in, the plans and the
+    schedule of the agents that act."""
+    plans, schedule = used_agents(dealt.plans, dealt.schedule)
+    row.update(pieces=len(dealt.pieces), walks=dealt.walks,
+               cleaned_sa_length=dealt.cleaned, agents_used=len(plans))  # fmt: skip
+    if dealt.offloaded:
+        row["offloaded"] = True
+    if dealt.moves is not None:
+        row["moves"] = dealt.moves
+    return row, plans, schedule
 
 
 def used_agents(

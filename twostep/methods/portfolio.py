@@ -136,6 +136,7 @@ class Portfolio:
         name: str = "portfolio",
         make_members: Members = default_members,
         rebind: bool = True,
+        owner_search: bool = True,
     ):
         self.link_degree = link_degree
         self.members = None if members is None else list(members)
@@ -145,9 +146,12 @@ class Portfolio:
         self.name = name
         self.make_members = make_members
         self.rebind = rebind
+        self.owner_search = owner_search
 
     @classmethod
-    def lite(cls, link_degree: int = 2, rebind: bool = True) -> Portfolio:
+    def lite(
+        cls, link_degree: int = 2, rebind: bool = True, owner_search: bool = True
+    ) -> Portfolio:
         """``portfolio-lite``: plan-deal, and the re-deals of two TwoStep candidates
         (:func:`lite_members`) with N agents only; a fraction of the portfolio's planning
         time for most of its gain (README, Methods)."""
@@ -157,6 +161,7 @@ class Portfolio:
             name="portfolio-lite",
             make_members=lite_members,
             rebind=rebind,
+            owner_search=owner_search,
         )
 
     def candidates(self, request: MethodRequest) -> list[Candidate]:
@@ -187,7 +192,7 @@ def run_portfolio(request: MethodRequest, portfolio: Portfolio | None = None) ->
     for candidate in portfolio.candidates(request):
         one = replace(request, agents=candidate.agents, sa_plan=sa_plan, fallback_if_longer=False)
         if candidate.deal_cut is not None:
-            run = run_plan_deal(one, candidate.deal_cut, portfolio.rebind)
+            run = run_plan_deal(one, candidate.deal_cut, portfolio.rebind, portfolio.owner_search)
         else:
             assert candidate.decomposer is not None
             read = reads_sa_plan(candidate.decomposer)
@@ -280,7 +285,7 @@ def redeal_all(
                 continue
             dealt[(cut, plan)] = len(rows)
             start = cpu_seconds()
-            run = redeal(one, plan, cut, portfolio.rebind)
+            run = redeal(one, plan, cut, portfolio.rebind, portfolio.owner_search)
             if isinstance(run, str):
                 seconds = cpu_seconds() - start
                 row.update(exec_length=None, planning_time_s=round(seconds, 4), skipped=run)
@@ -298,14 +303,20 @@ def redeal_all(
 
 
 def redeal(
-    request: MethodRequest, plan: tuple[str, ...], cut: str, rebind: bool = True
+    request: MethodRequest,
+    plan: tuple[str, ...],
+    cut: str,
+    rebind: bool = True,
+    owner_search: bool = True,
 ) -> RunResult | str:
     """plan-deal of ``plan`` as if it were the SA plan (planned in no time): the run, or
     why ``plan`` cannot be dealt (not a valid plan for one agent, or no deal of it
     re-validates). The run's deals are its ``redeal`` rows (``deal`` stays the SA
     plan's: the bench reads the cleaned SA length there)."""
     made = PlanResult(Status.SOLVED, plan, 0.0, 0.0, message="agents' plans concatenated")
-    run = run_plan_deal(replace(request, sa_plan=made), cut, rebind)  # records a failing plan
+    run = run_plan_deal(
+        replace(request, sa_plan=made), cut, rebind, owner_search
+    )  # records a failing plan
     deals = run.extra.pop("deal")
     run.extra["redeal"] = deals
     run.extra["redeal_seconds"] = run.extra.pop("deal_seconds")

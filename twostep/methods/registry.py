@@ -40,12 +40,14 @@ def method_for(
     cut: str = "best",
     link_degree: int = 2,
     rebind: bool = True,
+    owner_search: bool = True,
 ) -> Method:
     """The function that runs ``method`` (with ``decomposer`` for ``twostep``).
 
     ``cut`` is plan-deal's (``free``, ``holding`` or ``best``) and ``rebind`` whether
     plan-deal deals the rebound plan too (:mod:`twostep.dealing.rebind`; the portfolios'
-    plan-deal as well), ``link_degree`` the portfolio's for its goal-split members; the other methods have no options. plan-deal
+    plan-deal as well), ``owner_search`` whether it searches the owners of its shortest
+    deals (:mod:`twostep.dealing.improve`; the same), ``link_degree`` the portfolio's for its goal-split members; the other methods have no options. plan-deal
     and the portfolio are imported here, when asked for: a job of another method never
     loads their algorithms.
     """
@@ -59,15 +61,18 @@ def method_for(
         from twostep.methods.plan_deal import check_cut, run_plan_deal
 
         check_cut(cut)  # a ValueError now, not at the first run
-        return partial(run_plan_deal, cut=cut, rebind=rebind)
+        return partial(run_plan_deal, cut=cut, rebind=rebind, owner_search=owner_search)
     if decomposer == "portfolio":
         from twostep.methods.portfolio import Portfolio, run_portfolio
 
-        return partial(run_portfolio, portfolio=Portfolio(link_degree, rebind=rebind))
+        return partial(
+            run_portfolio,
+            portfolio=Portfolio(link_degree, rebind=rebind, owner_search=owner_search),
+        )
     if decomposer == "portfolio-lite":
         from twostep.methods.portfolio import Portfolio, run_portfolio
 
-        return partial(run_portfolio, portfolio=Portfolio.lite(link_degree, rebind))
+        return partial(run_portfolio, portfolio=Portfolio.lite(link_degree, rebind, owner_search))
     if decomposer is None or decomposer in SUBGOAL_SOURCES:
         return run_twostep
     raise UnknownMethod(f"unknown decomposer '{decomposer}' (known: {', '.join(DECOMPOSERS)})")
