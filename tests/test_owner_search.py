@@ -16,7 +16,7 @@ import pytest
 
 from tests.test_plan_split import BW, FAST, _blocks, _check, sa_result
 from twostep.dealing import DealError
-from twostep.dealing.improve import CLEANUP_COST, search_owners
+from twostep.dealing.improve import search_owners
 from twostep.dealing.timeline import JointSteps
 from twostep.methods import MethodRequest
 from twostep.methods.plan_deal import run_plan_deal
@@ -24,11 +24,24 @@ from twostep.methods.plan_deal import run_plan_deal
 LENGTHS = (3, 3, 2, 2)  # the model's pieces: how many steps each takes
 
 
-def _run(owner: Sequence[int]) -> JointSteps:
-    """The model's raw run: each agent does its pieces in order, one step per time step;
-    a time step lists one dummy entry per agent acting in it."""
-    loads = [sum(n for n, a in zip(LENGTHS, owner, strict=True) if a == agent) for agent in (0, 1)]
-    return [[(a, None) for a in (0, 1) if loads[a] > t] for t in range(max(loads))]  # type: ignore[misc]
+class Model:
+    """The model's raw runs: each agent does its pieces in order, one step per time step
+    (a time step lists one dummy entry per agent acting in it); ``work`` counts the time
+    steps run so far."""
+
+    def __init__(self) -> None:
+        self.work = 0
+
+    def run(self, owner: Sequence[int]) -> JointSteps:
+        loads = [sum(n for n, a in zip(LENGTHS, owner, strict=True) if a == b) for b in (0, 1)]
+        self.work += max(loads)
+        return [[(a, None) for a in (0, 1) if loads[a] > t] for t in range(max(loads))]  # type: ignore[misc]
+
+    def search(self, start: Sequence[int], **bounds: int) -> tuple[list[int], int, int]:
+        found = search_owners(
+            [0, 0, 0, 0], start, 2, self.run, lambda steps: steps, lambda: self.work, **bounds
+        )
+        return found.owner, found.length, found.moves
 
 
 def test_first_improvement_in_start_order() -> None:
@@ -36,23 +49,23 @@ def test_first_improvement_in_start_order() -> None:
     # Piece 1 to agent 1: 4 / 6, kept (6). Piece 2 or 3 to agent 1: 2 / 8, not shorter;
     # to agent 0 each already is. Two moves, 6 steps: a local optimum, as the climb is
     # first-improvement (3+2 / 3+2 would take 5).
-    found = search_owners([0, 0, 0, 0], [0, 1, 2, 3], 2, _run, len)
-    assert (found.owner, found.length, found.moves) == ([1, 1, 0, 0], 6, 2)
+    assert Model().search([0, 1, 2, 3]) == ([1, 1, 0, 0], 6, 2)
 
 
 def test_the_start_order_decides_which_piece_moves_first() -> None:
     # Pieces started in the order 2, 3, 0, 1: piece 2 to agent 1 (8 / 2: 8), kept; piece 3
     # (6 / 4: 6), kept; piece 0 to agent 1: 3 / 7, not shorter; piece 1 the same. 6 steps.
-    found = search_owners([0, 0, 0, 0], [2, 3, 0, 1], 2, _run, len)
-    assert (found.owner, found.length, found.moves) == ([0, 0, 1, 1], 6, 2)
+    assert Model().search([2, 3, 0, 1]) == ([0, 0, 1, 1], 6, 2)
 
 
-def test_no_work_left_means_the_start_owners() -> None:
-    # The first run and its clean-up cost 10 actions x (1 + CLEANUP_COST): with no more
-    # than that to spend, no trial is made.
-    first = sum(map(len, _run([0, 0, 0, 0]))) * (1 + CLEANUP_COST)
-    found = search_owners([0, 0, 0, 0], [0, 1, 2, 3], 2, _run, len, work=first)
-    assert (found.owner, found.length, found.moves) == ([0, 0, 0, 0], 10, 0)
+def test_the_search_stops_when_the_work_is_spent_or_the_floor_reached() -> None:
+    # The first run costs 10 steps of work: with a bound of 10, no trial is made. With 17,
+    # one: piece 0 to agent 1 (7 steps), after which 17 are spent. With a floor of 7 the
+    # search stops after that move too, however much work is left (the model's clean-up
+    # drops nothing).
+    assert Model().search([0, 1, 2, 3], work=10) == ([0, 0, 0, 0], 10, 0)
+    assert Model().search([0, 1, 2, 3], work=17) == ([1, 0, 0, 0], 7, 1)
+    assert Model().search([0, 1, 2, 3], floor=7) == ([1, 0, 0, 0], 7, 1)
 
 
 def test_trials_far_longer_are_not_cleaned_and_failed_trials_are_skipped() -> None:
@@ -68,11 +81,11 @@ def test_trials_far_longer_are_not_cleaned_and_failed_trials_are_skipped() -> No
         loads = [2 * list(owner).count(a) for a in range(3)]
         return [[(a, None) for a in range(3) if loads[a] > t] for t in range(max(loads))]  # type: ignore[misc]
 
-    def length(steps: JointSteps) -> int:
+    def clean(steps: JointSteps) -> JointSteps:
         cleaned.append(len(steps))
-        return len(steps)
+        return steps
 
-    found = search_owners([0, 0, 0], [0, 1, 2], 3, run, length)
+    found = search_owners([0, 0, 0], [0, 1, 2], 3, run, clean, lambda: 0)
     assert (found.owner, found.length, found.moves) == ([2, 1, 0], 2, 2)
     assert cleaned == [6, 4, 2]  # the first run, then only the two trials kept
 

@@ -249,16 +249,22 @@ def test_tyreworld_deals_reach_the_one_jack_floor(data_root: Path, task_id: int)
     # first jack-up: open the boot, fetch the wrench, loosen the nut (it needs the hub on
     # the ground). After the last jack-down: tighten that nut, put the wrench away, close
     # the boot. So the floor is 6W + 6 and it does not fall with N: the deal reaches it.
+    # That chain is the longest of the plan's order, so the owner search stops at once.
     task = load_task("tyreworld", task_id, data_root)
     hubs = _hubs(task)
     sa = run_single_agent(MethodRequest(task, planner=FAST))
     assert sa.exec_length is not None
+    assert sa.planner_calls[0].result.plan is not None
+    dealer = Dealer(task.problem, sa.planner_calls[0].result.plan, [])
+    assert dealer.chain("free") == dealer.chain("holding") == 6 * hubs + 6
     for agents in (2, 4):
         run = run_plan_deal(
             MethodRequest(task, agents, FAST, [], sa_plan=sa.planner_calls[0].result)
         )
         _check(task.problem, run, [])
         assert run.exec_length == 6 * hubs + 6, (agents, run.exec_length)
+        searched = [row for row in run.extra["deal"] if row.get("improved")]
+        assert searched and all(row["moves"] == 0 for row in searched)
 
 
 def test_the_deal_does_not_depend_on_the_hash_seed(data_root: Path, tmp_path: Path) -> None:

@@ -32,6 +32,7 @@ class Elimination:
         self.goal = goal
         self.start = (env, owns)
         self.steps = list(run)
+        self.work = 0  # actions simulated: what the clean-up cost, as a count
 
     def run(self) -> JointRun:
         """The run with every action dropped that the goal does not need."""
@@ -55,6 +56,7 @@ class Elimination:
         else:
             del self.envs[i + 1 :], self.owns[i + 1 :]
         env, owns = self.envs[i], self.owns[i]
+        self.work += len(steps) - i
         for a, step in steps[i:]:
             if i == 0 and not step.applicable(env, owns[a]):
                 raise PlanError(f"not a valid run: {step} does not apply")
@@ -95,6 +97,7 @@ class Elimination:
         env, owns = envs[i], owns_at[i]
         kept: list[tuple[int, Step]] = []
         for j in range(i + 1, len(steps)):
+            self.work += 1
             if env == envs[j] and owns == owns_at[j]:
                 return kept + steps[j:]  # back on the unchanged run: it reaches the goal
             # a goal literal wrong that no later action sets right: the goal is lost

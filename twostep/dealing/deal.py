@@ -15,6 +15,7 @@ from collections import defaultdict
 from collections.abc import Callable, Collection, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
+from itertools import pairwise
 
 from twostep.dealing.cleanup import Elimination, JointRun
 from twostep.dealing.improve import search_owners
@@ -156,6 +157,7 @@ class Dealer:
         universe = problem.init.union(*(a.possible_add for a in grounded))
         self.walker = Walker(problem, self.space, universe)
         self.estimate = WalkEstimate(self.walker, self.steps, self.states)
+        self.cleanup_work = 0  # what the joint clean-ups cost, as a count (Elimination.work)
         self._orders: dict[tuple[str, bool], tuple[list[list[int]], PieceOrder]] = {}
         self._deals: dict[tuple[object, ...], Deal | DealError] = {}
 
@@ -182,6 +184,18 @@ class Dealer:
                 pieces = [p for p in pieces if p]
                 self._orders[key] = (pieces, PieceOrder.of(pieces, edges))
         return self._orders[key]
+
+    def chain(self, cut: str) -> int:
+        """The longest chain of acting actions the order of step 1 (walks left out) and
+        the pieces of ``cut`` impose, each action one time step: no run of these pieces
+        in time steps is shorter."""
+        pieces, piece_order = self.pieces(cut, keep_walks=False)
+        after = {later: earlier for piece in pieces for earlier, later in pairwise(piece)}
+        ends: dict[int, int] = {}
+        for i in sorted(i for piece in pieces for i in piece):  # the order runs forward
+            needs = [*piece_order.action_preds.get(i, ()), *([after[i]] if i in after else [])]
+            ends[i] = 1 + max((ends[j] for j in needs), default=0)
+        return max(ends.values(), default=0)
 
     def deal(
         self, agents: int, cut: str = "free", order: str = "critical", steal: bool = True
@@ -264,11 +278,17 @@ class Dealer:
                 steps, _ = timeline.run(owner, schedule.start, schedule.level, agents, steal)
                 return steps
 
-            def cleaned_length(steps: JointSteps) -> int:
+            def clean(steps: JointSteps) -> JointSteps:
                 joint = self._joint_cleanup([pair for step in steps for pair in step], agents)
-                return len(earliest_steps(joint, agents))
+                return earliest_steps(joint, agents)
 
-            found = search_owners(schedule.owner, schedule.start, agents, simulate, cleaned_length)
+            cleaned_before = self.cleanup_work
+
+            def spent() -> int:
+                return timeline.work + self.cleanup_work - cleaned_before
+
+            found = search_owners(schedule.owner, schedule.start, agents, simulate,
+                                  clean, spent, self.chain(cut))  # fmt: skip
             steps, owner = timeline.run(found.owner, schedule.start, schedule.level, agents, steal)
             joint = self._joint_cleanup([pair for step in steps for pair in step], agents)
         deal = self._finish(pieces, owner, schedule.start, joint, agents, schedule.makespan)
@@ -295,7 +315,11 @@ class Dealer:
         """What several agents no longer need of a joint run (a block parked for want of a
         second hand): action elimination from the initial state."""
         env, own = self.init
-        return Elimination(self.goal, env, (own,) * agents, run).run()
+        elimination = Elimination(self.goal, env, (own,) * agents, run)
+        try:
+            return elimination.run()
+        finally:
+            self.cleanup_work += elimination.work
 
     def _once(self, key: tuple[object, ...], make: Callable[[], Deal]) -> Deal:
         """The deal made under ``key``, or its :class:`DealError` raised again: each is made

@@ -11,11 +11,14 @@ some of that gap. In the order the pieces start, each piece is given in turn to 
 agent; the agents run again in time steps, and the move is kept when the cleaned run is
 shorter (or as short, with fewer raw time steps). A trial whose raw run is more than one
 step longer than the current one is not cleaned: the clean-up costs several runs, and
-those trials hardly ever win.
+those trials hardly ever win. Nor does the search go on once the run is as short as the
+longest chain of the plan's order (:meth:`~twostep.dealing.deal.Dealer.chain`) and its
+clean-up dropped nothing: every run of these pieces takes that chain's actions one after
+the other (tyreworld's one jack), so only a clean-up could make one shorter.
 
 The search is bounded by work, not time, so its result does not depend on the machine:
-every run counts its actions, every clean-up four times its run's
-(:data:`WORK`), and the search stops when the sum reaches the bound.
+the runs and clean-ups count what they do (agents' turns and pieces looked at, actions
+simulated), and the search stops when the count reaches :data:`WORK`.
 """
 
 from __future__ import annotations
@@ -27,9 +30,8 @@ from twostep.dealing.model import DealError
 from twostep.dealing.timeline import JointSteps
 
 WORK = 40_000
-"""The owner search's bound per deal, in simulated actions (module docstring)."""
-CLEANUP_COST = 4
-"""What one clean-up counts, per action of its run, against :data:`WORK`."""
+"""The owner search's bound per deal, in the runs' and clean-ups' own counts (module
+docstring)."""
 SLACK = 1
 """How many time steps longer than the current one a trial's raw run may be and still be
 cleaned (module docstring)."""
@@ -42,7 +44,13 @@ class Found:
     owner: list[int]
     steps: JointSteps
     length: int
+    dropped: int  # the actions the clean-up dropped from the raw run
     moves: int = 0
+
+    @classmethod
+    def of(cls, owner: list[int], steps: JointSteps, cleaned: JointSteps, moves: int) -> Found:
+        dropped = sum(map(len, steps)) - sum(map(len, cleaned))
+        return cls(owner, steps, len(cleaned), dropped, moves)
 
 
 def search_owners(
@@ -50,33 +58,33 @@ def search_owners(
     start: Sequence[int],
     agents: int,
     simulate: Callable[[Sequence[int]], JointSteps],
-    cleaned_length: Callable[[JointSteps], int],
+    clean: Callable[[JointSteps], JointSteps],
+    spent: Callable[[], int],
+    floor: int = 0,
     work: int = WORK,
 ) -> Found:
     """The hill climb of the module docstring, from ``owner`` (each piece's agent);
     ``simulate`` runs the agents in time steps (raise :class:`DealError` when they cannot),
-    ``cleaned_length`` is the length of a raw run after the joint clean-up."""
+    ``clean`` gives a raw run's time steps after the joint clean-up, and ``spent`` the work
+    both have done so far; no trial starts once it reaches ``work``, or once the cleaned
+    run is no longer than ``floor`` and its clean-up dropped nothing."""
     steps = simulate(owner)
-    spent = sum(map(len, steps)) * (1 + CLEANUP_COST)
-    best = Found(list(owner), steps, cleaned_length(steps))
+    best = Found.of(list(owner), steps, clean(steps), 0)
     for p in sorted(range(len(owner)), key=lambda p: (start[p], p)):
         for a in range(agents):
             if a == best.owner[p]:
                 continue
-            if spent >= work:
+            if spent() >= work or (best.length <= floor and not best.dropped):
                 return best
             trial = [*best.owner[:p], a, *best.owner[p + 1 :]]
             try:
                 steps = simulate(trial)
             except DealError:
                 continue
-            size = sum(map(len, steps))
-            spent += size
             if len(steps) > len(best.steps) + SLACK:
                 continue
-            spent += size * CLEANUP_COST
-            length = cleaned_length(steps)
-            if (length, len(steps)) < (best.length, len(best.steps)):
-                best = Found(trial, steps, length, best.moves + 1)
+            cleaned = clean(steps)
+            if (len(cleaned), len(steps)) < (best.length, len(best.steps)):
+                best = Found.of(trial, steps, cleaned, best.moves + 1)
                 break
     return best

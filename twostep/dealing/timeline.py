@@ -58,6 +58,7 @@ class Timeline:
         self.action_preds = action_preds
         self.goal = goal
         self.start = start
+        self.work = 0  # what the runs so far cost, as a count (:attr:`_Run.work`)
 
     def run(
         self,
@@ -69,7 +70,11 @@ class Timeline:
     ) -> tuple[JointSteps, list[int]]:
         """The time steps, and each piece's agent (module docstring); ``steal``: an idle
         agent may take a piece dealt to another."""
-        return _Run(self, owner, start, level, agents, steal).run()
+        run = _Run(self, owner, start, level, agents, steal)
+        try:
+            return run.run()
+        finally:
+            self.work += run.work
 
 
 class _Run:
@@ -95,6 +100,7 @@ class _Run:
         self.owns = [own] * agents
         self.done: dict[int, int] = {}  # acting action -> the time step it was taken in
         self._paths: dict[tuple[int, int, int], list[Step] | None] = {}
+        self.work = 0  # agents' turns, and pieces looked at when an idle agent looks for one
 
     def run(self) -> tuple[JointSteps, list[int]]:
         crew = self.crew
@@ -109,6 +115,7 @@ class _Run:
                     agent.piece, agent.position, agent.path = agent.queue.pop(0), 0, []
             taken: list[tuple[int, Step]] = []
             idle = []
+            self.work += len(crew)
             for a in sorted(range(len(crew)), key=self._rank):
                 step = self._next(a)
                 if step is None:
@@ -214,6 +221,7 @@ class _Run:
         wait = 0
         for agent in self.crew:
             ahead = 0
+            self.work += len(agent.queue)
             work = [] if agent.piece is None else [self.pieces[agent.piece][agent.position :]]
             for piece in [*work, *(self.pieces[p] for p in agent.queue)]:
                 for j in piece:
@@ -233,6 +241,7 @@ class _Run:
         offers = []
         for b, agent in enumerate(self.crew):
             backlog = 0 if agent.piece is None else len(self.pieces[agent.piece]) - agent.position
+            self.work += len(agent.queue)
             for p in agent.queue:
                 if p != mine and self._ready(self.pieces[p][0]):
                     offers.append((b != a, -self.level[p], p, backlog))
