@@ -154,3 +154,25 @@ def test_no_walk_is_searched_for_a_place_no_road_leads_back_to(
     assert searched == []
     assert [str(s) for s in walker.walk_to(env, own, ahead)] == ["(go ann s3 s4)"]
     assert searched == [str(ahead)]
+
+
+def test_the_relaxed_check_stops_once_the_target_is_reached(tmp_path: Path) -> None:
+    # From s3 on the one-way street (the test above): s4's lamp is one move away, so the
+    # relaxed fixpoint stops early and keeps nothing; s1's lamp is never reached, so the
+    # fixpoint runs to its end, is kept, and is the one relaxed() gives (s3 and s4).
+    task = lamplighters(tmp_path, ONE_WAY)
+    dealer = Dealer(task.problem, PLAN, AGENT)
+    walker, space = dealer.walker, dealer.space
+    ground = Grounder(task.problem).ground
+    env, own = dealer.init
+    for move in ("(go ann s0 s1)", "(go ann s1 s2)", "(go ann s2 s3)"):
+        env, own = space.step(ground(move)).apply(env, own)
+    behind = space.step(ground("(trim ann l1 s1)"))
+    ahead = space.step(ground("(trim ann l4 s4)"))
+    assert walker.reaches(env, own, ahead.pre_env, ahead.pre_own)
+    assert (env, own) not in walker._relaxed
+    assert not walker.reaches(env, own, behind.pre_env, behind.pre_own)
+    kept = walker._relaxed[(env, own)]
+    assert kept == walker.relaxed(env, own)
+    stands = {f for f in space.own_facts(kept[1]) if f[0] == "stands"}
+    assert stands == {("stands", "ann", "s3"), ("stands", "ann", "s4")}

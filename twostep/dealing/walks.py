@@ -210,19 +210,32 @@ class Walker:
         reaches, so a fact outside it needs no search. Kept per state."""
         found = self._relaxed.get((env, own))
         if found is None:
-            reached, pending = (env, own), list(self._moves)
-            while True:
-                waiting = []
-                for step in pending:
-                    if step.exact and (step.pre_env & ~reached[0] or step.pre_own & ~reached[1]):
-                        waiting.append(step)
-                    else:
-                        reached = (reached[0] | step.add_env, reached[1] | step.add_own)
-                if len(waiting) == len(pending):
-                    break
-                pending = waiting
-            found = self._relaxed[(env, own)] = reached
+            found = self._relax(env, own, -1, -1)
         return found
+
+    def reaches(self, env: int, own: int, pos_env: int, pos_own: int) -> bool:
+        """Whether :meth:`relaxed` from ``env`` and ``own`` holds the facts ``pos_env`` and
+        ``pos_own``: the fixpoint is cut short once it does (the usual case), and kept
+        when it is complete."""
+        found = self._relaxed.get((env, own)) or self._relax(env, own, pos_env, pos_own)
+        return not (pos_env & ~found[0] or pos_own & ~found[1])
+
+    def _relax(self, env: int, own: int, pos_env: int, pos_own: int) -> tuple[int, int]:
+        """The facts of :meth:`relaxed`, or (when ``pos_env`` and ``pos_own`` are reached
+        before the end) the ones reached by then."""
+        reached, pending = (env, own), list(self._moves)
+        while pos_env & ~reached[0] or pos_own & ~reached[1]:
+            waiting = []
+            for step in pending:
+                if step.exact and (step.pre_env & ~reached[0] or step.pre_own & ~reached[1]):
+                    waiting.append(step)
+                else:
+                    reached = (reached[0] | step.add_env, reached[1] | step.add_own)
+            if len(waiting) == len(pending):
+                self._relaxed[(env, own)] = reached
+                break
+            pending = waiting
+        return reached
 
     def out_of_reach(self, env: int, own: int, pos: tuple[int, int], neg: tuple[int, int]) -> bool:
         """Whether no walk from ``env`` and ``own`` can make the facts ``pos`` (environment
@@ -258,10 +271,9 @@ class Walker:
         pos, neg = (target.pre_env, target.pre_own), (target.neg_env, target.neg_own)
         if target.exact and self.out_of_reach(env, own, pos, neg):
             raise DealError(f"no walk to where {target} applies")
-        if target.exact:  # a fact it needs that no walk reaches, even without deletes
-            reach_env, reach_own = self.relaxed(env, own)
-            if target.pre_env & ~reach_env or target.pre_own & ~reach_own:
-                raise DealError(f"no walk to where {target} applies")
+        # a fact it needs that no walk reaches, even without deletes
+        if target.exact and not self.reaches(env, own, target.pre_env, target.pre_own):
+            raise DealError(f"no walk to where {target} applies")
         try:
             return self._search(env, own, target.applicable, needed, str(target))
         except DealError:
