@@ -282,10 +282,11 @@ class Dealer:
                 joint = self._joint_cleanup([pair for step in steps for pair in step], agents)
                 return earliest_steps(joint, agents)
 
-            cleaned_before = self.cleanup_work
+            cleaned_before, walked_before = self.cleanup_work, self.walker.work
 
             def spent() -> int:
-                return timeline.work + self.cleanup_work - cleaned_before
+                walked = self.walker.work - walked_before
+                return timeline.work + self.cleanup_work - cleaned_before + walked
 
             found = search_owners(schedule.owner, schedule.start, agents, simulate,
                                   clean, spent, self.chain(cut))  # fmt: skip

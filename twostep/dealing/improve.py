@@ -17,7 +17,8 @@ clean-up dropped nothing: every run of these pieces takes that chain's actions o
 the other (tyreworld's one jack), so only a clean-up could make one shorter.
 
 The search is bounded by work, not time, so its result does not depend on the machine:
-the runs and clean-ups count what they do (agents' turns and pieces looked at, actions
+the runs, their walks and the clean-ups count what they do (agents' turns and pieces
+looked at, states the walk searches reach and moves their relaxed check looks at, actions
 simulated), and the search stops when the count reaches :data:`WORK`.
 """
 
@@ -29,7 +30,7 @@ from dataclasses import dataclass
 from twostep.dealing.model import DealError
 from twostep.dealing.timeline import JointSteps
 
-WORK = 40_000
+WORK = 60_000
 """The owner search's bound per deal, in the runs' and clean-ups' own counts (module
 docstring)."""
 SLACK = 1

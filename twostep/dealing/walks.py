@@ -164,6 +164,9 @@ class Walker:
         self._relaxed: dict[tuple[int, int], tuple[int, int]] = {}
         self.search_s = 0.0
         """Seconds spent in :meth:`walk_to` so far."""
+        self.work = 0
+        """What the searches so far cost, as a count: states reached, and moves looked at
+        by the relaxed check."""
 
     def candidates(self, own: int) -> tuple[list[Step], int]:
         """The moves whose positive preconditions hold in the universe plus ``own``, and
@@ -226,6 +229,7 @@ class Walker:
         reached, pending = (env, own), list(self._moves)
         while pos_env & ~reached[0] or pos_own & ~reached[1]:
             waiting = []
+            self.work += len(pending)
             for step in pending:
                 if step.exact and (step.pre_env & ~reached[0] or step.pre_own & ~reached[1]):
                     waiting.append(step)
@@ -309,6 +313,7 @@ class Walker:
         queue = deque([start])
         while queue:
             node = queue.popleft()
+            self.work += 1
             if reached(*node):
                 path: list[Step] = []
                 key = (node[0] & relevant, node[1])
