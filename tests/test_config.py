@@ -191,3 +191,17 @@ def test_run_and_sweep_directories_name_the_agents_the_job_runs(
     cfg = make(*overrides, "hydra.job.num=4", hydra=True)
     assert cfg.hydra.run.dir.endswith(f"_grippers_p7{named}")
     assert cfg.hydra.sweep.subdir == f"4_grippers_p7{named}_s0"
+
+
+@pytest.mark.parametrize("switch", ["rebind", "owner_search"])
+def test_plan_deal_switches_reach_the_method(switch: str, data_root: Path) -> None:
+    # conf/decomposer/plan-deal.yaml turns both on; an override turns one off, and the
+    # job's method (run_plan_deal with its options) gets exactly that.
+    from flows.build import build_job
+
+    for value in (True, False):
+        cfg = make("method=twostep", "decomposer=plan-deal", f"decomposer.{switch}={value}",
+                   f"data.root={data_root}")  # fmt: skip
+        with build_job(cfg) as job:  # type: ignore[arg-type]
+            options = job.method.keywords  # type: ignore[attr-defined]
+        assert options == {"cut": "best", "rebind": True, "owner_search": True, switch: value}
