@@ -111,12 +111,16 @@ def test_owner_search_reaches_the_shortest_schedule(
     tmp_path: Path, agents: int, length: int
 ) -> None:
     # What any schedule needs: b4, b1, b3 come off one after the other (each clears the
-    # next), b3 goes down, b4 onto it, b1 onto b4: a chain of 6 actions, so 6 steps at
-    # least. With 2 agents, 12 actions at least (those 6, b4 and b1 put down and picked
-    # up again, b5 picked up and stacked), and in the first step only (unstack b4 b1)
-    # applies of them: 1 + 11 / 2 -> 7 steps. Both are reached, and are shorter than the
-    # list schedules without the search (8 and 7: their agents leave b1 for another to
-    # take off b4, and the joint clean-up cannot drop the detour).
+    # next), b3 goes down (b4 must go onto it, b5 onto b2), b4 onto it, b1 onto b4: a chain
+    # of 6 actions, so 6 steps at least. With 2 agents 6 steps would take (unstack b3 b5) in
+    # step 3, by a free arm: the one that took b4 off in step 1 and set it down in step 2
+    # (the other took b1 off in step 2). b4 must then be taken up again by step 4, while
+    # that arm puts b3 down: by the other arm, which must first set b1 down. So b4 and b1
+    # are set down and taken up again, 12 actions with b5's two; but in step 1 only
+    # (unstack b4 b1) can act, so 6 steps hold 11 at most: 7 steps. Both are
+    # reached, and are shorter than the list schedules without the search (8 and 7: their
+    # agents leave b1 for another to take off b4, and the joint clean-up cannot drop the
+    # detour).
     task = _blocks(tmp_path, UNSTACKED)
     request = MethodRequest(task, agents, FAST, BW, sa_plan=sa_result(UNSTACKED_PLAN))
     without = run_plan_deal(request, owner_search=False)
