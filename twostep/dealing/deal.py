@@ -21,7 +21,7 @@ from twostep.dealing.cleanup import Elimination, JointRun
 from twostep.dealing.improve import search_owners
 from twostep.dealing.model import Deal, DealError, cpu_seconds
 from twostep.dealing.replay import Replay
-from twostep.dealing.schedule import ListScheduler, PieceOrder, WalkEstimate
+from twostep.dealing.schedule import ListScheduler, PieceOrder, Schedule, WalkEstimate
 from twostep.dealing.timeline import JointSteps, Timeline, earliest_steps
 from twostep.dealing.walks import Walker, is_walking, walking_space
 from twostep.decomposers.plan_split import (
@@ -159,6 +159,7 @@ class Dealer:
         self.estimate = WalkEstimate(self.walker, self.steps, self.states)
         self.cleanup_work = 0  # what the joint clean-ups cost, as a count (Elimination.work)
         self._orders: dict[tuple[str, bool], tuple[list[list[int]], PieceOrder]] = {}
+        self._schedules: dict[tuple[int, str, str, bool], Schedule] = {}
         self._deals: dict[tuple[object, ...], Deal | DealError] = {}
 
     @contextmanager
@@ -267,15 +268,16 @@ class Dealer:
         return self._once(key, lambda: self._improve(agents, cut, order, steal))
 
     def _improve(self, agents: int, cut: str, order: str, steal: bool) -> Deal:
-        pieces, piece_order = self.pieces(cut, keep_walks=False)
+        pieces, _ = self.pieces(cut, keep_walks=False)
+        schedule = self._list_schedule(agents, order, cut, keep_walks=False)
         with self._phase("owner search"):
-            before = walks_before(self.walking)
-            schedule = ListScheduler(pieces, piece_order, before, self.estimate, agents).run(order)
-            timeline = Timeline(self.walker, self.steps, pieces, piece_order.action_preds,
-                                self.goal, self.init)  # fmt: skip
+            timeline = self._timeline(cut, keep_walks=False)
+            ended: dict[tuple[int, ...], list[int]] = {}  # per trial: the owners it ended with
 
             def simulate(owner: Sequence[int]) -> JointSteps:
-                steps, _ = timeline.run(owner, schedule.start, schedule.level, agents, steal)
+                steps, ended[tuple(owner)] = timeline.run(
+                    owner, schedule.start, schedule.level, agents, steal
+                )
                 return steps
 
             def clean(steps: JointSteps) -> JointSteps:
@@ -290,8 +292,8 @@ class Dealer:
 
             found = search_owners(schedule.owner, schedule.start, agents, simulate,
                                   clean, spent, self.chain(cut))  # fmt: skip
-            steps, owner = timeline.run(found.owner, schedule.start, schedule.level, agents, steal)
-            joint = self._joint_cleanup([pair for step in steps for pair in step], agents)
+            joint = self._joint_cleanup([pair for step in found.steps for pair in step], agents)
+        owner = ended[tuple(found.owner)]
         deal = self._finish(pieces, owner, schedule.start, joint, agents, schedule.makespan)
         deal.moves = found.moves
         return deal
@@ -340,29 +342,38 @@ class Dealer:
     ) -> Deal:
         """One attempt of :meth:`deal`; cuts that give the same pieces give the same deal,
         made once."""
-        pieces, piece_order = self.pieces(cut, keep_walks)
+        pieces, _ = self.pieces(cut, keep_walks)
         key = (agents, order, keep_walks, steal, timed, tuple(map(tuple, pieces)))
         return self._once(
-            key, lambda: self._deal_pieces(agents, order, pieces, piece_order, steal, timed)
+            key, lambda: self._deal_pieces(agents, order, cut, keep_walks, steal, timed)
         )
 
+    def _list_schedule(self, agents: int, order: str, cut: str, keep_walks: bool) -> Schedule:
+        """Step 2 for ``agents`` agents and the pieces of ``cut`` (cached: the owner search
+        starts from the schedule its way's deal made)."""
+        key = (agents, order, cut, keep_walks)
+        if key not in self._schedules:
+            pieces, piece_order = self.pieces(cut, keep_walks)
+            with self._phase("dealing"):
+                before = walks_before(self.walking)
+                scheduler = ListScheduler(pieces, piece_order, before, self.estimate, agents)
+                self._schedules[key] = scheduler.run(order)
+        return self._schedules[key]
+
+    def _timeline(self, cut: str, keep_walks: bool) -> Timeline:
+        """Step 3's runs of the pieces of ``cut``."""
+        pieces, piece_order = self.pieces(cut, keep_walks)
+        return Timeline(self.walker, self.steps, pieces, piece_order.action_preds, self.goal,
+                        self.init)  # fmt: skip
+
     def _deal_pieces(
-        self,
-        agents: int,
-        order: str,
-        pieces: list[list[int]],
-        piece_order: PieceOrder,
-        steal: bool,
-        timed: bool,
+        self, agents: int, order: str, cut: str, keep_walks: bool, steal: bool, timed: bool
     ) -> Deal:
-        with self._phase("dealing"):
-            before = walks_before(self.walking)
-            scheduler = ListScheduler(pieces, piece_order, before, self.estimate, agents)
-            schedule = scheduler.run(order)
+        pieces, piece_order = self.pieces(cut, keep_walks)
+        schedule = self._list_schedule(agents, order, cut, keep_walks)
         with self._phase("replay"):
             if timed:
-                timeline = Timeline(self.walker, self.steps, pieces, piece_order.action_preds,
-                                    self.goal, self.init)  # fmt: skip
+                timeline = self._timeline(cut, keep_walks)
                 steps, owner = timeline.run(
                     schedule.owner, schedule.start, schedule.level, agents, steal
                 )
