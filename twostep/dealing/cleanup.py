@@ -88,7 +88,8 @@ class Elimination:
 
     def _without(self, i: int) -> list[tuple[int, Step]] | None:
         """The actions after ``i`` that still apply once ``i`` is dropped, when the goal
-        still holds without it (else None). The hot loop of the clean-up: written out."""
+        still holds without it (else None). The hot loop of the clean-up: written out (the
+        actions it simulated, j - i, are counted in :attr:`work` where it ends)."""
         steps, envs, owns_at = self.steps, self.envs, self.owns
         adds_env, dels_env = self.adds_env, self.dels_env
         goal = self.goal
@@ -97,13 +98,15 @@ class Elimination:
         env, owns = envs[i], owns_at[i]
         kept: list[tuple[int, Step]] = []
         for j in range(i + 1, len(steps)):
-            self.work += 1
             if env == envs[j] and owns == owns_at[j]:
+                self.work += j - i
                 return kept + steps[j:]  # back on the unchanged run: it reaches the goal
             # a goal literal wrong that no later action sets right: the goal is lost
             if pos_env & ~(env | adds_env[j]) or neg_env & env & ~dels_env[j]:
+                self.work += j - i
                 return None
             if own_goal and not j & 7 and self._lost_own(j, owns):
+                self.work += j - i
                 return None  # agent literals: checked now and then, a shortcut all the same
             entry = steps[j]
             a, step = entry
@@ -121,6 +124,7 @@ class Elimination:
                 env = (env & ~step.del_env) | step.add_env
                 owns = (*owns[:a], (own & ~step.del_own) | step.add_own, *owns[a + 1 :])
                 kept.append(entry)
+        self.work += len(steps) - 1 - i
         return kept if goal.holds(env, owns) else None
 
 
