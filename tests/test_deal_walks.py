@@ -10,6 +10,7 @@ move adds, and each walk is searched once per SA plan. The deals are checked by
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -19,6 +20,7 @@ from tests.conftest import own_task
 from tests.test_plan_split import FAST, sa_result
 from twostep.benchmark import BenchmarkTask
 from twostep.dealing import Dealer, DealError, walks
+from twostep.dealing.encoding import FactSpace, Step
 from twostep.methods import MethodRequest, check_run
 from twostep.methods.plan_deal import run_plan_deal
 from twostep.strips import Grounder
@@ -127,18 +129,38 @@ def test_lamps_dealt_and_validated(task: BenchmarkTask, agents: int) -> None:
 ONE_WAY = PROBLEM.replace(ROADS, " ".join(f"(road s{k} s{k + 1})" for k in range(4)))
 
 
-def test_no_walk_is_searched_for_a_place_no_road_leads_back_to(
-    tmp_path: Path, searched: list[str]
-) -> None:
+@dataclass
+class AtS3:
+    """The lighter on the one-way street, walked to s3: the walker, the fact space, the
+    state, and trimming a lamp it walked past (s1) and one ahead (s4)."""
+
+    walker: walks.Walker
+    space: FactSpace
+    env: int
+    own: int
+    behind: Step
+    ahead: Step
+
+
+def at_s3(tmp_path: Path) -> AtS3:
     task = lamplighters(tmp_path, ONE_WAY)
     dealer = Dealer(task.problem, PLAN, AGENT)
-    walker, space = dealer.walker, dealer.space
+    space = dealer.space
     ground = Grounder(task.problem).ground
     env, own = dealer.init
     for move in ("(go ann s0 s1)", "(go ann s1 s2)", "(go ann s2 s3)"):
         env, own = space.step(ground(move)).apply(env, own)
     behind = space.step(ground("(trim ann l1 s1)"))  # at s1, walked past
     ahead = space.step(ground("(trim ann l4 s4)"))
+    return AtS3(dealer.walker, space, env, own, behind, ahead)
+
+
+def test_no_walk_is_searched_for_a_place_no_road_leads_back_to(
+    tmp_path: Path, searched: list[str]
+) -> None:
+    street = at_s3(tmp_path)
+    walker, space, env, own = street.walker, street.space, street.env, street.own
+    behind, ahead = street.behind, street.ahead
     # a move adds (stands ann s1) (going from s0), so that alone rules nothing out
     assert not walker.out_of_reach(env, own, (behind.pre_env, behind.pre_own), (0, 0))
     # the search itself, over every move, finds no walk back
@@ -160,15 +182,9 @@ def test_the_relaxed_check_stops_once_the_target_is_reached(tmp_path: Path) -> N
     # From s3 on the one-way street (the test above): s4's lamp is one move away, so the
     # relaxed fixpoint stops early and keeps nothing; s1's lamp is never reached, so the
     # fixpoint runs to its end, is kept, and is the one relaxed() gives (s3 and s4).
-    task = lamplighters(tmp_path, ONE_WAY)
-    dealer = Dealer(task.problem, PLAN, AGENT)
-    walker, space = dealer.walker, dealer.space
-    ground = Grounder(task.problem).ground
-    env, own = dealer.init
-    for move in ("(go ann s0 s1)", "(go ann s1 s2)", "(go ann s2 s3)"):
-        env, own = space.step(ground(move)).apply(env, own)
-    behind = space.step(ground("(trim ann l1 s1)"))
-    ahead = space.step(ground("(trim ann l4 s4)"))
+    street = at_s3(tmp_path)
+    walker, space, env, own = street.walker, street.space, street.env, street.own
+    behind, ahead = street.behind, street.ahead
     assert walker.reaches(env, own, ahead.pre_env, ahead.pre_own)
     assert (env, own) not in walker._relaxed
     assert not walker.reaches(env, own, behind.pre_env, behind.pre_own)
