@@ -194,8 +194,9 @@ def test_a_robots_second_trip_goes_to_the_idle_robot_with_its_grippers(data_root
     # second; robot1 was never mentioned, so the second trip goes to robot1, lgripper2 to
     # lgripper1 (robot1's free grippers, matched in order). robot1 stands in room1 where
     # ball2 is: nothing to repair. Dealt to two agents (each has its own copy of both
-    # robots where they start): one trip each, 3 steps; without rebinding the second
-    # agent's robot2 must first drive to room1: 4.
+    # robots where they start): one trip each, 3 steps; without rebinding (and without
+    # copies, which find the same robot1 for the second agent) the second agent's robot2
+    # must first drive to room1: 4.
     preds = ["at-robby", "free", "carry"]
     task = load_task("grippers", 1, data_root)
     assert rebind(task.problem, GRIPPERS_SA_PLAN, preds) == [
@@ -207,4 +208,4 @@ def test_a_robots_second_trip_goes_to_the_idle_robot_with_its_grippers(data_root
     run = run_plan_deal(request)
     assert run.exec_length == 3 and run.fallback is None
     _valid(task, run, preds)
-    assert run_plan_deal(request, rebind=False).exec_length == 4
+    assert run_plan_deal(request, rebind=False, copies=False).exec_length == 4

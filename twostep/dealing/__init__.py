@@ -14,8 +14,9 @@ agents take turns on the SA plan itself:
 1. *Order and pieces* (:mod:`~twostep.dealing.deal`), as in
    :mod:`twostep.decomposers.plan_split` (steps 1-2): the deordering of the cleaned plan
    over environment facts (walking left out: it is found again in step 3), and its
-   pieces, cut at free agent states (``cut="free"``) or tied by what the agent holds
-   (``cut="holding"``).
+   pieces, cut at free agent states (``cut="free"``), tied by what the agent holds
+   (``cut="holding"``) or cut at each mover's free states (``cut="mover"``: a robot's
+   grippers free, whatever the other robots hold; :mod:`~twostep.dealing.copies`).
 2. *Dealing* (:mod:`~twostep.dealing.schedule`): list scheduling of the pieces on N
    agents without the hand-off constraint, at the grain of actions, walks estimated.
 3. *Time steps* (:mod:`~twostep.dealing.timeline`): the agents act at once, as in the
@@ -23,7 +24,10 @@ agents take turns on the SA plan itself:
    allows it and it applies, else a step of its shortest walk there
    (:mod:`~twostep.dealing.walks`: walks may change shared facts, a hoist leaving an area
    makes it ``clear``), else waits; an idle agent may take a ready piece dealt to another
-   (``steal``), and when nobody can act a piece goes to an agent that can reach it. When
+   (``steal``), and when nobody can act a piece goes to an agent that can reach it. An
+   agent that begins a piece may do it with another of its own movers, one that stands
+   where the piece begins (:mod:`~twostep.dealing.copies`: each agent has its own copy of
+   every robot). When
    that fails (a ramp taken away before an agent crossed it) the deal is made again with
    the walks' causal links kept, and then replayed one piece after the other
    (:mod:`~twostep.dealing.replay`).

@@ -18,6 +18,8 @@ from dataclasses import dataclass
 from itertools import pairwise
 
 from twostep.dealing.cleanup import Elimination, JointRun
+from twostep.dealing.copies import mover_pieces, piece_copies
+from twostep.dealing.encoding import Step
 from twostep.dealing.improve import search_owners
 from twostep.dealing.model import Deal, DealError, cpu_seconds
 from twostep.dealing.replay import Replay
@@ -35,8 +37,10 @@ from twostep.decomposers.plan_split import (
 from twostep.pddl import Problem
 from twostep.strips import GroundAction, Grounder, effects_along
 
-CUTS = ("free", "holding")
-"""Where the plan is cut into pieces: at free agent states, or by what the agent holds."""
+CUTS = ("free", "holding", "mover")
+"""Where the plan is cut into pieces: at free agent states, by what the agent holds, or
+at each mover's free states (:func:`~twostep.dealing.copies.mover_pieces`; the free cut
+where the task has no movers)."""
 ORDERS = ("critical", "plan")
 """Which ready piece is dealt next: the longest path to the end first, or the plan's order."""
 
@@ -52,13 +56,16 @@ class Way:
 
 
 def ways(cut: str | None = None) -> tuple[Way, ...]:
-    """The ways :mod:`twostep.methods.plan_deal` tries, of one cut or (None) of both: on
-    the 100 tasks these three do as well as all eight cuts x orders x stealing together,
-    but for 0.001 of the macro exec/SA at N = 4 (``bench/bench_dealing.py``)."""
+    """The ways :mod:`twostep.methods.plan_deal` tries, of one cut or (None) of every cut:
+    on the 100 tasks the first three do as well as all eight free and holding cuts x
+    orders x stealing together, but for 0.001 of the macro exec/SA at N = 4
+    (``bench/bench_dealing.py``); the fourth, the mover cut, is dealt only where its pieces
+    are not the free cut's (robots that work at once in the SA plan)."""
     return (
         Way(cut or "free", "critical", False),
         Way(cut or "holding", "critical", True),
         Way(cut or "holding", "plan", False),
+        Way(cut or "mover", "critical", False),
     )
 
 
@@ -105,9 +112,12 @@ def pieces_of(
     cut: str,
 ) -> list[list[int]]:
     """Step 1's pieces (plan-split's step 2), in an order the deordering allows."""
+    by_mover = mover_pieces(problem, grounded, agent_predicates) if cut == "mover" else None
     if cut == "holding":
         free_states(problem, grounded, agent_predicates)  # the plan must be applicable
         pieces = merge_cycles(holding_pieces(problem, grounded, agent_predicates), edges)
+    elif by_mover is not None:
+        pieces = merge_cycles(by_mover, edges)
     else:
         pieces = free_pieces(problem, grounded, agent_predicates)
     return topological_pieces(pieces, edges)
@@ -126,7 +136,8 @@ def walks_before(walking: Sequence[bool]) -> dict[int, int]:
 
 class Dealer:
     """Every deal of one SA plan (module docstring); ``cleaned`` is step 0's result when
-    the caller has it."""
+    the caller has it; ``copies``: agents may do a piece with another of their movers
+    (:mod:`~twostep.dealing.copies`)."""
 
     def __init__(
         self,
@@ -134,8 +145,10 @@ class Dealer:
         plan: Sequence[str],
         agent_predicates: Collection[str],
         cleaned: Sequence[GroundAction] | None = None,
+        copies: bool = True,
     ) -> None:
         self.problem = problem
+        self.use_copies = copies
         self.agent_predicates = tuple(agent_predicates)
         self.seconds: defaultdict[str, float] = defaultdict(float)
         start = cpu_seconds()
@@ -161,6 +174,7 @@ class Dealer:
         self._orders: dict[tuple[str, bool], tuple[list[list[int]], PieceOrder]] = {}
         self._schedules: dict[tuple[int, str, str, bool], Schedule] = {}
         self._deals: dict[tuple[object, ...], Deal | DealError] = {}
+        self._copies: dict[tuple[str, bool], dict[int, list[list[Step]]]] = {}
 
     @contextmanager
     def _phase(self, name: str) -> Iterator[None]:
@@ -185,6 +199,11 @@ class Dealer:
                 pieces = [p for p in pieces if p]
                 self._orders[key] = (pieces, PieceOrder.of(pieces, edges))
         return self._orders[key]
+
+    def mover_cut_is_free(self) -> bool:
+        """Whether the ``mover`` cut gives the ``free`` cut's pieces (a task without
+        movers, or whose plan frees every mover before the next begins)."""
+        return self.pieces("mover", False)[0] == self.pieces("free", False)[0]
 
     def chain(self, cut: str) -> int:
         """The longest chain of acting actions the order of step 1 (walks left out) and
@@ -363,8 +382,17 @@ class Dealer:
     def _timeline(self, cut: str, keep_walks: bool) -> Timeline:
         """Step 3's runs of the pieces of ``cut``."""
         pieces, piece_order = self.pieces(cut, keep_walks)
+        key = (cut, keep_walks)
+        if key not in self._copies:
+            with self._phase("order"):  # the pieces' copies
+                made: dict[int, list[list[Step]]] = {}
+                if self.use_copies:
+                    made = piece_copies(
+                        self.problem, self.space, self.steps, pieces, self.agent_predicates
+                    )
+                self._copies[key] = made
         return Timeline(self.walker, self.steps, pieces, piece_order.action_preds, self.goal,
-                        self.init)  # fmt: skip
+                        self.init, self._copies[key])  # fmt: skip
 
     def _deal_pieces(
         self, agents: int, order: str, cut: str, keep_walks: bool, steal: bool, timed: bool

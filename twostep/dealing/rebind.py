@@ -290,25 +290,8 @@ class Rebinder:
         busy: Collection[str],
     ) -> dict[str, str] | None:
         """A renaming from ``obj``'s objects to ``other``'s under which ``others`` are
-        ``facts``: ``obj`` to ``other``, and (a mover) its own facts' further objects to
-        the other's, of the same types, none of them busy."""
-        swap = {obj: other, other: obj}
-        if {(f[0], *(swap.get(x, x) for x in f[1:])) for f in others} == facts:
-            return {obj: other}
-        if obj not in self.movers:
-            return None
-        mine = sorted({x for f in facts for x in f[1:]} - {obj})
-        theirs = sorted({x for f in others for x in f[1:]} - {other})
-        if len(mine) != len(theirs) or len(mine) > MATCHED or set(theirs) & set(busy):
-            return None
-        for order in itertools.permutations(theirs):
-            names = {obj: other, **dict(zip(mine, order, strict=True))}
-            if any(self.types[a] != self.types[b] for a, b in names.items()):
-                continue
-            back = {b: a for a, b in names.items()}
-            if {(f[0], *(back.get(x, x) for x in f[1:])) for f in others} == facts:
-                return names
-        return None
+        ``facts`` (:func:`matching`; only a mover's further objects are renamed)."""
+        return matching(facts, others, obj, other, busy, self.types, obj in self.movers)
 
     def _repair(
         self, state: frozenset[Fact], renamed: Sequence[str], rest: Sequence[str], at: int
@@ -380,6 +363,38 @@ class Rebinder:
                         seen.add(there)
                         queue.append((there, [*path, move]))
         return None
+
+
+def matching(
+    facts: frozenset[Fact],
+    others: frozenset[Fact],
+    obj: str,
+    other: str,
+    busy: Collection[str],
+    types: dict[str, str],
+    mover: bool = True,
+) -> dict[str, str] | None:
+    """A renaming from ``obj``'s objects to ``other``'s under which ``others`` (facts of
+    ``other``) are ``facts`` (facts of ``obj``): ``obj`` to ``other``, and (a ``mover``)
+    the further objects of ``facts`` to those of ``others``, of the same types, none of
+    them ``busy``; None when there is none."""
+    swap = {obj: other, other: obj}
+    if {(f[0], *(swap.get(x, x) for x in f[1:])) for f in others} == facts:
+        return {obj: other}
+    if not mover:
+        return None
+    mine = sorted({x for f in facts for x in f[1:]} - {obj})
+    theirs = sorted({x for f in others for x in f[1:]} - {other})
+    if len(mine) != len(theirs) or len(mine) > MATCHED or set(theirs) & set(busy):
+        return None
+    for order in itertools.permutations(theirs):
+        names = {obj: other, **dict(zip(mine, order, strict=True))}
+        if any(types[a] != types[b] for a, b in names.items()):
+            continue
+        back = {b: a for a, b in names.items()}
+        if {(f[0], *(back.get(x, x) for x in f[1:])) for f in others} == facts:
+            return names
+    return None
 
 
 def rebind(

@@ -23,6 +23,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+from twostep.dealing.copies import carries_through
 from twostep.dealing.encoding import GoalBits, Step
 from twostep.dealing.model import DealError
 from twostep.dealing.walks import Walker, closing_walk
@@ -53,11 +54,16 @@ class Timeline:
         action_preds: dict[int, list[int]],
         goal: GoalBits,
         start: tuple[int, int],
+        copies: dict[int, list[list[Step]]] | None = None,
     ) -> None:
         self.walker, self.steps, self.pieces = walker, steps, pieces
         self.action_preds = action_preds
         self.goal = goal
         self.start = start
+        self.copies = copies or {}
+        """Per piece, the same piece done with another of the agent's movers
+        (:mod:`~twostep.dealing.copies`)."""
+        self.piece_of = {i: p for p in self.copies for i in pieces[p]}
         self.work = 0  # what the runs so far cost, as a count (:attr:`_Run.work`)
 
     def run(
@@ -93,13 +99,15 @@ class _Run:
         self.walker, self.steps = timeline.walker, timeline.steps
         self.pieces, self.action_preds = timeline.pieces, timeline.action_preds
         self.goal = timeline.goal
+        self.copies, self.piece_of = timeline.copies, timeline.piece_of
+        self.chosen: dict[int, tuple[int, list[Step]]] = {}  # piece -> (agent, its copy)
         self.owner, self.level = list(owner), level
         order = sorted(range(len(self.pieces)), key=lambda p: (start[p], p))
         self.crew = [_Agent([p for p in order if owner[p] == a]) for a in range(agents)]
         self.env, own = timeline.start
         self.owns = [own] * agents
         self.done: dict[int, int] = {}  # acting action -> the time step it was taken in
-        self._paths: dict[tuple[int, int, int], list[Step] | None] = {}
+        self._paths: dict[tuple[int, int, int, Step], list[Step] | None] = {}
         self.work = 0  # agents' turns, and pieces looked at when an idle agent looks for one
 
     def run(self) -> tuple[JointSteps, list[int]]:
@@ -169,22 +177,56 @@ class _Run:
         agent, env, own = self.crew[a], self.env, self.owns[a]
         if agent.piece is None:
             return None
+        if agent.position == 0 and agent.piece in self.copies:
+            self._choose(a, agent.piece)
+        step = self._step(a, agent.piece, agent.position)
         i = self.pieces[agent.piece][agent.position]
-        step = self.steps[i]
         if step.applicable(env, own):
             agent.path = []
             return step if self._ready(i) else None
         if not (agent.path and agent.path[0].applicable(env, own)):
-            agent.path = list(self._path(own, i) or ())
+            agent.path = list(self._path(own, i, step) or ())
         return agent.path[0] if agent.path else None
 
-    def _path(self, own: int, i: int) -> list[Step] | None:
-        """The shortest walk from ``own`` to where action ``i`` applies in the current
-        environment (None: none now); remembered, since waiting agents ask every step."""
-        key = (self.env, own, i)
+    def _step(self, a: int, p: int, position: int) -> Step:
+        """The action at ``position`` of piece ``p`` as agent ``a`` does it: of the copy
+        it took, if any."""
+        chosen = self.chosen.get(p)
+        if chosen is not None and chosen[0] == a:
+            return chosen[1][position]
+        return self.steps[self.pieces[p][position]]
+
+    def _copy(self, a: int, p: int) -> list[Step] | None:
+        """The first copy of piece ``p`` that agent ``a`` can begin where it stands and
+        carry through, when the piece itself does not apply there (None: none)."""
+        env, own = self.env, self.owns[a]
+        if self.steps[self.pieces[p][0]].applicable(env, own):
+            return None
+        where = self.walker.space.where
+        for copy in self.copies.get(p, ()):
+            if copy[0].applicable(env, own) and carries_through(own, copy, where):
+                return copy
+        return None
+
+    def _choose(self, a: int, p: int) -> None:
+        """Agent ``a``, about to begin piece ``p``: a copy it can begin where it stands
+        (:meth:`_copy`), else the piece itself, unless it is on its way to a copy."""
+        copy = self._copy(a, p)
+        if copy is not None:
+            self.chosen[p] = (a, copy)
+        elif self.steps[self.pieces[p][0]].applicable(self.env, self.owns[a]):
+            self.chosen.pop(p, None)
+        elif self.chosen.get(p, (a,))[0] != a:
+            del self.chosen[p]
+
+    def _path(self, own: int, i: int, step: Step) -> list[Step] | None:
+        """The shortest walk from ``own`` to where ``step`` (action ``i`` or its copy)
+        applies in the current environment (None: none now); remembered, since waiting
+        agents ask every step."""
+        key = (self.env, own, i, step)
         if key not in self._paths:
             try:
-                self._paths[key] = self.walker.walk_to(self.env, own, self.steps[i])
+                self._paths[key] = self.walker.walk_to(self.env, own, step)
             except DealError:
                 self._paths[key] = None
         return self._paths[key]
@@ -198,7 +240,10 @@ class _Run:
         """Agent ``a``'s walk to where action ``i`` applies (None: no way there now)."""
         if self.steps[i].applicable(self.env, self.owns[a]):
             return 0
-        path = self._path(self.owns[a], i)
+        p = self.piece_of.get(i)
+        if p is not None and self.pieces[p][0] == i and self._copy(a, p) is not None:
+            return 0
+        path = self._path(self.owns[a], i, self.steps[i])
         return None if path is None else len(path)
 
     def _give(self, p: int, b: int) -> None:

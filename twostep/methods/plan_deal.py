@@ -80,12 +80,17 @@ def check_cut(cut: str) -> None:
 
 
 def run_plan_deal(
-    request: MethodRequest, cut: str = BEST, rebind: bool = True, owner_search: bool = True
+    request: MethodRequest,
+    cut: str = BEST,
+    rebind: bool = True,
+    owner_search: bool = True,
+    copies: bool = True,
 ) -> RunResult:
     """Deal the SA plan with ``cut`` (``free``, ``holding`` or ``best``: both) and each
     order to every number of agents up to N, and (``rebind``) the rebound plan too, and
-    (``owner_search``) search the owners of each number's shortest deal; the shortest schedule
-    wins (module docstring)."""
+    (``owner_search``) search the owners of each number's shortest deal; with ``copies``
+    an agent may do a piece with another of its movers (:mod:`~twostep.dealing.copies`);
+    the shortest schedule wins (module docstring)."""
     check_cut(cut)
     start = time.perf_counter()
     run = new_run(request, MethodName.TWOSTEP)
@@ -96,9 +101,8 @@ def run_plan_deal(
         run.sa_length = len(sa_steps)
     trials = Trials()
     if sa_steps is not None and request.agents > 1:
-        try_deals(
-            request, sa_steps, ways(None if cut == BEST else cut), trials, rebind, owner_search
-        )
+        tried = ways(None if cut == BEST else cut)
+        try_deals(request, sa_steps, tried, trials, rebind, owner_search, copies)
     run.score_time_s = trials.seconds.get("scoring", 0.0)
     run.extra["deal"] = trials.rows
     run.extra["deal_seconds"] = {phase: round(s, 6) for phase, s in trials.seconds.items()}
@@ -134,6 +138,7 @@ def try_deals(
     trials: Trials,
     rebinding: bool = True,
     owner_search: bool = True,
+    copies: bool = True,
 ) -> None:
     """The cleaned SA plan (one agent), then every way for 2..N agents: of the cleaned SA
     plan and, with ``rebinding``, of each different plan rebinding makes of it
@@ -144,7 +149,7 @@ def try_deals(
     ``rebound``: ``rounds`` or ``tails``, the owner search's ``improved``)."""
     problem = request.problem
     try:
-        dealer = Dealer(problem, sa_steps, request.agent_predicates)
+        dealer = Dealer(problem, sa_steps, request.agent_predicates, copies=copies)
     except PlanError as error:  # an SA plan that does not apply: nothing to deal
         trials.rows.append({"agents": 1, "error": str(error)})
         trials.invalid = str(error)
@@ -164,11 +169,14 @@ def try_deals(
                 rebound["tails" if tails else "rounds"] = plan
     spent = cpu_seconds() - start
     dealers: list[tuple[str | None, Dealer]] = [(None, dealer)]
-    dealers += [(kind, Dealer(problem, plan, request.agent_predicates)) for kind, plan in rebound.items()]  # fmt: skip
+    dealers += [(kind, Dealer(problem, plan, request.agent_predicates, copies=copies))
+                for kind, plan in rebound.items()]  # fmt: skip
     for agents in range(2, request.agents + 1):
         made: list[tuple[int, int, str | None, Dealer, Way]] = []  # this number's deals
         for kind, one in dealers:
             for way in tried:
+                if way.cut == "mover" and one.mover_cut_is_free():
+                    continue  # the free cut's pieces: the free way's deal
                 row = deal_row(agents, way, kind)
                 trials.rows.append(row)
                 try:
