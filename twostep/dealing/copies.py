@@ -41,14 +41,16 @@ def piece_copies(
     steps: Sequence[Step],
     pieces: Sequence[Sequence[int]],
     agent_predicates: Collection[str],
+    moving: frozenset[str] | None = None,
 ) -> dict[int, list[list[Step]]]:
     """Each piece's copies (module docstring), aligned with its actions; pieces without
-    any are left out."""
+    any are left out. ``moving``: the task's movers, when the caller has them."""
     goal = space.goal()
     if goal.space is not None or goal.pos_own or goal.neg_own:
         return {}
     agent = frozenset(agent_predicates)
-    moving = movers(problem, space.positional & agent)
+    if moving is None:
+        moving = task_movers(problem, agent)
     if not moving:
         return {}
     types = problem.all_objects
@@ -113,6 +115,13 @@ def _renamed(
     return copy
 
 
+def task_movers(problem: Problem, agent_predicates: Collection[str]) -> frozenset[str]:
+    """The task's movers: objects that stay in a positional agent fact an action moves
+    (a robot in ``at-robby``)."""
+    positional = positional_predicates(problem.domain) & frozenset(agent_predicates)
+    return movers(problem, positional)
+
+
 def carries_through(own: int, piece: Sequence[Step], where: int) -> bool:
     """Whether an agent with own facts ``own`` meets every own precondition of ``piece``
     beyond where it stands (walks see to that), one action after the other."""
@@ -125,18 +134,21 @@ def carries_through(own: int, piece: Sequence[Step], where: int) -> bool:
 
 
 def mover_pieces(
-    problem: Problem, plan: Sequence[GroundAction], agent_predicates: Collection[str]
+    problem: Problem,
+    plan: Sequence[GroundAction],
+    agent_predicates: Collection[str],
+    moving: frozenset[str] | None = None,
 ) -> list[list[int]] | None:
     """The ``mover`` cut: each mover's actions, cut where its own agent facts beyond where
     it stands are as in the initial state again (a robot's grippers free), whatever the
     other movers do meanwhile (the ``free`` cut waits until every robot is free at once);
     None when the task has no movers or an action moves none or several of them."""
     agent = frozenset(agent_predicates)
-    positional = positional_predicates(problem.domain) & agent
-    moving = movers(problem, positional)
+    if moving is None:
+        moving = task_movers(problem, agent)
     if not moving:
         return None
-    capacity = agent - positional
+    capacity = agent - positional_predicates(problem.domain)
     mine: list[str] = []
     for action in plan:
         found = set(action.args) & moving

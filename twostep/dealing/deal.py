@@ -11,6 +11,7 @@ replays them (:mod:`~twostep.dealing.replay`) and cleans the joint run again.
 from __future__ import annotations
 
 import bisect
+import functools
 from collections import defaultdict
 from collections.abc import Callable, Collection, Iterator, Sequence
 from contextlib import contextmanager
@@ -18,7 +19,7 @@ from dataclasses import dataclass
 from itertools import pairwise
 
 from twostep.dealing.cleanup import Elimination, JointRun
-from twostep.dealing.copies import mover_pieces, piece_copies
+from twostep.dealing.copies import mover_pieces, piece_copies, task_movers
 from twostep.dealing.encoding import Step
 from twostep.dealing.improve import search_owners
 from twostep.dealing.model import Deal, DealError, cpu_seconds
@@ -110,9 +111,13 @@ def pieces_of(
     agent_predicates: Collection[str],
     edges: set[tuple[int, int]],
     cut: str,
+    moving: frozenset[str] | None = None,
 ) -> list[list[int]]:
-    """Step 1's pieces (plan-split's step 2), in an order the deordering allows."""
-    by_mover = mover_pieces(problem, grounded, agent_predicates) if cut == "mover" else None
+    """Step 1's pieces (plan-split's step 2), in an order the deordering allows
+    (``moving``: the task's movers, when the caller has them)."""
+    by_mover = None
+    if cut == "mover":
+        by_mover = mover_pieces(problem, grounded, agent_predicates, moving)
     if cut == "holding":
         free_states(problem, grounded, agent_predicates)  # the plan must be applicable
         pieces = merge_cycles(holding_pieces(problem, grounded, agent_predicates), edges)
@@ -195,10 +200,16 @@ class Dealer:
                 preds = self.agent_predicates
                 edges = order_edges(self.problem, self.cleaned, self.walking, preds, keep_walks)
                 pieces = [[i for i in p if not self.walking[i]]
-                          for p in pieces_of(self.problem, self.cleaned, preds, edges, cut)]  # fmt: skip
+                          for p in pieces_of(self.problem, self.cleaned, preds, edges, cut,
+                                             self.movers)]  # fmt: skip
                 pieces = [p for p in pieces if p]
                 self._orders[key] = (pieces, PieceOrder.of(pieces, edges))
         return self._orders[key]
+
+    @functools.cached_property
+    def movers(self) -> frozenset[str]:
+        """The task's movers (:func:`~twostep.dealing.copies.task_movers`)."""
+        return task_movers(self.problem, self.agent_predicates)
 
     def mover_cut_is_free(self) -> bool:
         """Whether the ``mover`` cut gives the ``free`` cut's pieces (a task without
@@ -387,9 +398,8 @@ class Dealer:
             with self._phase("order"):  # the pieces' copies
                 made: dict[int, list[list[Step]]] = {}
                 if self.use_copies:
-                    made = piece_copies(
-                        self.problem, self.space, self.steps, pieces, self.agent_predicates
-                    )
+                    made = piece_copies(self.problem, self.space, self.steps, pieces,
+                                        self.agent_predicates, self.movers)  # fmt: skip
                 self._copies[key] = made
         return Timeline(self.walker, self.steps, pieces, piece_order.action_preds, self.goal,
                         self.init, self._copies[key])  # fmt: skip
