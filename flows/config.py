@@ -48,7 +48,7 @@ class MethodConfig:
 class DecomposerConfig:
     name: str = "plan-deal"  # goal-split | expert | llm | plan-split | plan-deal | portfolio
     link_degree: int = 2
-    cut: str = "best"  # plan-deal: free | holding | best (both, the shorter kept)
+    cut: str = "best"  # plan-deal: free | holding | mover | best (every cut, the shortest kept)
     rebind: bool = True  # plan-deal (and the portfolios' plan-deal): deal the rebound plan too
     owner_search: bool = True  # plan-deal (and the portfolios'): search its deals' owners
 

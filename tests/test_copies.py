@@ -161,10 +161,16 @@ def test_the_mover_cut_frees_each_robot_on_its_own(tmp_path: Path, data_root: Pa
 def test_without_robots_the_mover_cut_is_the_free_cut_and_is_not_dealt_again(
     tmp_path: Path, data_root: Path
 ) -> None:
-    # termes: no mover, so no row of the mover cut (its pieces are the free cut's).
+    # termes: no mover, so no row of the mover cut beside the free cut (its pieces are the
+    # free cut's; 7 steps, derived in tests/test_plan_deal.py).
     from tests.test_plan_deal import TERMES, TERMES_PLAN, TERMES_TOWER, _copy_task
 
     task = _copy_task(tmp_path, data_root, "termes", TERMES_TOWER)
     assert Dealer(task.problem, TERMES_PLAN, TERMES).mover_cut_is_free()
-    run = run_plan_deal(MethodRequest(task, 2, FAST, TERMES, sa_plan=sa_result(TERMES_PLAN)))
+    request = MethodRequest(task, 2, FAST, TERMES, sa_plan=sa_result(TERMES_PLAN))
+    run = run_plan_deal(request)
     assert not [r for r in run.extra["deal"] if r.get("cut") == "mover"]
+    # asked for alone, the mover cut is dealt: the free cut's pieces, the free cut's length
+    by_mover = run_plan_deal(request, cut="mover")
+    assert {r["cut"] for r in by_mover.extra["deal"] if r["agents"] == 2} == {"mover"}
+    assert by_mover.exec_length == run_plan_deal(request, cut="free").exec_length == 7

@@ -177,10 +177,12 @@ class _Run:
         agent, env, own = self.crew[a], self.env, self.owns[a]
         if agent.piece is None:
             return None
-        if agent.position == 0 and agent.piece in self.copies:
-            self._choose(a, agent.piece)
-        step = self._step(a, agent.piece, agent.position)
         i = self.pieces[agent.piece][agent.position]
+        step = self.steps[i]
+        if agent.piece in self.copies:  # the piece, or the copy its agent took
+            if agent.position == 0:
+                self._choose(a, agent.piece)
+            step = self._step(a, agent.piece, agent.position)
         if step.applicable(env, own):
             agent.path = []
             return step if self._ready(i) else None
@@ -240,9 +242,10 @@ class _Run:
         """Agent ``a``'s walk to where action ``i`` applies (None: no way there now)."""
         if self.steps[i].applicable(self.env, self.owns[a]):
             return 0
-        p = self.piece_of.get(i)
-        if p is not None and self.pieces[p][0] == i and self._copy(a, p) is not None:
-            return 0
+        if self.copies:
+            p = self.piece_of.get(i)
+            if p is not None and self.pieces[p][0] == i and self._copy(a, p) is not None:
+                return 0
         path = self._path(self.owns[a], i, self.steps[i])
         return None if path is None else len(path)
 

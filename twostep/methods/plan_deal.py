@@ -175,8 +175,8 @@ def try_deals(
         made: list[tuple[int, int, str | None, Dealer, Way]] = []  # this number's deals
         for kind, one in dealers:
             for way in tried:
-                if way.cut == "mover" and one.mover_cut_is_free():
-                    continue  # the free cut's pieces: the free way's deal
+                if way.cut == "mover" and free_way_of(way, tried) and one.mover_cut_is_free():
+                    continue  # the free cut's pieces: the free way's deal, tried beside it
                 row = deal_row(agents, way, kind)
                 trials.rows.append(row)
                 try:
@@ -201,6 +201,11 @@ def try_deals(
             trials.seconds[phase] = trials.seconds.get(phase, 0.0) + seconds
     trials.seconds["rebinding"] = spent
     choose_deal(request, candidates, trials)
+
+
+def free_way_of(way: Way, tried: Sequence[Way]) -> bool:
+    """Whether ``tried`` has the free cut's way of ``way``'s order and stealing."""
+    return Way("free", way.order, way.steal) in tried
 
 
 def deal_row(agents: int, way: Way, kind: str | None) -> dict[str, Any]:
