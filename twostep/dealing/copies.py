@@ -19,6 +19,11 @@ In the agents' run (:mod:`~twostep.dealing.timeline`), an agent that begins a pi
 first action does not apply where it stands takes the first copy whose first action does
 and whose agent facts beyond where it stands (the grippers free) carry it through the piece;
 otherwise it walks, as before.
+
+The *mover cut* (:func:`mover_pieces`) cuts the plan into pieces by mover: each robot's
+actions, cut where its own grippers are free again. The free cut waits until the agent
+holds nothing at all, so where the SA plan lets two robots work at once their trips make
+one piece; by mover they are two, which two agents can do at once.
 """
 
 from __future__ import annotations
