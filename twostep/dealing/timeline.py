@@ -5,12 +5,14 @@ At each time step, in the order of their pieces' longest paths to the end (the c
 piece first), each agent takes its next action: the next action of its current piece when
 it applies and every action it needs from other pieces (the plan's order) is done, else a
 step of the shortest walk to where it applies (:class:`~twostep.dealing.walks.Walker`),
-else it waits. An agent without a piece takes its next one in the deal. Actions of one
-time step are applicable before it and interfere with none another agent took in it (the
-scorer's rule: none deletes what another needs or adds, none adds what another needs
-false), so the time steps are a valid joint schedule and, one after the other, a valid run.
-Walking needs no order: an agent may walk to its next piece while another finishes the
-piece before.
+else it waits. An agent without a piece takes its next one in the deal; one that begins a
+piece whose first action does not apply where it stands may do a *copy* of it instead,
+the same actions by another of its own robots that stands there
+(:mod:`~twostep.dealing.copies`). Actions of one time step are applicable before it and
+interfere with none another agent took in it (the scorer's rule: none deletes what another
+needs or adds, none adds what another needs false), so the time steps are a valid joint
+schedule and, one after the other, a valid run. Walking needs no order: an agent may walk
+to its next piece while another finishes the piece before.
 
 When no agent can act, the first piece whose agent cannot reach it is *handed* to an agent
 that can (an idle one, the least busy first); when there is none, the deal fails
