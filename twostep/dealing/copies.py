@@ -31,7 +31,7 @@ from __future__ import annotations
 from collections.abc import Collection, Sequence
 
 from twostep.dealing.encoding import FactSpace, Step
-from twostep.dealing.rebind import matching, movers
+from twostep.dealing.rebind import matching, movers, rename_action
 from twostep.decomposers.goal_split import positional_predicates
 from twostep.pddl import Fact, Problem
 from twostep.strips import GroundAction, Grounder, PlanError
@@ -69,8 +69,8 @@ def piece_copies(
     }  # fmt: skip
     found: dict[int, list[list[Step]]] = {}
     for p, piece in enumerate(pieces):
-        actions = [str(steps[i].action) for i in piece]
-        busy = {o for a in actions for o in a.strip("()").split()[1:]}
+        originals = [steps[i] for i in piece]
+        busy = {o for step in originals for o in step.action.args}
         mine = sorted(busy & moving)
         if len(mine) != 1:
             continue
@@ -84,7 +84,7 @@ def piece_copies(
             names = matching(own[mover], own[other], mover, other, busy, types)
             if names is None:
                 continue
-            copy = _renamed(space, grounder, actions, names, [steps[i] for i in piece])
+            copy = _renamed(space, grounder, originals, names)
             if copy is not None:
                 copies.append(copy)
         if copies:
@@ -93,19 +93,14 @@ def piece_copies(
 
 
 def _renamed(
-    space: FactSpace,
-    grounder: Grounder,
-    actions: Sequence[str],
-    names: dict[str, str],
-    originals: Sequence[Step],
+    space: FactSpace, grounder: Grounder, originals: Sequence[Step], names: dict[str, str]
 ) -> list[Step] | None:
-    """The piece's actions renamed as steps, or None when one does not ground, is not
-    exact, or touches the environment otherwise than the action it stands for."""
+    """The piece's steps renamed, or None when one does not ground, is not exact, or
+    touches the environment otherwise than the action it stands for."""
     copy = []
-    for text, original in zip(actions, originals, strict=True):
-        name, *args = text.strip("()").split()
+    for original in originals:
         try:
-            action = grounder.ground("(" + " ".join([name, *(names.get(a, a) for a in args)]) + ")")
+            action = grounder.ground(rename_action(str(original.action), names))
         except PlanError:
             return None
         step = space.step(action)
@@ -164,13 +159,14 @@ def mover_pieces(
     def own(state: frozenset[Fact], mover: str) -> frozenset[Fact]:
         return frozenset(f for f in state if f[0] in capacity and mover in f[1:])
 
+    free = {mover: own(problem.init, mover) for mover in set(mine)}
     state = problem.init
     open_pieces: dict[str, list[int]] = {}
     pieces: list[list[int]] = []
     for i, (action, mover) in enumerate(zip(plan, mine, strict=True)):
         state = action.apply(state)
         open_pieces.setdefault(mover, []).append(i)
-        if own(state, mover) == own(problem.init, mover):
+        if own(state, mover) == free[mover]:
             pieces.append(open_pieces.pop(mover))
     pieces += open_pieces.values()
     return sorted(pieces)

@@ -73,7 +73,8 @@ def _args(action: str) -> list[str]:
     return action.strip("()").split()[1:]
 
 
-def _renamed(action: str, names: dict[str, str]) -> str:
+def rename_action(action: str, names: dict[str, str]) -> str:
+    """``action`` (as text) with its arguments renamed by ``names``."""
     name, *args = action.strip("()").split()
     return "(" + " ".join([name, *(names.get(a, a) for a in args)]) + ")"
 
@@ -158,7 +159,7 @@ class Rebinder:
                         break
                     trials += 1
                     renamed = [*closing] + [
-                        _renamed(a, names) if names.keys() & set(_args(a)) else a
+                        rename_action(a, names) if names.keys() & set(_args(a)) else a
                         for a in current[first : last + 1]
                     ]
                     repaired = self._repair(
@@ -276,22 +277,11 @@ class Rebinder:
                 continue
             if seen.get(other, -1) >= own:
                 continue
-            names = self._matching(facts, self._facts(states[first], other), obj, other, busy)
+            others = self._facts(states[first], other)
+            names = matching(facts, others, obj, other, busy, self.types, obj in self.movers)
             if names is not None:
                 found.append((seen.get(other, -1), other, names))
         return [names for *_, names in sorted(found, key=lambda entry: entry[:2])]
-
-    def _matching(
-        self,
-        facts: frozenset[Fact],
-        others: frozenset[Fact],
-        obj: str,
-        other: str,
-        busy: Collection[str],
-    ) -> dict[str, str] | None:
-        """A renaming from ``obj``'s objects to ``other``'s under which ``others`` are
-        ``facts`` (:func:`matching`; only a mover's further objects are renamed)."""
-        return matching(facts, others, obj, other, busy, self.types, obj in self.movers)
 
     def _repair(
         self, state: frozenset[Fact], renamed: Sequence[str], rest: Sequence[str], at: int

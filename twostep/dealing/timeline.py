@@ -202,10 +202,8 @@ class _Run:
 
     def _copy(self, a: int, p: int) -> list[Step] | None:
         """The first copy of piece ``p`` that agent ``a`` can begin where it stands and
-        carry through, when the piece itself does not apply there (None: none)."""
+        carry through (None: none); asked only where the piece itself does not apply."""
         env, own = self.env, self.owns[a]
-        if self.steps[self.pieces[p][0]].applicable(env, own):
-            return None
         where = self.walker.space.where
         for copy in self.copies.get(p, ()):
             if copy[0].applicable(env, own) and carries_through(own, copy, where):
@@ -213,13 +211,13 @@ class _Run:
         return None
 
     def _choose(self, a: int, p: int) -> None:
-        """Agent ``a``, about to begin piece ``p``: a copy it can begin where it stands
-        (:meth:`_copy`), else the piece itself, unless it is on its way to a copy."""
-        copy = self._copy(a, p)
-        if copy is not None:
-            self.chosen[p] = (a, copy)
-        elif self.steps[self.pieces[p][0]].applicable(self.env, self.owns[a]):
+        """Agent ``a``, about to begin piece ``p``: the piece itself where it applies, else
+        a copy it can begin where it stands (:meth:`_copy`), else the piece itself unless
+        the agent is on its way to a copy."""
+        if self.steps[self.pieces[p][0]].applicable(self.env, self.owns[a]):
             self.chosen.pop(p, None)
+        elif (copy := self._copy(a, p)) is not None:
+            self.chosen[p] = (a, copy)
         elif self.chosen.get(p, (a,))[0] != a:
             del self.chosen[p]
 
