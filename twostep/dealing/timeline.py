@@ -5,11 +5,12 @@ At each time step, in the order of their pieces' longest paths to the end (the c
 piece first), each agent takes its next action: the next action of its current piece when
 it applies and every action it needs from other pieces (the plan's order) is done, else a
 step of the shortest walk to where it applies (:class:`~twostep.dealing.walks.Walker`),
-else, when its walks touch no shared fact, a step of its shortest walk to where the
-action's own facts hold (*walking ahead*: a termes robot that carries a block for a ramp
-not yet built waits beside it, not at the depot), else it waits. An agent without a piece takes its next one in the deal; one that begins a
-piece whose first action does not apply where it stands may do a *copy* of it instead,
-the same actions by another of its own robots that stands there
+else, where no move changes a shared fact, a step of its shortest walk to where it stands
+for the action (*walking ahead*: a termes robot with a block for a ramp not yet built
+waits beside the ramp, not on the depot), else it waits. An agent without a piece takes
+its next one in the deal; one that begins a piece whose first action does not apply where
+it stands may do a *copy* of it instead, the same actions by another of its own robots
+that stands there
 (:mod:`~twostep.dealing.copies`). Actions of one time step are applicable before it and
 interfere with none another agent took in it (the scorer's rule: none deletes what another
 needs or adds, none adds what another needs false), so the time steps are a valid joint
@@ -70,8 +71,9 @@ class Timeline:
         """Per piece, the same piece done with another of the agent's movers
         (:mod:`~twostep.dealing.copies`)."""
         self.piece_of = {i: p for p in self.copies for i in pieces[p]}
-        self.walks_ahead = walks_ahead
-        """Whether agents walk ahead (module docstring)."""
+        self.walks_ahead = walks_ahead and not (walker.adds_env or walker.dels_env)
+        """Whether agents walk ahead (module docstring): asked, and no move changes a
+        shared fact (a storage hoist walking ahead would stand in another's way)."""
         self.work = 0  # what the runs so far cost, as a count (:attr:`_Run.work`)
 
     def run(
@@ -117,10 +119,7 @@ class _Run:
         self.done: dict[int, int] = {}  # acting action -> the time step it was taken in
         self._paths: dict[tuple[int, int, int, Step], list[Step] | None] = {}
         self._aheads: dict[tuple[int, int, int], list[Step]] = {}
-        # walking ahead only where walks change no shared fact (no hoist left in the way)
-        self.walks_ahead = timeline.walks_ahead and not (
-            self.walker.adds_env or self.walker.dels_env
-        )
+        self.walks_ahead = timeline.walks_ahead
         self.work = 0  # agents' turns, and pieces looked at when an idle agent looks for one
 
     def run(self) -> tuple[JointSteps, list[int]]:
