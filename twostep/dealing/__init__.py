@@ -23,7 +23,8 @@ agents take turns on the SA plan itself:
    parallel schedule. Each takes the next action of its pieces when the plan's order
    allows it and it applies, else a step of its shortest walk there
    (:mod:`~twostep.dealing.walks`: walks may change shared facts, a hoist leaving an area
-   makes it ``clear``), else waits; an idle agent may take a ready piece dealt to another
+   makes it ``clear``), else (where walks change no shared fact) a step towards where it
+   will stand for the action, else waits; an idle agent may take a ready piece dealt to another
    (``steal``), and when nobody can act a piece goes to an agent that can reach it. An
    agent that begins a piece may do it with another of its own movers, one that stands
    where the piece begins (:mod:`~twostep.dealing.copies`: each agent has its own copy of

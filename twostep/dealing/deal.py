@@ -142,7 +142,8 @@ def walks_before(walking: Sequence[bool]) -> dict[int, int]:
 class Dealer:
     """Every deal of one SA plan (module docstring); ``cleaned`` is step 0's result when
     the caller has it; ``copies``: agents may do a piece with another of their movers
-    (:mod:`~twostep.dealing.copies`)."""
+    (:mod:`~twostep.dealing.copies`); ``walks_ahead``: an agent whose next action cannot
+    apply yet walks to where it will (:mod:`~twostep.dealing.timeline`)."""
 
     def __init__(
         self,
@@ -151,9 +152,10 @@ class Dealer:
         agent_predicates: Collection[str],
         cleaned: Sequence[GroundAction] | None = None,
         copies: bool = True,
+        walks_ahead: bool = True,
     ) -> None:
         self.problem = problem
-        self.use_copies = copies
+        self.use_copies, self.walks_ahead = copies, walks_ahead
         self.agent_predicates = tuple(agent_predicates)
         self.seconds: defaultdict[str, float] = defaultdict(float)
         start = cpu_seconds()
@@ -402,7 +404,7 @@ class Dealer:
                                         self.agent_predicates, self.movers)  # fmt: skip
                 self._copies[key] = made
         return Timeline(self.walker, self.steps, pieces, piece_order.action_preds, self.goal,
-                        self.init, self._copies[key])  # fmt: skip
+                        self.init, self._copies[key], self.walks_ahead)  # fmt: skip
 
     def _deal_pieces(
         self, agents: int, order: str, cut: str, keep_walks: bool, steal: bool, timed: bool

@@ -5,9 +5,12 @@ At each time step, in the order of their pieces' longest paths to the end (the c
 piece first), each agent takes its next action: the next action of its current piece when
 it applies and every action it needs from other pieces (the plan's order) is done, else a
 step of the shortest walk to where it applies (:class:`~twostep.dealing.walks.Walker`),
-else it waits. An agent without a piece takes its next one in the deal; one that begins a
-piece whose first action does not apply where it stands may do a *copy* of it instead,
-the same actions by another of its own robots that stands there
+else, where no move changes a shared fact, a step of its shortest walk to where it stands
+for the action (*walking ahead*: a termes robot with a block for a ramp not yet built
+waits beside the ramp, not on the depot), else it waits. An agent without a piece takes
+its next one in the deal; one that begins a piece whose first action does not apply where
+it stands may do a *copy* of it instead, the same actions by another of its own robots
+that stands there
 (:mod:`~twostep.dealing.copies`). Actions of one time step are applicable before it and
 interfere with none another agent took in it (the scorer's rule: none deletes what another
 needs or adds, none adds what another needs false), so the time steps are a valid joint
@@ -42,6 +45,7 @@ class _Agent:
     piece: int | None = None
     position: int = 0  # index of the next action in the current piece
     path: list[Step] = field(default_factory=list)  # the walk it is on
+    ahead: bool = False  # the walk goes where the action's own facts hold, not where it applies
     busy: int = 0  # actions taken so far
 
 
@@ -57,6 +61,7 @@ class Timeline:
         goal: GoalBits,
         start: tuple[int, int],
         copies: dict[int, list[list[Step]]] | None = None,
+        walks_ahead: bool = True,
     ) -> None:
         self.walker, self.steps, self.pieces = walker, steps, pieces
         self.action_preds = action_preds
@@ -66,6 +71,9 @@ class Timeline:
         """Per piece, the same piece done with another of the agent's movers
         (:mod:`~twostep.dealing.copies`)."""
         self.piece_of = {i: p for p in self.copies for i in pieces[p]}
+        self.walks_ahead = walks_ahead and not (walker.adds_env or walker.dels_env)
+        """Whether agents walk ahead (module docstring): asked, and no move changes a
+        shared fact (a storage hoist walking ahead would stand in another's way)."""
         self.work = 0  # what the runs so far cost, as a count (:attr:`_Run.work`)
 
     def run(
@@ -110,6 +118,8 @@ class _Run:
         self.owns = [own] * agents
         self.done: dict[int, int] = {}  # acting action -> the time step it was taken in
         self._paths: dict[tuple[int, int, int, Step], list[Step] | None] = {}
+        self._aheads: dict[tuple[int, int, int], list[Step]] = {}
+        self.walks_ahead = timeline.walks_ahead
         self.work = 0  # agents' turns, and pieces looked at when an idle agent looks for one
 
     def run(self) -> tuple[JointSteps, list[int]]:
@@ -157,6 +167,7 @@ class _Run:
         agent.busy += 1
         if agent.path and agent.path[0] is step:
             agent.path.pop(0)
+            agent.ahead = agent.ahead and bool(agent.path)
             return 0
         assert agent.piece is not None
         self.done[self.pieces[agent.piece][agent.position]] = now
@@ -188,9 +199,27 @@ class _Run:
         if step.applicable(env, own):
             agent.path = []
             return step if self._ready(i) else None
-        if not (agent.path and agent.path[0].applicable(env, own)):
-            agent.path = list(self._path(own, i, step) or ())
+        if agent.ahead or not (agent.path and agent.path[0].applicable(env, own)):
+            agent.path, agent.ahead = list(self._path(own, i, step) or ()), False
+            if not agent.path and self.walks_ahead:
+                agent.path, agent.ahead = self._ahead(own, step), True
         return agent.path[0] if agent.path else None
+
+    def _ahead(self, own: int, step: Step) -> list[Step]:
+        """The shortest walk from ``own`` to where the agent stands as ``step`` needs
+        (empty: it stands there, or no walk goes there now); remembered like :meth:`_path`."""
+        want = step.pre_own & self.walker.space.where
+        if not step.exact or own & want == want:
+            return []
+        key = (self.env, own, want)
+        if key not in self._aheads:
+            try:
+                self._aheads[key] = self.walker.walk_until(
+                    self.env, own, lambda _, own: own & want == want
+                )
+            except DealError:
+                self._aheads[key] = []
+        return list(self._aheads[key])
 
     def _step(self, a: int, p: int, position: int) -> Step:
         """The action at ``position`` of piece ``p`` as agent ``a`` does it: of the copy
