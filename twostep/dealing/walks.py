@@ -160,7 +160,14 @@ class Walker:
         self._successors: dict[tuple[int, int], list[Step]] = {}
         self._moved: dict[Step, frozenset[Fact]] = {}  # per move: the slots it changes
         self._walks: dict[tuple[int, int, Step], list[Step] | None] = {}
-        self._moves = steps
+        # per move, what the relaxed check reads: the positive preconditions it needs (none
+        # for a move not exact as bits: as if it always applied) and what it adds
+        self._relaxed_moves = [
+            (s.pre_env, s.pre_own, s.add_env, s.add_own)
+            if s.exact
+            else (0, 0, s.add_env, s.add_own)
+            for s in steps
+        ]
         self._relaxed: dict[tuple[int, int], tuple[int, int]] = {}
         self.search_s = 0.0
         """Seconds spent in :meth:`walk_to` so far."""
@@ -226,20 +233,22 @@ class Walker:
     def _relax(self, env: int, own: int, pos_env: int, pos_own: int) -> tuple[int, int]:
         """The facts of :meth:`relaxed`, or (when ``pos_env`` and ``pos_own`` are reached
         before the end) the ones reached by then."""
-        reached, pending = (env, own), list(self._moves)
-        while pos_env & ~reached[0] or pos_own & ~reached[1]:
+        reached_env, reached_own, pending = env, own, self._relaxed_moves
+        while pos_env & ~reached_env or pos_own & ~reached_own:
             waiting = []
             self.work += len(pending)
-            for step in pending:
-                if step.exact and (step.pre_env & ~reached[0] or step.pre_own & ~reached[1]):
-                    waiting.append(step)
+            for move in pending:  # the hot loop of the check: bits only
+                needs_env, needs_own, adds_env, adds_own = move
+                if needs_env & ~reached_env or needs_own & ~reached_own:
+                    waiting.append(move)
                 else:
-                    reached = (reached[0] | step.add_env, reached[1] | step.add_own)
+                    reached_env |= adds_env
+                    reached_own |= adds_own
             if len(waiting) == len(pending):
-                self._relaxed[(env, own)] = reached
+                self._relaxed[(env, own)] = (reached_env, reached_own)
                 break
             pending = waiting
-        return reached
+        return reached_env, reached_own
 
     def out_of_reach(self, env: int, own: int, pos: tuple[int, int], neg: tuple[int, int]) -> bool:
         """Whether no walk from ``env`` and ``own`` can make the facts ``pos`` (environment
