@@ -62,6 +62,67 @@ def test_a_single_cup_or_a_plan_without_rounds_is_not_rebound(tmp_path: Path) ->
     assert rebind(one.problem, ("(take c1)", "(fill c1)", "(serve c1 g1)"), CUPS) is None
 
 
+def _dirty_cups(tmp_path: Path) -> BenchmarkTask:
+    task = _cups(tmp_path)
+    text = task.problem_path.read_text().replace("(clean c2) (clean c3)", "(used c2) (used c3)")
+    task.problem_path.write_text(text)
+    return load_task("cups", 1, tmp_path)
+
+
+def test_with_resets_a_round_goes_to_a_used_cup_washed_first(tmp_path: Path) -> None:
+    # c2 and c3 start used, so no cup is in c1's state (clean) when its rounds begin.
+    # With resets a round may go to a cup in another state, washed first: take, wash, put
+    # (wash changes only the cup's own facts; the hand is free again after it). Round 1
+    # (fill, serve g1, wash c1): c2 and c3 were never mentioned, c2 first by name; it has
+    # no action before the round, so its reset goes first in the plan, then take c1 (the
+    # plan's own), and the round renamed with put c1, take c2 before it and put c2, take c1
+    # after it. Round 2 of c1: c2 (clean now, last mentioned by its put) and c3 (never
+    # mentioned); with resets the one mentioned longest ago goes first: c3, whose reset
+    # goes first of all. Its last cup, c1, serves g3.
+    dirty = _dirty_cups(tmp_path)
+    expected = [
+        "(take c3)", "(wash c3)", "(put c3)",
+        "(take c2)", "(wash c2)", "(put c2)",
+        "(take c1)", "(put c1)",
+        "(take c2)", "(fill c2)", "(serve c2 g1)", "(wash c2)", "(put c2)",
+        "(take c1)", "(put c1)",
+        "(take c3)", "(fill c3)", "(serve c3 g2)", "(wash c3)", "(put c3)",
+        "(take c1)", "(fill c1)", "(serve c1 g3)",
+    ]  # fmt: skip
+    assert rebind(dirty.problem, CUPS_SA_PLAN, CUPS, resets=True) == expected
+    assert rebind(dirty.problem, CUPS_SA_PLAN, CUPS, tails=True, resets=True) == expected
+
+
+@pytest.mark.parametrize(("agents", "length"), [(2, 8), (3, 4), (4, 4)])
+def test_plan_deal_deals_the_plan_with_resets(tmp_path: Path, agents: int, length: int) -> None:
+    # The plan above, cleaned (the last washes, and c1's take-put pairs, serve nothing):
+    # take, wash, fill, serve for c3 and for c2, take, fill, serve for c1: pieces of 4, 4
+    # and 3 actions. Three agents take a cup each: 4 steps, a fourth has nothing to do;
+    # two: one of them does two cups, putting the first down to take the second (one
+    # hand): 4 + 1 + 3 = 8. The rounds and tails plans are none (no cup is ready), so
+    # without resets every deal is the SA plan's one chain: 9 steps.
+    dirty = _dirty_cups(tmp_path)
+    request = MethodRequest(dirty, agents, FAST, CUPS, sa_plan=sa_result(CUPS_SA_PLAN))
+    run = run_plan_deal(request)
+    assert run.exec_length == length and run.fallback is None
+    (chosen,) = [row for row in run.extra["deal"] if row.get("chosen")]
+    assert chosen["rebound"] == "resets" and chosen["agents_used"] == min(agents, 3)
+    _valid(dirty, run, CUPS)
+    assert run_plan_deal(request, rebind=False).exec_length == 9
+    _owner_searches_until_one_moves(run.extra["deal"], agents)
+
+
+def _owner_searches_until_one_moves(rows: list[dict], agents: int) -> None:
+    """The owner search starts from one plan's shortest deal after another (never the same
+    plan twice) and stops after the first that moves a piece."""
+    for n in range(2, agents + 1):
+        searched = [row for row in rows if row.get("improved") and row["agents"] == n]
+        assert searched, n
+        kinds = [row.get("rebound") for row in searched]
+        assert len(set(kinds)) == len(kinds)
+        assert all(row.get("moves", 0) == 0 for row in searched[:-1])
+
+
 def _one_guest(tmp_path: Path) -> BenchmarkTask:
     text = CUPS_TASK.replace(
         "(:goal (and (served g1) (served g2) (served g3)))", "(:goal (served g1))"
@@ -108,6 +169,7 @@ def test_barman_glass_rounds_deal_shorter_and_stay_monotone(data_root: Path) -> 
         if agents > 2:
             assert run.exec_length < plain.exec_length
         _valid(task, run, preds)
+        _owner_searches_until_one_moves(run.extra["deal"], agents)
         lengths[agents] = run.exec_length
     assert lengths[2] >= lengths[3] >= lengths[4]
 

@@ -29,12 +29,23 @@ on (it is cleaned where it stands), and the other object does the whole tail; an
 that no longer applies there gives way to one on the same arguments that applies and adds
 all it adds (a glass filled afresh where the plan refilled it).
 
+With ``resets``, a round may also go to an object in another state, brought back first
+(barman's SA plan makes every cocktail after the first few in one shaker: the other
+shakers stand used, their last cocktail poured out). The reset is the shortest sequence
+of the task's actions (at most :data:`RESET_DEPTH`) that changes only that object's facts
+and the agent facts, and leaves its own facts as the round's object's were and every
+other fact, the hands' too, as it found them (take the shaker, empty it, wash it, put it
+down). It goes right after the object's last action before the round (else right before
+the round), so the deal can give it to an idle agent long before the round needs the
+object. Movers are not reset. A round then goes to the object mentioned longest ago
+whose rename, repaired, works (reset or not): that spreads the rounds widest.
+
 The rounds are taken in plan order. Each may go to an interchangeable object mentioned
 longer ago than the round's own object; a rename counts only when the whole plan,
 repaired, still applies and reaches the goal, and of those the one that adds the fewest
 actions is kept (ties: the object mentioned longest ago). The searches are bounded by
-counts (:data:`TRIALS`, :data:`REPAIR_DEPTH`, :data:`REPAIR_STATES`, :data:`MATCHED`),
-never by time, so the result is the same on every machine.
+counts (:data:`TRIALS`, :data:`REPAIR_DEPTH`, :data:`REPAIR_STATES`, :data:`MATCHED`,
+:data:`RESET_DEPTH`), never by time, so the result is the same on every machine.
 """
 
 from __future__ import annotations
@@ -54,6 +65,8 @@ REPAIR_DEPTH = 4
 """Handling actions inserted before one action, at most."""
 REPAIR_STATES = 2_000
 """States one repair search may visit."""
+RESET_DEPTH = 6
+"""Actions a reset may take, at most (handling included)."""
 MATCHED = 4
 """A mover's further objects matched to another mover's, at most (a robot's grippers)."""
 
@@ -138,10 +151,13 @@ class Rebinder:
             found[action.args].append(action)
         return found
 
-    def rebind(self, plan: Sequence[str], tails: bool = False) -> list[str] | None:
+    def rebind(
+        self, plan: Sequence[str], tails: bool = False, resets: bool = False
+    ) -> list[str] | None:
         """The plan with rounds (and with ``tails`` their tails) rebound and handling
-        repaired; None when no round could be (the plan must apply from the initial state
-        and reach the goal)."""
+        repaired, with ``resets`` to an object brought back to the round's state first
+        where none is in it (module docstring); None when no round could be (the plan must
+        apply from the initial state and reach the goal)."""
         current = list(plan)
         changed, start, trials = False, 0, 0
         while trials < TRIALS:
@@ -152,32 +168,122 @@ class Rebinder:
                     continue
                 start = first + 1
                 best: tuple[int, int, list[str], int] | None = None
-                for rank, names in enumerate(
-                    self._candidates(current, states, first, last, obj, facts)
+                for rank, (names, reset) in enumerate(
+                    self._candidates(current, states, first, last, obj, facts, resets)
                 ):
                     if trials >= TRIALS:
                         break
                     trials += 1
+                    before: list[str] = []
+                    at, state = first, states[first]
+                    if reset:
+                        found = self._reset(current, states, first, obj, names[obj], facts)
+                        if found is None:
+                            continue
+                        at, before, state = found
                     renamed = [*closing] + [
                         rename_action(a, names) if names.keys() & set(_args(a)) else a
                         for a in current[first : last + 1]
                     ]
-                    repaired = self._repair(
-                        states[first], renamed, current[last + 1 :], len(closing)
-                    )
-                    if repaired is not None:  # the fewest actions added, then the earliest
+                    repaired = self._repair(state, renamed, current[last + 1 :], len(closing))
+                    if repaired is not None:  # the fewest actions added (with resets: any),
+                        # then the object mentioned longest ago
                         tail, begin = repaired
-                        if best is None or (len(tail), rank) < best[:2]:
-                            best = (len(tail), rank, tail, begin)
+                        added = 0 if resets else len(tail) + len(before) - (first - at)
+                        if best is None or (added, rank) < best[:2]:
+                            best = (added, rank, [*current[:at], *before, *tail],
+                                    at + len(before) + begin)  # fmt: skip
                 if best is None:
                     continue
-                *_, tail, begin = best
-                current, changed = current[:first] + tail, True
-                start = first + begin + 1  # on after the round's first action
+                *_, current, begin = best
+                changed = True
+                start = begin + 1  # on after the round's first action
                 break  # a round was rebound (or the trials ran out): the plan again
             else:
                 break  # every round was tried
         return current if changed else None
+
+    @functools.cached_property
+    def _touching(self) -> dict[str, list[GroundAction]]:
+        """Per object, the task's actions that name it (made when a reset first needs
+        them)."""
+        found: defaultdict[str, list[GroundAction]] = defaultdict(list)
+        for action in sorted(self.problem.grounded.actions.values(), key=str):
+            for obj in set(action.args):
+                found[obj].append(action)
+        return found
+
+    def _reset(
+        self,
+        plan: Sequence[str],
+        states: Sequence[frozenset[Fact]],
+        first: int,
+        obj: str,
+        other: str,
+        facts: frozenset[Fact],
+    ) -> tuple[int, list[str], frozenset[Fact]] | None:
+        """The shortest sequence of actions that changes only ``other``'s facts and the
+        agent facts, after which ``other``'s own facts are ``obj``'s ``facts`` renamed and
+        every other fact is as before (a used shaker emptied and cleaned, the hands as
+        they were), placed right after ``other``'s last action before ``first`` or else
+        right before ``first``: (where it goes, it and the plan's actions from there to
+        ``first``, the state it leaves at ``first``); None when there is none within
+        :data:`RESET_DEPTH` actions."""
+        target = frozenset((f[0], *(other if x == obj else x for x in f[1:])) for f in facts)
+        moves = [
+            a
+            for a in self._touching.get(other, ())
+            if all(other in f[1:] or f[0] in self.agent for f in a.possible_add | a.possible_delete)
+        ]
+        last = max((t for t in range(first) if other in _args(plan[t])), default=-1)
+        for at in dict.fromkeys((last + 1, first)):
+            state = states[at]
+            held = {o for f in state if f[0] in self.agent for o in f[1:]} | {other}
+            handling = [  # what the hands hold, put down and picked up again
+                a
+                for r, a in enumerate(self.handling)
+                if r not in self._walking and set(a.args) <= held and a not in moves
+            ]
+            goal = target | {f for f in state if other not in f[1:] or not self._counts(f, other)}
+            path = self._search(state, frozenset(goal), [*moves, *handling])
+            if path is None:
+                continue
+            before = [str(move) for move in path]
+            for move in path:
+                state = move.apply(state)
+            for text in plan[at:first]:  # the plan's own actions up to the round
+                action = self.grounder.ground(text)
+                if not action.applicable(state):
+                    break
+                state = action.apply(state)
+                before.append(text)
+            else:
+                return at, before, state
+        return None
+
+    @staticmethod
+    def _search(
+        state: frozenset[Fact], goal: frozenset[Fact], moves: Sequence[GroundAction]
+    ) -> list[GroundAction] | None:
+        """The shortest sequence of ``moves`` from ``state`` to ``goal`` (breadth-first, at
+        most :data:`RESET_DEPTH` of them and :data:`REPAIR_STATES` states)."""
+        queue: deque[tuple[frozenset[Fact], list[GroundAction]]] = deque([(state, [])])
+        seen = {state}
+        while queue:
+            here, path = queue.popleft()
+            if here == goal:
+                return path
+            if len(path) >= RESET_DEPTH:
+                continue
+            for move in moves:
+                if move.applicable(here):
+                    there = move.apply(here)
+                    if there not in seen:
+                        if len(seen) >= REPAIR_STATES:
+                            return None
+                        seen.add(there)
+                        queue.append((there, [*path, move]))
+        return None
 
     def _states(self, plan: Sequence[GroundAction]) -> list[frozenset[Fact]]:
         state = self.problem.init
@@ -260,18 +366,21 @@ class Rebinder:
         last: int,
         obj: str,
         facts: frozenset[Fact],
-    ) -> list[dict[str, str]]:
+        resets: bool = False,
+    ) -> list[tuple[dict[str, str], bool]]:
         """Objects that can do the round ``first``..``last`` of ``obj``, the one mentioned
         longest ago first; only those mentioned before ``obj`` last was. Each as the
         renaming of the round's actions: ``obj`` to the other, and for a mover the objects
-        its own facts name (a robot's grippers) to the other's."""
+        its own facts name (a robot's grippers) to the other's; and whether it must be
+        reset first. With ``resets``, objects in another state (not movers) are
+        candidates too, to be reset."""
         busy = {o for a in plan[first : last + 1] for o in _args(a)}
         seen: dict[str, int] = {}
         for t, action in enumerate(plan[:first]):
             for o in _args(action):
                 seen[o] = t
         own = seen.get(obj, -1)
-        found = []
+        found, loose = [], []
         for other, kind in self.types.items():
             if other == obj or other in busy or kind != self.types[obj]:
                 continue
@@ -281,7 +390,15 @@ class Rebinder:
             names = matching(facts, others, obj, other, busy, self.types, obj in self.movers)
             if names is not None:
                 found.append((seen.get(other, -1), other, names))
-        return [names for *_, names in sorted(found, key=lambda entry: entry[:2])]
+            elif (  # with resets, one in another state, to be reset
+                resets
+                and obj not in self.movers
+                and not any(obj in f[1:] for f in others)
+                and not any(other in f[1:] for f in facts)
+            ):
+                loose.append((seen.get(other, -1), other, {obj: other}))
+        both = [(*entry, False) for entry in found] + [(*entry, True) for entry in loose]
+        return [(names, reset) for *_, names, reset in sorted(both, key=lambda e: e[:2])]
 
     def _repair(
         self, state: frozenset[Fact], renamed: Sequence[str], rest: Sequence[str], at: int
@@ -388,8 +505,12 @@ def matching(
 
 
 def rebind(
-    problem: Problem, plan: Sequence[str], agent_predicates: Collection[str], tails: bool = False
+    problem: Problem,
+    plan: Sequence[str],
+    agent_predicates: Collection[str],
+    tails: bool = False,
+    resets: bool = False,
 ) -> list[str] | None:
     """``plan`` with its objects' rounds (and with ``tails`` their tails) spread over
     interchangeable objects (module docstring), or None when nothing changes."""
-    return Rebinder(problem, agent_predicates).rebind(plan, tails)
+    return Rebinder(problem, agent_predicates).rebind(plan, tails, resets)

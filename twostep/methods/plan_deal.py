@@ -49,6 +49,10 @@ SCORED_UP_TO = 40
 proves their shortest schedule in milliseconds; longer ones keep their own schedule (the
 scorer's search grows fast with agents and length: seconds for 4 agents and 200 actions)."""
 
+REBOUND = (("rounds", False, False), ("tails", True, False), ("resets", True, True))
+"""The rebound plans dealt beside the cleaned SA plan: (their rows' ``rebound``, with
+tails, with resets; :meth:`~twostep.dealing.rebind.Rebinder.rebind`)."""
+
 BEST = "best"
 """The default cut: every cut of :data:`twostep.dealing.CUTS`, the shorter schedule kept."""
 
@@ -142,11 +146,13 @@ def try_deals(
 ) -> None:
     """The cleaned SA plan (one agent), then every way for 2..N agents: of the cleaned SA
     plan and, with ``rebinding``, of each different plan rebinding makes of it
-    (:mod:`~twostep.dealing.rebind`: its rounds, and its rounds and tails); with
-    ``owner_search``, the owner search (:mod:`~twostep.dealing.improve`) from the shortest
-    deal to each number of agents. The shortest schedule is kept, ties to fewer agents,
-    then to the earlier deal (its row is marked ``chosen``; a rebound plan's rows say
-    ``rebound``: ``rounds`` or ``tails``, the owner search's ``improved``)."""
+    (:mod:`~twostep.dealing.rebind`: its rounds; its rounds and tails; and those with
+    objects reset for rounds no object is ready for); with ``owner_search``, the owner
+    search (:mod:`~twostep.dealing.improve`) from the shortest deal to each number of
+    agents, and where it moves no piece, from the shortest deal of the next plan (shortest
+    first) until one does. The shortest schedule is kept, ties to fewer agents, then to the
+    earlier deal (its row is marked ``chosen``; a rebound plan's rows say ``rebound``:
+    ``rounds``, ``tails`` or ``resets``, the owner search's ``improved``)."""
     problem = request.problem
     try:
         dealer = Dealer(problem, sa_steps, request.agent_predicates, copies=copies)
@@ -163,10 +169,10 @@ def try_deals(
     rebound: dict[str, list[str]] = {}
     if rebinding:
         rebinder = Rebinder(problem, request.agent_predicates)
-        for tails in (False, True):
-            plan = rebinder.rebind(cleaned, tails)
+        for name, tails, resets in REBOUND:
+            plan = rebinder.rebind(cleaned, tails, resets)
             if plan is not None and plan not in rebound.values():
-                rebound["tails" if tails else "rounds"] = plan
+                rebound[name] = plan
     spent = cpu_seconds() - start
     dealers: list[tuple[str | None, Dealer]] = [(None, dealer)]
     dealers += [(kind, Dealer(problem, plan, request.agent_predicates, copies=copies))
@@ -186,16 +192,21 @@ def try_deals(
                     continue
                 candidates.append(candidate(row, dealt))
                 made.append((len(dealt.schedule), len(made), kind, one, way))
-        if owner_search and made:  # the owner search, from this number's shortest deal
-            *_, kind, one, way = min(made, key=lambda entry: entry[:2])
+        searched: set[str | None] = set()
+        for *_, kind, one, way in sorted(made, key=lambda entry: entry[:2]) if owner_search else ():
+            if kind in searched:  # each plan's shortest deal, until a search moves a piece
+                continue
+            searched.add(kind)
             row = {**deal_row(agents, way, kind), "improved": True}
             trials.rows.append(row)
             try:
-                candidates.append(
-                    candidate(row, one.improve(agents, way.cut, way.order, way.steal))
-                )
+                improved = one.improve(agents, way.cut, way.order, way.steal)
             except DealError as error:
                 row["error"] = str(error)
+                continue
+            candidates.append(candidate(row, improved))
+            if improved.moves:
+                break
     for _, one in dealers:  # the dealers' phases, and rebinding and scoring beside them
         for phase, seconds in one.seconds.items():
             trials.seconds[phase] = trials.seconds.get(phase, 0.0) + seconds
