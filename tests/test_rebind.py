@@ -77,8 +77,9 @@ def test_with_resets_a_round_goes_to_a_used_cup_washed_first(tmp_path: Path) -> 
     # no action before the round, so its reset goes first in the plan, then take c1 (the
     # plan's own), and the round renamed with put c1, take c2 before it and put c2, take c1
     # after it. Round 2 of c1: c2 (clean now, last mentioned by its put) and c3 (never
-    # mentioned); with resets the one mentioned longest ago goes first: c3, whose reset
-    # goes first of all. Its last cup, c1, serves g3.
+    # mentioned) both need put c1, take c2 / c3 before it and put, take c1 after it (a
+    # reset's own actions do not count), so the one mentioned longest ago wins: c3, whose
+    # reset goes first of all. Its last cup, c1, serves g3.
     dirty = _dirty_cups(tmp_path)
     expected = [
         "(take c3)", "(wash c3)", "(put c3)",
@@ -99,14 +100,15 @@ def test_plan_deal_deals_the_plan_with_resets(tmp_path: Path, agents: int, lengt
     # take, wash, fill, serve for c3 and for c2, take, fill, serve for c1: pieces of 4, 4
     # and 3 actions. Three agents take a cup each: 4 steps, a fourth has nothing to do;
     # two: one of them does two cups, putting the first down to take the second (one
-    # hand): 4 + 1 + 3 = 8. The rounds and tails plans are none (no cup is ready), so
-    # without resets every deal is the SA plan's one chain: 9 steps.
+    # hand): 4 + 1 + 3 = 8. The rounds plan is none (no cup is ready); the tails plan is
+    # the plan above (it resets). Without rebinding every deal is the SA plan's one
+    # chain: 9 steps.
     dirty = _dirty_cups(tmp_path)
     request = MethodRequest(dirty, agents, FAST, CUPS, sa_plan=sa_result(CUPS_SA_PLAN))
     run = run_plan_deal(request)
     assert run.exec_length == length and run.fallback is None
     (chosen,) = [row for row in run.extra["deal"] if row.get("chosen")]
-    assert chosen["rebound"] == "resets" and chosen["agents_used"] == min(agents, 3)
+    assert chosen["rebound"] == "tails" and chosen["agents_used"] == min(agents, 3)
     _valid(dirty, run, CUPS)
     assert run_plan_deal(request, rebind=False).exec_length == 9
     _owner_searches_until_one_moves(run.extra["deal"], agents)

@@ -37,8 +37,8 @@ and the agent facts, and leaves its own facts as the round's object's were and e
 other fact, the hands' too, as it found them (take the shaker, empty it, wash it, put it
 down). It goes right after the object's last action before the round (else right before
 the round), so the deal can give it to an idle agent long before the round needs the
-object. Movers are not reset. A round then goes to the object mentioned longest ago
-whose rename, repaired, works (reset or not): that spreads the rounds widest.
+object. Movers are not reset, and a reset's own actions do not count among those a
+rename adds (below): an idle agent does them, and the rounds spread widest.
 
 The rounds are taken in plan order. Each may go to an interchangeable object mentioned
 longer ago than the round's own object; a rename counts only when the whole plan,
@@ -186,12 +186,11 @@ class Rebinder:
                         for a in current[first : last + 1]
                     ]
                     repaired = self._repair(state, renamed, current[last + 1 :], len(closing))
-                    if repaired is not None:  # the fewest actions added (with resets: any),
-                        # then the object mentioned longest ago
+                    if repaired is not None:  # the fewest actions added (a reset's not
+                        # counted), then the object mentioned longest ago
                         tail, begin = repaired
-                        added = 0 if resets else len(tail) + len(before) - (first - at)
-                        if best is None or (added, rank) < best[:2]:
-                            best = (added, rank, [*current[:at], *before, *tail],
+                        if best is None or (len(tail), rank) < best[:2]:
+                            best = (len(tail), rank, [*current[:at], *before, *tail],
                                     at + len(before) + begin)  # fmt: skip
                 if best is None:
                     continue
@@ -230,22 +229,18 @@ class Rebinder:
         ``first``, the state it leaves at ``first``); None when there is none within
         :data:`RESET_DEPTH` actions."""
         target = frozenset((f[0], *(other if x == obj else x for x in f[1:])) for f in facts)
-        moves = [
-            a
-            for a in self._touching.get(other, ())
-            if all(other in f[1:] or f[0] in self.agent for f in a.possible_add | a.possible_delete)
-        ]
+        if any(  # a goal fact of the object's own that the reset would undo
+            other in f[1:] and f not in target and f in states[first] and self._counts(f, other)
+            for f in self.problem.goal.positive
+        ):
+            return None
+        moves = self._resetting(other)
         last = max((t for t in range(first) if other in _args(plan[t])), default=-1)
         for at in dict.fromkeys((last + 1, first)):
             state = states[at]
-            held = {o for f in state if f[0] in self.agent for o in f[1:]} | {other}
-            handling = [  # what the hands hold, put down and picked up again
-                a
-                for r, a in enumerate(self.handling)
-                if r not in self._walking and set(a.args) <= held and a not in moves
-            ]
+            held = frozenset(o for f in state if f[0] in self.agent for o in f[1:]) | {other}
             goal = target | {f for f in state if other not in f[1:] or not self._counts(f, other)}
-            path = self._search(state, frozenset(goal), [*moves, *handling])
+            path = self._search(state, frozenset(goal), [*moves, *self._held(held, other)])
             if path is None:
                 continue
             before = [str(move) for move in path]
@@ -260,6 +255,30 @@ class Rebinder:
             else:
                 return at, before, state
         return None
+
+    @functools.cache  # noqa: B019 (one Rebinder per task)
+    def _resetting(self, other: str) -> list[GroundAction]:
+        """The task's actions that name ``other`` and change only facts that mention it
+        and agent facts (take the shaker, empty it, wash it)."""
+        return [
+            a
+            for a in self._touching.get(other, ())
+            if all(other in f[1:] or f[0] in self.agent for f in a.possible_add | a.possible_delete)
+        ]
+
+    @functools.cache  # noqa: B019 (one Rebinder per task)
+    def _held(self, held: frozenset[str], other: str) -> list[GroundAction]:
+        """The handling actions on the objects the hands hold (put down and taken up
+        again while ``other`` is reset), beside :meth:`_resetting`'s."""
+        ranks = {r for obj in (*held, "") for r in self._handling_of.get(obj, ())}
+        moves = set(self._resetting(other))
+        return [
+            self.handling[r]
+            for r in sorted(ranks)
+            if r not in self._walking
+            and set(self.handling[r].args) <= held
+            and self.handling[r] not in moves
+        ]
 
     @staticmethod
     def _search(

@@ -49,9 +49,11 @@ SCORED_UP_TO = 40
 proves their shortest schedule in milliseconds; longer ones keep their own schedule (the
 scorer's search grows fast with agents and length: seconds for 4 agents and 200 actions)."""
 
-REBOUND = (("rounds", False, False), ("tails", True, False), ("resets", True, True))
+REBOUND = (("rounds", False, False), ("tails", True, True))
 """The rebound plans dealt beside the cleaned SA plan: (their rows' ``rebound``, with
-tails, with resets; :meth:`~twostep.dealing.rebind.Rebinder.rebind`)."""
+tails, with resets; :meth:`~twostep.dealing.rebind.Rebinder.rebind`). The second resets
+objects too: where no object is ready for a round, it is the plan the deal can spread
+over the objects that are left used (barman's shakers)."""
 
 BEST = "best"
 """The default cut: every cut of :data:`twostep.dealing.CUTS`, the shorter schedule kept."""
@@ -146,13 +148,13 @@ def try_deals(
 ) -> None:
     """The cleaned SA plan (one agent), then every way for 2..N agents: of the cleaned SA
     plan and, with ``rebinding``, of each different plan rebinding makes of it
-    (:mod:`~twostep.dealing.rebind`: its rounds; its rounds and tails; and those with
-    objects reset for rounds no object is ready for); with ``owner_search``, the owner
+    (:mod:`~twostep.dealing.rebind`: its rounds; and its rounds and tails, objects reset
+    where none is ready for a round: :data:`REBOUND`); with ``owner_search``, the owner
     search (:mod:`~twostep.dealing.improve`) from the shortest deal to each number of
     agents, and where it moves no piece, from the shortest deal of the next plan (shortest
     first) until one does. The shortest schedule is kept, ties to fewer agents, then to the
     earlier deal (its row is marked ``chosen``; a rebound plan's rows say ``rebound``:
-    ``rounds``, ``tails`` or ``resets``, the owner search's ``improved``)."""
+    ``rounds`` or ``tails``, the owner search's ``improved``)."""
     problem = request.problem
     try:
         dealer = Dealer(problem, sa_steps, request.agent_predicates, copies=copies)
