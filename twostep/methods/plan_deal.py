@@ -151,10 +151,9 @@ def try_deals(
     (:mod:`~twostep.dealing.rebind`: its rounds; and its rounds and tails, objects reset
     where none is ready for a round: :data:`REBOUND`); with ``owner_search``, the owner
     search (:mod:`~twostep.dealing.improve`) from the shortest deal to each number of
-    agents, and where it moves no piece, from the shortest deal of the next plan (shortest
-    first) until one does. The shortest schedule is kept, ties to fewer agents, then to the
-    earlier deal (its row is marked ``chosen``; a rebound plan's rows say ``rebound``:
-    ``rounds`` or ``tails``, the owner search's ``improved``)."""
+    agents. The shortest schedule is kept, ties to fewer agents, then to the earlier deal
+    (its row is marked ``chosen``; a rebound plan's rows say ``rebound``: ``rounds`` or
+    ``tails``, the owner search's ``improved``)."""
     problem = request.problem
     try:
         dealer = Dealer(problem, sa_steps, request.agent_predicates, copies=copies)
@@ -194,21 +193,16 @@ def try_deals(
                     continue
                 candidates.append(candidate(row, dealt))
                 made.append((len(dealt.schedule), len(made), kind, one, way))
-        searched: set[str | None] = set()
-        for *_, kind, one, way in sorted(made, key=lambda entry: entry[:2]) if owner_search else ():
-            if kind in searched:  # each plan's shortest deal, until a search moves a piece
-                continue
-            searched.add(kind)
+        if owner_search and made:  # the owner search, from this number's shortest deal
+            *_, kind, one, way = min(made, key=lambda entry: entry[:2])
             row = {**deal_row(agents, way, kind), "improved": True}
             trials.rows.append(row)
             try:
-                improved = one.improve(agents, way.cut, way.order, way.steal)
+                candidates.append(
+                    candidate(row, one.improve(agents, way.cut, way.order, way.steal))
+                )
             except DealError as error:
                 row["error"] = str(error)
-                continue
-            candidates.append(candidate(row, improved))
-            if improved.moves:
-                break
     for _, one in dealers:  # the dealers' phases, and rebinding and scoring beside them
         for phase, seconds in one.seconds.items():
             trials.seconds[phase] = trials.seconds.get(phase, 0.0) + seconds
