@@ -41,13 +41,16 @@ def test_one_cups_rounds_go_to_the_idle_cups(tmp_path: Path) -> None:
     # was (its take again); c3 longest ago, so it goes to c3.
     task = _cups(tmp_path)
     assert handling_predicates(task.problem, CUPS) == {"shelf"}
-    assert rebind(task.problem, CUPS_SA_PLAN, CUPS) == [
-        "(take c1)", "(put c1)",
-        "(take c2)", "(fill c2)", "(serve c2 g1)", "(wash c2)", "(put c2)",
-        "(take c1)", "(put c1)",
-        "(take c3)", "(fill c3)", "(serve c3 g2)", "(wash c3)", "(put c3)",
-        "(take c1)", "(fill c1)", "(serve c1 g3)",
-    ]  # fmt: skip
+    assert rebind(task.problem, CUPS_SA_PLAN, CUPS) == CUPS_REBOUND
+
+
+CUPS_REBOUND = [
+    "(take c1)", "(put c1)",
+    "(take c2)", "(fill c2)", "(serve c2 g1)", "(wash c2)", "(put c2)",
+    "(take c1)", "(put c1)",
+    "(take c3)", "(fill c3)", "(serve c3 g2)", "(wash c3)", "(put c3)",
+    "(take c1)", "(fill c1)", "(serve c1 g3)",
+]  # fmt: skip
 
 
 def test_a_single_cup_or_a_plan_without_rounds_is_not_rebound(tmp_path: Path) -> None:
@@ -79,17 +82,11 @@ def test_with_resets_a_round_goes_to_a_used_cup_washed_first(tmp_path: Path) -> 
     # after it. Round 2 of c1: c2 (clean now, last mentioned by its put) and c3 (never
     # mentioned) both need put c1, take c2 / c3 before it and put, take c1 after it (a
     # reset's own actions do not count), so the one mentioned longest ago wins: c3, whose
-    # reset goes first of all. Its last cup, c1, serves g3.
+    # reset goes first of all. Its last cup, c1, serves g3. After the two resets, it is the
+    # plan that rebinding makes when the cups start clean.
     dirty = _dirty_cups(tmp_path)
-    expected = [
-        "(take c3)", "(wash c3)", "(put c3)",
-        "(take c2)", "(wash c2)", "(put c2)",
-        "(take c1)", "(put c1)",
-        "(take c2)", "(fill c2)", "(serve c2 g1)", "(wash c2)", "(put c2)",
-        "(take c1)", "(put c1)",
-        "(take c3)", "(fill c3)", "(serve c3 g2)", "(wash c3)", "(put c3)",
-        "(take c1)", "(fill c1)", "(serve c1 g3)",
-    ]  # fmt: skip
+    expected = ["(take c3)", "(wash c3)", "(put c3)", "(take c2)", "(wash c2)", "(put c2)",
+                *CUPS_REBOUND]  # fmt: skip
     assert rebind(dirty.problem, CUPS_SA_PLAN, CUPS, resets=True) == expected
     assert rebind(dirty.problem, CUPS_SA_PLAN, CUPS, tails=True, resets=True) == expected
 
@@ -103,14 +100,22 @@ def test_plan_deal_deals_the_plan_with_resets(tmp_path: Path, agents: int, lengt
     # hand): 4 + 1 + 3 = 8. The rounds plan is none (no cup is ready); the tails plan is
     # the plan above (it resets). Without rebinding every deal is the SA plan's one
     # chain: 9 steps.
-    dirty = _dirty_cups(tmp_path)
-    request = MethodRequest(dirty, agents, FAST, CUPS, sa_plan=sa_result(CUPS_SA_PLAN))
+    _, request, _ = _deal_cups(_dirty_cups(tmp_path), agents, length, "tails")
+    assert run_plan_deal(request, rebind=False).exec_length == 9
+
+
+def _deal_cups(
+    task: BenchmarkTask, agents: int, length: int, rebound: str
+) -> tuple[RunResult, MethodRequest, dict]:
+    """plan-deal of the cups SA plan to ``agents``: ``length`` steps, no fallback, the
+    chosen deal of the ``rebound`` plan on at most three agents (three cups), valid."""
+    request = MethodRequest(task, agents, FAST, CUPS, sa_plan=sa_result(CUPS_SA_PLAN))
     run = run_plan_deal(request)
     assert run.exec_length == length and run.fallback is None
     (chosen,) = [row for row in run.extra["deal"] if row.get("chosen")]
-    assert chosen["rebound"] == "tails" and chosen["agents_used"] == min(agents, 3)
-    _valid(dirty, run, CUPS)
-    assert run_plan_deal(request, rebind=False).exec_length == 9
+    assert chosen["rebound"] == rebound and chosen["agents_used"] == min(agents, 3)
+    _valid(task, run, CUPS)
+    return run, request, chosen
 
 
 def _one_guest(tmp_path: Path) -> BenchmarkTask:
@@ -127,15 +132,9 @@ def test_plan_deal_deals_the_rebound_plan(tmp_path: Path, agents: int, length: i
     # pieces of 4, 4 and 3 actions. Three agents take one cup each: 3 steps (the puts go
     # in the joint clean-up); two: one agent does two cups, 4 + 3 = 7 steps; a fourth agent
     # has nothing to do. Without rebinding every deal is the one chain: 9 steps.
-    task = _cups(tmp_path)
-    request = MethodRequest(task, agents, FAST, CUPS, sa_plan=sa_result(CUPS_SA_PLAN))
-    run = run_plan_deal(request)
-    assert run.exec_length == length and run.fallback is None
-    (chosen,) = [row for row in run.extra["deal"] if row.get("chosen")]
-    assert chosen["rebound"] == "rounds" and chosen["agents_used"] == min(agents, 3)
+    run, request, chosen = _deal_cups(_cups(tmp_path), agents, length, "rounds")
     assert chosen["cleaned_sa_length"] == 11
     assert "rebinding" in run.extra["deal_seconds"]
-    _valid(task, run, CUPS)
     plain = run_plan_deal(request, rebind=False)
     assert plain.exec_length == 9 and plain.fallback == "no deal shorter than the cleaned SA plan"
     assert not any(row.get("rebound") for row in plain.extra["deal"])

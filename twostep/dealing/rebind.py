@@ -53,11 +53,14 @@ from __future__ import annotations
 import functools
 import itertools
 from collections import Counter, defaultdict, deque
-from collections.abc import Collection, Sequence
+from collections.abc import Callable, Collection, Sequence
+from typing import TypeVar
 
 from twostep.decomposers.goal_split import positional_predicates
 from twostep.pddl import Fact, Problem
 from twostep.strips import GroundAction, Grounder, PlanError, effects_along
+
+T = TypeVar("T")
 
 TRIALS = 400
 """Renames tried per plan, at most (each costs a replay of the plan's rest)."""
@@ -286,23 +289,8 @@ class Rebinder:
     ) -> list[GroundAction] | None:
         """The shortest sequence of ``moves`` from ``state`` to ``goal`` (breadth-first, at
         most :data:`RESET_DEPTH` of them and :data:`REPAIR_STATES` states)."""
-        queue: deque[tuple[frozenset[Fact], list[GroundAction]]] = deque([(state, [])])
-        seen = {state}
-        while queue:
-            here, path = queue.popleft()
-            if here == goal:
-                return path
-            if len(path) >= RESET_DEPTH:
-                continue
-            for move in moves:
-                if move.applicable(here):
-                    there = move.apply(here)
-                    if there not in seen:
-                        if len(seen) >= REPAIR_STATES:
-                            return None
-                        seen.add(there)
-                        queue.append((there, [*path, move]))
-        return None
+        found = breadth_first(state, moves, RESET_DEPTH, lambda here: here == goal or None)
+        return None if found is None else found[0]
 
     def _states(self, plan: Sequence[GroundAction]) -> list[frozenset[Fact]]:
         state = self.problem.init
@@ -471,24 +459,41 @@ class Rebinder:
             for other in self.siblings.get(target.args, ())
             if other is not target and other.add >= target.add
         ]
-        queue: deque[tuple[frozenset[Fact], list[GroundAction]]] = deque([(state, [])])
-        seen = {state}
-        while queue:
-            here, path = queue.popleft()
-            for goal in goals:
-                if goal.applicable(here):
-                    return path, goal
-            if len(path) >= REPAIR_DEPTH:
-                continue
-            for move in moves:
-                if move.applicable(here):
-                    there = move.apply(here)
-                    if there not in seen:
-                        if len(seen) >= REPAIR_STATES:
-                            return None
-                        seen.add(there)
-                        queue.append((there, [*path, move]))
-        return None
+        return breadth_first(
+            state,
+            moves,
+            REPAIR_DEPTH,
+            lambda here: next((g for g in goals if g.applicable(here)), None),
+        )
+
+
+def breadth_first(
+    state: frozenset[Fact],
+    moves: Sequence[GroundAction],
+    depth: int,
+    reached: Callable[[frozenset[Fact]], T | None],
+) -> tuple[list[GroundAction], T] | None:
+    """The shortest sequence of ``moves`` from ``state`` (at most ``depth`` of them, and
+    :data:`REPAIR_STATES` states) to a state where ``reached`` gives something, and what it
+    gave; None when there is none within those bounds."""
+    queue: deque[tuple[frozenset[Fact], list[GroundAction]]] = deque([(state, [])])
+    seen = {state}
+    while queue:
+        here, path = queue.popleft()
+        hit = reached(here)
+        if hit is not None:
+            return path, hit
+        if len(path) >= depth:
+            continue
+        for move in moves:
+            if move.applicable(here):
+                there = move.apply(here)
+                if there not in seen:
+                    if len(seen) >= REPAIR_STATES:
+                        return None
+                    seen.add(there)
+                    queue.append((there, [*path, move]))
+    return None
 
 
 def matching(
