@@ -241,7 +241,7 @@ class Rebinder:
         last = max((t for t in range(first) if other in _args(plan[t])), default=-1)
         for at in dict.fromkeys((last + 1, first)):
             state = states[at]
-            held = frozenset(o for f in state if f[0] in self.agent for o in f[1:]) | {other}
+            held = self._in_hand(state) | {other}
             goal = target | {f for f in state if other not in f[1:] or not self._counts(f, other)}
             path = self._search(state, frozenset(goal), [*moves, *self._held(held, other)])
             if path is None:
@@ -291,6 +291,10 @@ class Rebinder:
         most :data:`RESET_DEPTH` of them and :data:`REPAIR_STATES` states)."""
         found = breadth_first(state, moves, RESET_DEPTH, lambda here: here == goal or None)
         return None if found is None else found[0]
+
+    def _in_hand(self, state: frozenset[Fact]) -> frozenset[str]:
+        """The objects the agent facts of ``state`` name (the hands and what they hold)."""
+        return frozenset(o for f in state if f[0] in self.agent for o in f[1:])
 
     def _states(self, plan: Sequence[GroundAction]) -> list[frozenset[Fact]]:
         state = self.problem.init
@@ -445,7 +449,7 @@ class Rebinder:
         agent facts mention, after which ``target`` applies, or an action on the same
         arguments that adds all it adds (a glass filled afresh where the plan refilled it);
         and the action that then applies."""
-        objects = set(_args(text)) | {o for f in state if f[0] in self.agent for o in f[1:]}
+        objects = set(_args(text)) | self._in_hand(state)
         ranks = {r for obj in (*objects, "") for r in self._handling_of.get(obj, ())}
         own = set(_args(text))  # walks only of the target's own movers (not every robot)
         moves = [
