@@ -15,10 +15,11 @@ from pathlib import Path
 import pytest
 
 from tests.test_plan_split import BW, FAST, _blocks, _check, sa_result
-from twostep.dealing import DealError
+from twostep.benchmark import load_task
+from twostep.dealing import Dealer, DealError
 from twostep.dealing.improve import search_owners
 from twostep.dealing.timeline import JointSteps
-from twostep.methods import MethodRequest
+from twostep.methods import MethodRequest, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
 
 LENGTHS = (3, 3, 2, 2)  # the model's pieces: how many steps each takes
@@ -132,3 +133,83 @@ def test_owner_search_reaches_the_shortest_schedule(
     chosen = next(row for row in run.extra["deal"] if row.get("chosen"))
     assert chosen["improved"] and chosen["moves"] >= 1
     assert "owner search" in run.extra["deal_seconds"]
+
+
+def test_the_owner_search_keeps_the_walks_links_where_the_deal_needs_them(
+    data_root: Path,
+) -> None:
+    # termes p18 with 2 agents: in the order without walks a ramp goes before a robot has
+    # crossed it, so the agents of the free/critical list schedule run into a place they
+    # cannot walk to (DealError), and the deal is made with the walks' links kept. The
+    # owner search starts from the same deal: it must keep the links too (it failed with
+    # "no agent can walk to where the next piece applies" before), and it can only be as
+    # short as the deal it starts from or shorter; the outcome re-validates.
+    import yaml
+
+    preds = yaml.safe_load((Path(__file__).parents[1] / "conf/domain/termes.yaml").read_text())
+    preds = preds["agent_predicates"]
+    task = load_task("termes", 18, data_root)
+    sa = run_single_agent(MethodRequest(task, planner=FAST))
+    plan = sa.planner_calls[0].result
+    assert plan.plan is not None
+    dealer = Dealer(task.problem, plan.plan, preds)
+    with pytest.raises(DealError):  # the timed run of that order, without the walks' links
+        dealer._deal(2, "critical", "free", keep_walks=False, steal=False, timed=True)
+    dealt = dealer.deal(2, "free", "critical", False)
+    improved = dealer.improve(2, "free", "critical", False)
+    assert len(improved.schedule) <= len(dealt.schedule)
+    run = run_plan_deal(MethodRequest(task, 2, FAST, preds, sa_plan=plan))
+    searched = [row for row in run.extra["deal"] if row.get("improved")]
+    assert searched and all("error" not in row for row in searched)
+    _check(task.problem, run, preds)
+
+
+def test_passes_repeat_while_one_keeps_a_move() -> None:
+    # Pieces of 1, 1, 3 and 3 steps, 2 agents, all on agent 0 (8 steps), tried in the order
+    # 0, 1, 2, 3. First pass: piece 0 to agent 1 (7 / 1: 7), kept; piece 1 (6 / 2: 6), kept;
+    # piece 2 (3 / 5: 5), kept; piece 3 to agent 1 (0 / 8), not shorter. A single pass ends
+    # at 5 steps, with owners 1, 1, 1, 0. The second pass gives piece 0 back to agent 0
+    # (4 / 4: 4), kept, and moves none of the other three (each move makes one side 5 or
+    # more); the third keeps nothing: 4 steps, four moves, the shortest for these pieces
+    # (1 + 3 on each agent).
+    lengths = (1, 1, 3, 3)
+    runs: list[list[int]] = []
+
+    def run(owner: Sequence[int]) -> JointSteps:
+        runs.append(list(owner))
+        loads = [sum(n for n, a in zip(lengths, owner, strict=True) if a == b) for b in (0, 1)]
+        return [[(a, None) for a in (0, 1) if loads[a] > t] for t in range(max(loads))]  # type: ignore[misc]
+
+    found = search_owners([0, 0, 0, 0], [0, 1, 2, 3], 2, run, lambda steps: steps, lambda: 0)
+    assert (found.owner, found.length, found.moves) == ([0, 1, 1, 0], 4, 4)
+    # the first run, then each pass tries every piece once (after a kept move, the next
+    # piece): four trials in each of the three passes
+    assert len(runs) == 1 + 4 + 4 + 4
+
+
+def test_the_search_for_more_agents_starts_where_the_one_for_fewer_ended(
+    data_root: Path,
+) -> None:
+    # blocksworld p16, a real SA plan: every deal to 4 agents is longer than where the
+    # owner search for 3 agents ended, so the search for 4 starts from there, the fourth
+    # arm idle (its row says after = 3), and it finds a shorter schedule than the 3-agent
+    # run's outcome: a fourth arm that the search from the 4-agent deals did not use. The
+    # schedules re-validate.
+    import yaml
+
+    path = Path(__file__).parents[1] / "conf/domain/blocksworld.yaml"
+    preds = yaml.safe_load(path.read_text())["agent_predicates"]
+    task = load_task("blocksworld", 16, data_root)
+    sa = run_single_agent(MethodRequest(task, planner=FAST))
+    plan = sa.planner_calls[0].result
+    three = run_plan_deal(MethodRequest(task, 3, FAST, preds, sa_plan=plan))
+    four = run_plan_deal(MethodRequest(task, 4, FAST, preds, sa_plan=plan))
+    for run in (three, four):
+        _check(task.problem, run, preds)
+    (search,) = [r for r in four.extra["deal"] if r.get("improved") and r["agents"] == 4]
+    assert search["after"] == 3
+    deals = [r["exec_length"] for r in four.extra["deal"]
+             if r["agents"] == 4 and not r.get("improved") and "exec_length" in r]  # fmt: skip
+    assert three.exec_length is not None and four.exec_length is not None
+    assert four.exec_length < three.exec_length < min(deals)
+    assert search.get("chosen") and search["exec_length"] == four.exec_length

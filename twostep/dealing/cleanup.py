@@ -65,10 +65,12 @@ class Elimination:
             self.envs.append(env)
             self.owns.append(owns)
         n = len(steps)
+        # what later actions set, from each index on: only the entries after i are read
+        # from now on (by _without(i) and later calls), so only those are made
         self.adds_env, self.dels_env = [0] * (n + 1), [0] * (n + 1)
         self.adds_own = [[0] * agents for _ in range(n + 1)]
         self.dels_own = [[0] * agents for _ in range(n + 1)]
-        for k in range(n - 1, -1, -1):
+        for k in range(n - 1, i, -1):
             a, step = steps[k]
             self.adds_env[k] = self.adds_env[k + 1] | step.add_env
             self.dels_env[k] = self.dels_env[k + 1] | step.del_env

@@ -21,8 +21,8 @@ from itertools import pairwise
 from twostep.dealing.cleanup import Elimination, JointRun
 from twostep.dealing.copies import mover_pieces, piece_copies, task_movers
 from twostep.dealing.encoding import Step
-from twostep.dealing.improve import search_owners
-from twostep.dealing.model import Deal, DealError, cpu_seconds
+from twostep.dealing.improve import search_owners, work_bound
+from twostep.dealing.model import Deal, DealError, SearchKey, cpu_seconds
 from twostep.dealing.replay import Replay
 from twostep.dealing.schedule import ListScheduler, PieceOrder, Schedule, WalkEstimate
 from twostep.dealing.timeline import JointSteps, Timeline, earliest_steps
@@ -182,6 +182,9 @@ class Dealer:
         self._schedules: dict[tuple[int, str, str, bool], Schedule] = {}
         self._deals: dict[tuple[object, ...], Deal | DealError] = {}
         self._copies: dict[tuple[str, bool], dict[int, list[list[Step]]]] = {}
+        # per owner search: its walks' links, the owners found, the list schedule it ran
+        # with (its number of agents)
+        self._found: dict[SearchKey, tuple[bool, list[int], int]] = {}
 
     @contextmanager
     def _phase(self, name: str) -> Iterator[None]:
@@ -290,20 +293,46 @@ class Dealer:
         return deal
 
     def improve(
-        self, agents: int, cut: str = "free", order: str = "critical", steal: bool = True
+        self,
+        agents: int,
+        cut: str = "free",
+        order: str = "critical",
+        steal: bool = True,
+        after: SearchKey | None = None,
+        work: int | None = None,
     ) -> Deal:
-        """The deal of :meth:`deal` in time steps (the order without walks), its owners
-        then searched for a shorter run (:mod:`~twostep.dealing.improve`); raise
-        :class:`DealError` when that deal fails. ``moves`` says how many pieces changed
-        agent; made once per way."""
-        key = ("improve", agents, cut, order, steal)
-        return self._once(key, lambda: self._improve(agents, cut, order, steal))
+        """The deal of :meth:`deal` in time steps (the order without walks; with the walks'
+        own causal links kept when the agents find no way on without them, as :meth:`deal`
+        does), its owners then searched for a shorter run (:mod:`~twostep.dealing.improve`,
+        bounded by ``work``, default :func:`~twostep.dealing.improve.work_bound`); raise
+        :class:`DealError` when both fail. With ``after`` (the :attr:`Deal.search` of an
+        earlier search of this dealer, for fewer agents), the search starts instead from the
+        owners that one found, the other agents idle. ``moves`` says how many pieces changed
+        agent; made once per search."""
+        bound = work_bound(agents) if work is None else work
+        key: SearchKey = (agents, cut, order, steal, after, bound)
+        return self._once(("improve", key), lambda: self._improve(key))
 
-    def _improve(self, agents: int, cut: str, order: str, steal: bool) -> Deal:
-        pieces, _ = self.pieces(cut, keep_walks=False)
-        schedule = self._list_schedule(agents, order, cut, keep_walks=False)
+    def _improve(self, key: SearchKey) -> Deal:
+        agents, after = key[0], key[4]
+        if after is not None:
+            keep_walks, owner, base = self._found[after]
+            return self._search(key, keep_walks, base, owner)
+        try:
+            return self._search(key, False, agents)
+        except DealError:  # the agents find no way on: the walks' own causal links kept
+            return self._search(key, True, agents)
+
+    def _search(
+        self, key: SearchKey, keep_walks: bool, base: int, first: Sequence[int] | None = None
+    ) -> Deal:
+        """One attempt of :meth:`improve`, with or without the walks' links, from the list
+        schedule for ``base`` agents (its owners, or ``first``)."""
+        agents, cut, order, steal, _, work = key
+        pieces, _ = self.pieces(cut, keep_walks)
+        schedule = self._list_schedule(base, order, cut, keep_walks)
         with self._phase("owner search"):
-            timeline = self._timeline(cut, keep_walks=False)
+            timeline = self._timeline(cut, keep_walks)
             ended: dict[tuple[int, ...], list[int]] = {}  # per trial: the owners it ended with
 
             def simulate(owner: Sequence[int]) -> JointSteps:
@@ -322,12 +351,14 @@ class Dealer:
                 walked = self.walker.work - walked_before
                 return timeline.work + self.cleanup_work - cleaned_before + walked
 
-            found = search_owners(schedule.owner, schedule.start, agents, simulate,
-                                  clean, spent, self.chain(cut))  # fmt: skip
+            start = schedule.owner if first is None else first
+            found = search_owners(start, schedule.start, agents, simulate,
+                                  clean, spent, self.chain(cut), work)  # fmt: skip
             joint = self._joint_cleanup([pair for step in found.steps for pair in step], agents)
+        self._found[key] = (keep_walks, found.owner, base)
         owner = ended[tuple(found.owner)]
         deal = self._finish(pieces, owner, schedule.start, joint, agents, schedule.makespan)
-        deal.moves = found.moves
+        deal.moves, deal.search, deal.work = found.moves, key, spent()
         return deal
 
     def _replayed(

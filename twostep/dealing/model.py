@@ -5,6 +5,12 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import TypeAlias
+
+SearchKey: TypeAlias = tuple[int, str, str, bool, "SearchKey | None", int]
+"""One owner search of a dealer (:meth:`~twostep.dealing.deal.Dealer.improve`): its agents,
+cut, order and stealing, the search whose owners it starts from (None: the list schedule's),
+and its work bound."""
 
 
 def cpu_seconds() -> float:
@@ -31,3 +37,5 @@ class Deal:
     schedule: list[list[tuple[int, str]]]  # per time step: (agent, action), a valid joint schedule
     offloaded: bool = False  # every replay was stuck: pieces offloaded from the plan's run
     moves: int | None = None  # the owner search's kept moves (None: not searched)
+    search: SearchKey | None = None  # the owner search that made it (None: not searched)
+    work: int = 0  # what that search cost, in its own counts (improve.WORK)

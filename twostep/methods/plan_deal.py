@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from twostep.dealing import CUTS, Deal, Dealer, DealError, Way, ways
-from twostep.dealing.model import cpu_seconds
+from twostep.dealing.model import SearchKey, cpu_seconds
 from twostep.dealing.rebind import Rebinder
 from twostep.execution import ParallelExecution, ScheduleError, check_schedule
 from twostep.methods.request import MethodRequest
@@ -151,7 +151,8 @@ def try_deals(
     (:mod:`~twostep.dealing.rebind`: its rounds; and its rounds and tails, objects reset
     where none is ready for a round: :data:`REBOUND`); with ``owner_search``, the owner
     search (:mod:`~twostep.dealing.improve`) from the shortest deal to each number of
-    agents. The shortest schedule is kept, ties to fewer agents, then to the earlier deal
+    agents, or from where the search for one agent fewer ended when that is shorter (its
+    row says ``after``). The shortest schedule is kept, ties to fewer agents, then to the earlier deal
     (its row is marked ``chosen``; a rebound plan's rows say ``rebound``: ``rounds`` or
     ``tails``, the owner search's ``improved``)."""
     problem = request.problem
@@ -178,6 +179,7 @@ def try_deals(
     dealers: list[tuple[str | None, Dealer]] = [(None, dealer)]
     dealers += [(kind, Dealer(problem, plan, request.agent_predicates, copies=copies))
                 for kind, plan in rebound.items()]  # fmt: skip
+    searched: tuple[int, str | None, Dealer, Way, SearchKey | None] | None = None  # the last
     for agents in range(2, request.agents + 1):
         made: list[tuple[int, int, str | None, Dealer, Way]] = []  # this number's deals
         for kind, one in dealers:
@@ -194,15 +196,21 @@ def try_deals(
                 candidates.append(candidate(row, dealt))
                 made.append((len(dealt.schedule), len(made), kind, one, way))
         if owner_search and made:  # the owner search, from this number's shortest deal
-            *_, kind, one, way = min(made, key=lambda entry: entry[:2])
+            length, _, kind, one, way = min(made, key=lambda entry: entry[:2])
+            after = None
+            if searched is not None and searched[0] < length:  # or where the last one ended
+                length, kind, one, way, after = searched
             row = {**deal_row(agents, way, kind), "improved": True}
+            if after is not None:
+                row["after"] = after[0]
             trials.rows.append(row)
             try:
-                candidates.append(
-                    candidate(row, one.improve(agents, way.cut, way.order, way.steal))
-                )
+                dealt = one.improve(agents, way.cut, way.order, way.steal, after)
             except DealError as error:
                 row["error"] = str(error)
+            else:
+                candidates.append(candidate(row, dealt))
+                searched = (len(dealt.schedule), kind, one, way, dealt.search)
     for _, one in dealers:  # the dealers' phases, and rebinding and scoring beside them
         for phase, seconds in one.seconds.items():
             trials.seconds[phase] = trials.seconds.get(phase, 0.0) + seconds
