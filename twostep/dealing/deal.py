@@ -299,18 +299,16 @@ class Dealer:
         order: str = "critical",
         steal: bool = True,
         after: SearchKey | None = None,
-        work: int | None = None,
     ) -> Deal:
         """The deal of :meth:`deal` in time steps (the order without walks; with the walks'
         own causal links kept when the agents find no way on without them, as :meth:`deal`
         does), its owners then searched for a shorter run (:mod:`~twostep.dealing.improve`,
-        bounded by ``work``, default :func:`~twostep.dealing.improve.work_bound`); raise
-        :class:`DealError` when both fail. With ``after`` (the :attr:`Deal.search` of an
+        bounded by :func:`~twostep.dealing.improve.work_bound`); raise :class:`DealError`
+        when both fail. With ``after`` (the :attr:`Deal.search` of an
         earlier search of this dealer, for fewer agents), the search starts instead from the
         owners that one found, the other agents idle. ``moves`` says how many pieces changed
         agent; made once per search."""
-        bound = work_bound(agents) if work is None else work
-        key: SearchKey = (agents, cut, order, steal, after, bound)
+        key: SearchKey = (agents, cut, order, steal, after)
         return self._once(("improve", key), lambda: self._improve(key))
 
     def _improve(self, key: SearchKey) -> Deal:
@@ -328,7 +326,7 @@ class Dealer:
     ) -> Deal:
         """One attempt of :meth:`improve`, with or without the walks' links, from the list
         schedule for ``base`` agents (its owners, or ``first``)."""
-        agents, cut, order, steal, _, work = key
+        agents, cut, order, steal, _ = key
         pieces, _ = self.pieces(cut, keep_walks)
         schedule = self._list_schedule(base, order, cut, keep_walks)
         with self._phase("owner search"):
@@ -353,12 +351,12 @@ class Dealer:
 
             start = schedule.owner if first is None else first
             found = search_owners(start, schedule.start, agents, simulate,
-                                  clean, spent, self.chain(cut), work)  # fmt: skip
+                                  clean, spent, self.chain(cut), work_bound(agents))  # fmt: skip
             joint = self._joint_cleanup([pair for step in found.steps for pair in step], agents)
         self._found[key] = (keep_walks, found.owner, base)
         owner = ended[tuple(found.owner)]
         deal = self._finish(pieces, owner, schedule.start, joint, agents, schedule.makespan)
-        deal.moves, deal.search, deal.work = found.moves, key, spent()
+        deal.moves, deal.search = found.moves, key
         return deal
 
     def _replayed(

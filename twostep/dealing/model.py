@@ -7,10 +7,10 @@ import time
 from dataclasses import dataclass
 from typing import TypeAlias
 
-SearchKey: TypeAlias = tuple[int, str, str, bool, "SearchKey | None", int]
+SearchKey: TypeAlias = tuple[int, str, str, bool, "SearchKey | None"]
 """One owner search of a dealer (:meth:`~twostep.dealing.deal.Dealer.improve`): its agents,
-cut, order and stealing, the search whose owners it starts from (None: the list schedule's),
-and its work bound."""
+cut, order and stealing, and the search whose owners it starts from (None: the list
+schedule's)."""
 
 
 def cpu_seconds() -> float:
@@ -38,4 +38,3 @@ class Deal:
     offloaded: bool = False  # every replay was stuck: pieces offloaded from the plan's run
     moves: int | None = None  # the owner search's kept moves (None: not searched)
     search: SearchKey | None = None  # the owner search that made it (None: not searched)
-    work: int = 0  # what that search cost, in its own counts (improve.WORK)

@@ -152,9 +152,9 @@ def try_deals(
     where none is ready for a round: :data:`REBOUND`); with ``owner_search``, the owner
     search (:mod:`~twostep.dealing.improve`) from the shortest deal to each number of
     agents, or from where the search for one agent fewer ended when that is shorter (its
-    row says ``after``). The shortest schedule is kept, ties to fewer agents, then to the earlier deal
-    (its row is marked ``chosen``; a rebound plan's rows say ``rebound``: ``rounds`` or
-    ``tails``, the owner search's ``improved``)."""
+    row says ``after``). The shortest schedule is kept, ties to fewer agents, then to the
+    earlier deal (its row is marked ``chosen``; a rebound plan's rows say ``rebound``:
+    ``rounds`` or ``tails``, the owner search's ``improved``)."""
     problem = request.problem
     try:
         dealer = Dealer(problem, sa_steps, request.agent_predicates, copies=copies)
@@ -199,7 +199,7 @@ def try_deals(
             length, _, kind, one, way = min(made, key=lambda entry: entry[:2])
             after = None
             if searched is not None and searched[0] < length:  # or where the last one ended
-                length, kind, one, way, after = searched
+                _, kind, one, way, after = searched
             row = {**deal_row(agents, way, kind), "improved": True}
             if after is not None:
                 row["after"] = after[0]
