@@ -9,6 +9,10 @@ median ratio (goal: at most 1.10) and validates every plan with unified-planning
 
     .venv/bin/python bench/bench_planner.py                  # all 100 tasks, lama-first
     .venv/bin/python bench/bench_planner.py --domains blocksworld --tasks 1-5 --repeats 3
+    .venv/bin/python bench/bench_planner.py --json docs/bench/planner.json   # the results page's rows
+
+``--json FILE`` also writes the rows as a bench record (:mod:`bench.record`);
+:func:`page` turns it into the results page (``make results``).
 """
 
 from __future__ import annotations
@@ -20,7 +24,11 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from bench import record
 from twostep.benchmark import DEFAULT_DATA_ROOT, list_domains, list_tasks, load_task
 from twostep.planner import ALIASES, PlannerSettings, Status, driver_path, plan
 from twostep.validation import validate_plan
@@ -55,7 +63,10 @@ def main() -> int:
     parser.add_argument("--alias", default="lama-first")
     parser.add_argument("--time-limit", type=float, default=60.0)
     parser.add_argument("--repeats", type=int, default=1, help="timing repeats per task (median)")
+    parser.add_argument("--json", type=Path, help="also write the rows here (a bench record)")
     args = parser.parse_args()
+    run = record.started()
+    rows: list[dict[str, Any]] = []
     args.data = args.data.resolve()  # the direct driver runs in a scratch folder
     settings = PlannerSettings(args.alias, args.time_limit)
     print(f"# {' '.join(sys.argv)}")
@@ -87,6 +98,11 @@ def main() -> int:
                 ratios.append(ratio)
             length = len(result.plan) if result.plan is not None else "-"
             status = "valid" if valid else f"{result.status.value} {result.message}"
+            rows.append({"domain": domain, "task": task_id, "name": task.name, "parse_s": parse_s,
+                         "plan_s": statistics.median(ours), "planner_s": result.planner_time_s,
+                         "direct_s": statistics.median(direct), "ratio": ratio,
+                         "length": len(result.plan) if result.plan is not None else None, "valid": valid,
+                         "status": status})  # fmt: skip
             print(f"{task.name:<18}{parse_s:>9.3f}{statistics.median(ours):>9.3f}"
                   f"{result.planner_time_s:>10.3f}{statistics.median(direct):>10.3f}"
                   f"{ratio:>7.3f}{length!s:>8}  {status}")  # fmt: skip
@@ -94,6 +110,13 @@ def main() -> int:
         print(f"\nmedian wrapper/direct wall-time ratio over {len(ratios)} tasks: "
               f"{statistics.median(ratios):.3f} (goal <= 1.10)")  # fmt: skip
     print(f"tasks not solved+validated: {failures}")
+    if args.json:
+        settings_row = {
+            "alias": args.alias,
+            "time_limit_s": args.time_limit,
+            "repeats": args.repeats,
+        }
+        record.write(args.json, run, rows, settings=settings_row)
     return 1 if failures else 0
 
 
