@@ -23,7 +23,11 @@ real    Our FloorPlan14 problem (``tests/fixtures/alfred_scene``, AlfWorld's for
         goal-split), N = 2 and 3, seeds 0-4: embodied lengths, the trace check, and
         AlfWorld's own engine on every trace when ``make alfworld-engine`` has run.
 
-Every section prints the machine's load average beside its timings.
+Every section prints the machine's load average beside its timings. ``--json FILE`` also
+writes every section's rows as a bench record (:mod:`bench.record`); :func:`page` turns it
+into the results page (``make results``):
+
+    .venv/bin/python bench/bench_embodied.py --json docs/bench/embodied.json
 """
 
 from __future__ import annotations
@@ -33,14 +37,19 @@ import os
 import platform
 import shutil
 import statistics
+import sys
 import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
 from random import Random
+from typing import Any
 
 import yaml
 
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from bench import record as bench_record
 from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.embodied import (
@@ -105,7 +114,10 @@ def twostep_plans(task: BenchmarkTask, agents: int) -> list[list[str]]:
     return plans + [[] for _ in range(agents - len(plans))]
 
 
-def speed(repeats: int, size: int) -> None:
+Rows = list[dict[str, Any]]
+
+
+def speed(repeats: int, size: int, rows: Rows | None = None) -> None:
     print(f"\n== speed ({load()})")
     header = (
         f"{'task':6} {'N':>2} {'plans':>5} {'actions':>7} {'steps':>7} {'waits':>6} "
@@ -130,6 +142,13 @@ def speed(repeats: int, size: int) -> None:
                 backoffs.append(result.backoffs)
                 ok += result.success
             mean_time, mean_steps = statistics.mean(times), statistics.mean(steps)
+            if rows is not None:
+                rows.append({"section": "speed", "task": name, "agents": agents,
+                             "plans": sum(bool(p) for p in plans),
+                             "actions": sum(len(p) for p in plans), "steps": mean_steps,
+                             "waits": statistics.mean(waits), "backoffs": statistics.mean(backoffs),
+                             "ok": ok, "repeats": repeats, "time_ms": 1000 * mean_time,
+                             "ground_ms": 1000 * ground, "load": list(os.getloadavg())})  # fmt: skip
             print(
                 f"{name:6} {agents:>2} {sum(bool(p) for p in plans):>5} "
                 f"{sum(len(p) for p in plans):>7} {mean_steps:>7.1f} "
@@ -171,7 +190,7 @@ def replayed(
     return result, report, record
 
 
-def check(seeds: int) -> None:
+def check(seeds: int, rows: Rows | None = None) -> None:
     print(f"\n== trace check: 4 tasks x MA, TwoStep (goal-split) x N = 2, 3 x {seeds} seeds")
     floor, own = load_floor_plan(KITCHEN), read_kitchen_file(KITCHEN)
     totals = {"traces": 0, "failed runs": 0, "commands": 0, "interactions": 0,
@@ -194,12 +213,15 @@ def check(seeds: int) -> None:
                         print(f"  p{task_id} {method} N={agents} seed {seed}: {violation}")
     print("  " + ", ".join(f"{k} {v}" for k, v in totals.items()))
     print(f"  {time.perf_counter() - start:.1f} s with planning ({load()})")
+    if rows is not None:
+        rows.append({"section": "check", "seeds": seeds, **totals,
+                     "seconds": time.perf_counter() - start, "load": list(os.getloadavg())})  # fmt: skip
 
 
 # ------------------------------------------------------------------ render
 
 
-def render() -> None:
+def render(rows: Rows | None = None) -> None:
     floor = load_floor_plan(KITCHEN)
     task = load_task("alfworld", 1, ROOT / "data")
     run = method_run(task, "ma", 2, AGENT_PREDICATES)
@@ -217,18 +239,25 @@ def render() -> None:
             took = time.perf_counter() - start
             sizes = ", ".join(f"{k} {p.stat().st_size // 1024} kB" for k, p in written.items())
             print(f"  {label}: {took:.2f} s ({sizes}; {load()})")
+            if rows is not None:
+                rows.append({"section": "render", "run": label, "seconds": took,
+                             "steps": result.steps,
+                             "kb": {k: p.stat().st_size // 1024 for k, p in written.items()},
+                             "load": list(os.getloadavg())})  # fmt: skip
 
 
 # ------------------------------------------------------------------ real
 
 
-def real(seeds: int) -> None:
+def real(seeds: int, rows: Rows | None = None) -> None:
     from twostep.alfworld_engine import engine_python, replay_trace
     from twostep.trace_check import alfworld_layouts_folder
 
     layouts = alfworld_layouts_folder()
     if layouts is None:
         print("\n== real: skipped (the alfworld wheel, extra 'embodied', is not installed)")
+        if rows is not None:
+            rows.append({"section": "real", "skipped": "the alfworld wheel is not installed"})
         return
     root = Path(tempfile.mkdtemp(prefix="twostep-alfred-"))
     (root / "alfred").mkdir()
@@ -255,6 +284,11 @@ def real(seeds: int) -> None:
             if engine:
                 judged += replay_trace(record, problem_text, plays).ok
         actions = sum(len(p) for p in run.plans.values())
+        if rows is not None:
+            rows.append({"section": "real", "problem": str(fixture.relative_to(ROOT)),
+                         "floor_plan": floor.name, "method": method, "agents": agents,
+                         "actions": actions, "lengths": lengths, "checked": checked,
+                         "engine": judged if engine else None, "seeds": seeds})  # fmt: skip
         print(f"  {method:12} {agents:>2} {actions:>7}  {lengths!s:28} "
               f"{statistics.mean(lengths):>6.1f} {checked:>3}/{seeds} "
               f"{(f'{judged}/{seeds}' if engine else '-'):>7}")  # fmt: skip
@@ -266,17 +300,22 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--size", type=int, default=24, help="objects of the larger kitchen")
     parser.add_argument("--seeds", type=int, default=30, help="seeds of the trace check")
+    parser.add_argument("--json", type=Path, help="also write the rows here (a bench record)")
     args = parser.parse_args()
+    run = bench_record.started()
+    rows: Rows = []
     sections = set(args.sections.split(","))
     print(f"python {platform.python_version()}, {os.cpu_count()} cpus ({load()})")
     if "speed" in sections:
-        speed(args.repeats, args.size)
+        speed(args.repeats, args.size, rows)
     if "check" in sections:
-        check(args.seeds)
+        check(args.seeds, rows)
     if "render" in sections:
-        render()
+        render(rows)
     if "real" in sections:
-        real(min(args.seeds, 5))
+        real(min(args.seeds, 5), rows)
+    if args.json:
+        bench_record.write(args.json, run, rows, sections=sorted(sections), size=args.size)
 
 
 if __name__ == "__main__":

@@ -2,6 +2,11 @@
 
     .venv/bin/python bench/bench_execution.py [--repeats 5] [--budget 30]
     .venv/bin/python bench/bench_execution.py --scaling [--max-nodes 2000] [--time-limit 10]
+    .venv/bin/python bench/bench_execution.py --json docs/bench/execution.json
+    .venv/bin/python bench/bench_execution.py --scaling --json docs/bench/execution_scaling.json
+
+``--json FILE`` also writes the table's rows as a bench record (:mod:`bench.record`);
+:func:`page` turns the two records into the results page (``make results``).
 
 ``--scaling`` prints only the scaling table: exact mode for N = 2..16 agents and 30, 60
 and 100 steps per agent, on the ``shared`` case (every track crosses one hub, pairs of
@@ -43,9 +48,13 @@ import statistics
 import sys
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
+from pathlib import Path
 from typing import Any
 
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from bench import record
 from twostep.execution import ParallelExecution, parallel_length
 from twostep.execution.compiled import compile_task
 from twostep.execution.model import DEFAULT_MAX_NODES, DEFAULT_TIME_LIMIT_S
@@ -389,8 +398,11 @@ def class_sizes(plans: Sequence[Sequence[GroundAction]], problem: Problem) -> st
     return "+".join(map(str, sizes)) or "-"
 
 
-def scaling(max_nodes: int | None, time_limit_s: float | None) -> int:
-    """The scaling table: exact mode, N = 2..16 agents, 30/60/100 steps per agent."""
+def scaling(
+    max_nodes: int | None, time_limit_s: float | None, rows: list[dict[str, Any]] | None = None
+) -> int:
+    """The scaling table: exact mode, N = 2..16 agents, 30/60/100 steps per agent (each
+    row also appended to ``rows``)."""
     print(
         f"exact mode, one run each, node budget {max_nodes}, time budget {time_limit_s} s; "
         "grounding not timed; CPU time is this process's (the machine may be shared: "
@@ -456,6 +468,13 @@ def scaling(max_nodes: int | None, time_limit_s: float | None) -> int:
                     derived,
                 ]
                 print("| " + " | ".join(cells) + " |", flush=True)
+                if rows is not None:
+                    rows.append({"case": case.name, "agents": agents, "steps_per_agent": length,
+                                 "interchangeable": cells[3], "wall_ms": ms, "cpu_ms": cpu_ms,
+                                 "nodes": result.nodes_expanded, "length": result.length,
+                                 "lower_bound": result.lower_bound, "exact": result.exact,
+                                 "gap": result.gap,
+                                 "hand_derived": None if derived == "-" else int(derived)})  # fmt: skip
                 if not result.exact:
                     stopped.append(
                         f"{case.name} N = {agents}, {length} steps: length {result.length}, "
@@ -496,12 +515,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=DEFAULT_TIME_LIMIT_S,
         help="time budget of the search in the scaling table, seconds ('none': no limit)",
     )
+    parser.add_argument("--json", type=Path, help="also write the rows here (a bench record)")
     args = parser.parse_args(argv)
     command = " ".join(argv if argv is not None else sys.argv[1:])
+    run = record.started(None if argv is None else ["bench/bench_execution.py", *argv])
     if args.scaling:
         print(f"$ python bench/bench_execution.py {command}".rstrip())
         print(f"python {platform.python_version()}, {platform.machine()}, {os.cpu_count()} CPUs")
-        return scaling(args.max_nodes, args.time_limit)
+        scaled: list[dict[str, Any]] = []
+        code = scaling(args.max_nodes, args.time_limit, scaled)
+        if args.json:
+            budget = {"max_nodes": args.max_nodes, "time_limit_s": args.time_limit}
+            record.write(args.json, run, scaled, table="scaling", budget=budget)
+        return code
     from unified_planning.shortcuts import get_environment
 
     get_environment().credits_stream = None
@@ -555,6 +581,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"exact mode, N = {AGENTS}, {PLAN_LENGTH}-step plans: worst median {worst:.1f} ms "
         f"(goal < 1000 ms: {verdict})"
     )
+    if args.json:
+        record.write(args.json, run, [asdict(r) for r in rows], table="comparison",
+                     agents=AGENTS, repeats=args.repeats, budget_s=args.budget)  # fmt: skip
     return 0
 
 

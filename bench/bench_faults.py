@@ -47,13 +47,14 @@ import tempfile
 import threading
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
+from bench import record as bench_record  # noqa: E402
 from tests import bad_files  # noqa: E402
 from tests.llm_standin import Fault, Reply, standin_server  # noqa: E402
 
@@ -474,7 +475,9 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--fault-rate", type=float, default=0.15, help="per fault kind")
     parser.add_argument("--save", type=Path, default=None, help="also write the table here")
+    parser.add_argument("--json", type=Path, help="also write the rows here (a bench record)")
     args = parser.parse_args()
+    run = bench_record.started()
     chosen = [name.strip() for name in args.only.split(",") if name.strip()]
     unknown = [name for name in chosen if name not in SCENARIOS]
     if unknown:
@@ -492,6 +495,11 @@ def main() -> None:
     print(text)
     if args.save:
         args.save.write_text(text + "\n")
+    if args.json:  # docs/bench/faults.json: the results page's rows (make results)
+        settings = {"jobs": args.jobs, "kills": args.kills, "seed": args.seed,
+                    "fault_rate": args.fault_rate}  # fmt: skip
+        bench_record.write(args.json, run, [asdict(r) for r in rows], settings=settings,
+                           seconds=time.perf_counter() - start)  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -30,6 +30,11 @@ not exist yet (it is copied from the environment's template store, made by MLflo
 
     .venv/bin/python bench/bench_startup.py                 # default and services, 3 runs each
     .venv/bin/python bench/bench_startup.py --repeat 5 --scenarios default,logged,cold
+    .venv/bin/python bench/bench_startup.py --repeat 3 --scenarios default,logged,cold,services \
+        --json docs/bench/startup.json            # the results page's rows
+
+``--json FILE`` also writes the scenarios' rows as a bench record (:mod:`bench.record`);
+:func:`page` turns it into the results page (``make results``).
 """
 
 from __future__ import annotations
@@ -46,6 +51,9 @@ import time
 from pathlib import Path
 from typing import Any
 
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from bench import record
 from flows.environment import DEFAULTS
 
 REPO = Path(__file__).resolve().parent.parent
@@ -226,7 +234,9 @@ def main() -> int:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--scenarios", default="default,services")
     parser.add_argument("--root", type=Path, default=None, help="output root (default: temp)")
+    parser.add_argument("--json", type=Path, help="also write the rows here (a bench record)")
     args = parser.parse_args()
+    run = record.started()
     root = args.root or Path(tempfile.mkdtemp(prefix="bench-startup-"))
     wanted = args.scenarios.split(",")
     print(
@@ -264,6 +274,8 @@ def main() -> int:
                 env=environment(), cwd=REPO,
             )  # fmt: skip
     (root / "bench_startup.json").write_text(json.dumps(results, indent=2))
+    if args.json:
+        record.write(args.json, run, results, job=JOB, repeat=args.repeat, goals=GOALS)
     return 0
 
 
