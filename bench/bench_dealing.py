@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import itertools
-import json
 import statistics
 import sys
 import time
@@ -26,6 +25,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from bench import record
 from bench.bench_methods import agent_predicates, data_label, task_ids
 from twostep.benchmark import DEFAULT_DATA_ROOT, list_tasks, load_task
 from twostep.dealing import CUTS, ORDERS, Dealer, DealError, Way, ways
@@ -98,7 +98,7 @@ def main() -> int:
     plans = {
         (r["domain"], r["task"]): r["plan"]
         for path in args.rows
-        for r in json.loads(Path(path).read_text())
+        for r in record.rows_of(Path(path))
         if r["method"] == "sa" and r.get("plan") and str(r.get("data", "data")) == label
     }
     results = []

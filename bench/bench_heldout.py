@@ -47,7 +47,6 @@ in ``bench/heldout_agents.yaml``.
 from __future__ import annotations
 
 import argparse
-import json
 import re
 import shutil
 import sys
@@ -402,7 +401,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.validate:
         if args.rows is None:
             parser.error("--validate needs --rows")
-        counts = validate(args.validate, json.loads(args.rows.read_text()), tuple(args.agents))
+        from bench import record
+
+        counts = validate(args.validate, record.rows_of(args.rows), tuple(args.agents))
         for what, n in sorted(counts.items()):
             print(f"{what}: {n}")
         return 0 if counts["not valid"] == 0 else 1

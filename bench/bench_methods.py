@@ -22,8 +22,13 @@ and time limit (and, for TwoStep, the same ``fallback_if_longer``).
 
     .venv/bin/python bench/bench_methods.py --domains blocksworld --tasks 1-5 --agents 2
     .venv/bin/python bench/bench_methods.py --data data data/large --workers 2 \
-        --reuse docs/bench/methods_sa_ma.json --out outputs/bench/methods_all.json
+        --reuse docs/bench/methods_deal.json --out outputs/bench/methods_all.json
     .venv/bin/python bench/bench_methods.py --report outputs/bench/methods_all.json
+
+``--out`` is a bench record (:mod:`bench.record`: the rows with the command, date, commit,
+machine and load of the run; rows files of earlier runs, bare lists, are read as well);
+:func:`page_plan_deal`, :func:`page_heldout` and :func:`page_methods` turn records into
+the results pages (``make results``).
 
 A new subgoal source joins the bench with one line in :data:`SUBGOAL_SOURCES`; every method
 runs through the registry (:func:`twostep.methods.method_for`).
@@ -32,7 +37,6 @@ runs through the registry (:func:`twostep.methods.method_for`).
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
 import sys
 import time
@@ -46,13 +50,15 @@ from typing import Any
 
 import yaml
 
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from bench import record
 from twostep.benchmark import DEFAULT_DATA_ROOT, BenchmarkError, list_domains, list_tasks, load_task
 from twostep.dealing import PHASES as DEALER_PHASES
 from twostep.dealing.cleanup import clean_plan
 from twostep.decomposers.base import Decomposer
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.decomposers.plan_split import PlanSplitDecomposer
-from twostep.files import write_json_atomic
 from twostep.generators import DOMAINS as BENCHMARK_DOMAINS
 from twostep.methods import MethodRequest, RunResult, check_run, method_for
 from twostep.methods.registry import TWOSTEP_METHODS
@@ -665,9 +671,9 @@ def plot_methods(
     ns: Sequence[int],
     targets: Mapping[int, float] | None,
     default: str | None,
-    path: Path,
+    path: Path | None,
 ) -> Any:
-    """Two panels to ``path`` (PNG; the figure is returned): the macro exec/SA of each method against N, with the
+    """Two panels to ``path`` (PNG; None: not saved; the figure is returned): the macro exec/SA of each method against N, with the
     targets; and the same macro against the macro planning time (one point per method and
     N, SA's planning time as a line), where the trade-off between the methods shows."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -707,8 +713,81 @@ def plot_methods(
     by_time.set_ylabel("macro exec length / SA length")
     by_time.set_title("Quality against planning time (N = 2, 3, 4)")
     by_time.grid(alpha=0.3, which="both")
-    figure.savefig(path, dpi=120)
+    if path is not None:
+        figure.savefig(path, dpi=120)
     return figure
+
+
+# ---------------------------------------------------------------------------- pages
+
+Figure = Callable[[Any, str, str], str]  # bench.results: (figure, name, alt) -> Markdown
+
+
+def _rows_of_records(records: Sequence[Mapping[str, Any]]) -> list[Row]:
+    """One row per key: a later record's row replaces an earlier one's (as ``--report``)."""
+    return list({row_key(r): r for rec in records for r in rec["rows"]}.values())
+
+
+def _ns(rows: Iterable[Row]) -> list[int]:
+    return sorted({int(r["agents"]) for r in rows} | {1})
+
+
+def _page(rows: list[Row], figure: Figure, name: str, level: int = 2) -> list[str]:
+    """The report of ``rows`` (:func:`report_all`, one section per data root, headings at
+    ``level``), with the figure of the 100 tasks' macro against N and time
+    (:func:`plot_methods`)."""
+    default = offline_default()
+    ns = _ns(rows)
+    heading = "#" * level
+    lines = [
+        f"{heading} Data root {line.removeprefix('## data root ')}"
+        if line.startswith("## data root ") else line
+        for line in report_all(rows, METHODS, ns, default).splitlines()
+    ]  # fmt: skip
+    # the 100 tasks with the targets, else the rows' one data root
+    roots = sorted({row_data(r) for r in rows})
+    drawn_root = (
+        LEGACY["data"] if LEGACY["data"] in roots else (roots[0] if len(roots) == 1 else None)
+    )
+    if drawn_root is not None:
+        part = [r for r in rows if row_data(r) == drawn_root]
+        present = [m for m in METHODS if any(r["method"] == m for r in part)]
+        table = summarise(part, present, ns)
+        targets = TARGETS if drawn_root == LEGACY["data"] else None
+        drawn = plot_methods(table, present, ns, targets, default, None)
+        alt = "Macro exec/SA of each method against N with the targets, and against planning time"
+        lines += ["", f"{heading} Figure", "", figure(drawn, name, alt), "",
+                  f"Data root {drawn_root}. Left: the macro exec/SA (the mean over domains of the "
+                  "per-task exec length / SA length) against N"
+                  + (", with the targets of the offline default" if targets else "")
+                  + ". Right: the same against the macro planning time (log scale; dashed: the SA "
+                  "plan's own).", ""]  # fmt: skip
+    return lines
+
+
+def page_plan_deal(records: Sequence[Mapping[str, Any]], figure: Figure) -> list[str]:
+    """The plan-deal page: every data root of the rows (the 100 tasks, stress, large)."""
+    return _page(_rows_of_records(records), figure, "macro")
+
+
+def page_methods(records: Sequence[Mapping[str, Any]], figure: Figure) -> list[str]:
+    """A page of several methods' rows side by side (later files' rows replace earlier
+    ones', as ``--report`` takes them)."""
+    return _page(_rows_of_records(records), figure, "macro")
+
+
+def page_heldout(records: Sequence[Mapping[str, Any]], figure: Figure) -> list[str]:
+    """The held-out page: the paper's five domains, then the others apart (with their own
+    macro: the paper reports only the five)."""
+    rows = _rows_of_records(records)
+    ours = [r for r in rows if r["domain"] in BENCHMARK_DOMAINS]
+    others = [r for r in rows if r["domain"] not in BENCHMARK_DOMAINS]
+    if not others:
+        return _page(ours, figure, "macro")
+    domains = ", ".join(sorted({r["domain"] for r in others}))
+    lines = ["## The paper's five domains", "", *_page(ours, figure, "macro", 3), ""]
+    lines += [f"## Other domains ({domains})", "", *_page(others, figure, "others", 3)]
+    return lines
 
 
 # ---------------------------------------------------------------------------- running
@@ -724,7 +803,7 @@ def task_ids(spec: str, available: list[int]) -> list[int]:
 
 
 def _load_rows(paths: Iterable[str]) -> list[Row]:
-    return [r for p in paths for r in json.loads(Path(p).read_text())]
+    return [r for p in paths for r in record.rows_of(Path(p))]
 
 
 def _clock(seconds: float) -> str:
@@ -783,7 +862,8 @@ def main() -> int:
     known = reusable_rows(old, args.reuse_methods, args.alias, args.time_limit, fallback)
     for row in known.values():
         row.setdefault("reused_from", "--reuse")
-    earlier: list[Row] = json.loads(out.read_text()) if args.resume and out.is_file() else []
+    earlier: list[Row] = record.rows_of(out) if args.resume and out.is_file() else []
+    run = record.started()
     # rows of this very run: every method
     known.update(reusable_rows(earlier, ("sa", *METHODS), args.alias, args.time_limit, fallback))
     given = yaml.safe_load(args.agent_predicates.read_text()) if args.agent_predicates else {}
@@ -817,7 +897,7 @@ def main() -> int:
                 )
                 continue
             rows += got
-            write_json_atomic(out, rows, indent=1)  # finished tasks survive a crash or a stop
+            record.write(out, run, rows)  # finished tasks survive a crash or a stop
             reused = sum(r in job.known for r in got)
             elapsed = time.perf_counter() - start
             # rough: later tasks are larger, so the estimate errs short

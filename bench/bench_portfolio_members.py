@@ -22,12 +22,16 @@ from __future__ import annotations
 
 import argparse
 import itertools
-import json
 import statistics
+import sys
 from collections import defaultdict
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from bench import record
 
 PLAN_DEAL = "plan-deal"
 
@@ -86,7 +90,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("rows", type=Path, help="rows of bench_methods.py with portfolio runs")
     parser.add_argument("--top", type=int, default=5, help="subsets shown per N (default 5)")
     args = parser.parse_args(argv)
-    rows = [r for r in json.loads(args.rows.read_text()) if r.get("method") == "portfolio"]
+    rows = [r for r in record.rows_of(args.rows) if r.get("method") == "portfolio"]
     names = members(rows)
     subsets = [(), *((m,) for m in names), *itertools.combinations(names, 2), tuple(names)]
     print(f"# {len(rows)} portfolio runs; members: {', '.join(names)}")
