@@ -391,6 +391,34 @@ def load_average() -> str:
     return " ".join(f"{x:.2f}" for x in os.getloadavg())
 
 
+def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
+    """The results page (bench.results): this bench's rows (``--out``), then the load-time
+    bench's (``bench/bench_load.py --out``)."""
+    from bench import bench_load
+
+    conformance, load = records
+    meta = conformance.get("meta", {})
+    lines = [
+        "## Conformance",
+        "",
+        f"Corpus `{meta.get('corpus')}` (one problem per domain; not in this repository), "
+        f"`{meta.get('planner')}` with {meta.get('time_limit_s')} s of search for Fast Downward "
+        f"and twostep; MA and plan-deal with N = {meta.get('agents')} for the domains of "
+        f"`{meta.get('agents_file')}`. Load average at the start and end of each sitting: "
+        + "; ".join(conformance.get("load_average", []))
+        + ".",
+        "",
+        "Load s: `orchestration.task_load_s` of the run's result.json (read and ground the "
+        "task, in process). Plan valid: the SA plan checked on the original files by the "
+        "independent validator (`bench/independent`); MA valid and plan-deal valid: the "
+        "schedule re-validated the same way.",
+        "",
+        *report(conformance["rows"]).splitlines(),
+        "",
+    ]
+    return lines + bench_load.section(load, figure)
+
+
 def write_json(path: Path, data: dict[str, Any]) -> None:
     tmp = path.with_suffix(path.suffix + ".tmp")
     tmp.write_text(json.dumps(data, indent=1) + "\n")

@@ -467,6 +467,44 @@ def table(rows: list[Row]) -> list[str]:
     return [lines[0], "-" * len(lines[0]), *lines[1:]]
 
 
+def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
+    """The results page of a ``--json`` record (bench.results)."""
+    (data,) = records
+    rows = [Row(**r) for r in data["rows"]]
+    settings = data.get("settings", {})
+    lines = [
+        "## Records after each mishap",
+        "",
+        "One row per scenario, each in an output root of its own; the columns come from the "
+        "sweeps' job records, the job store and the MLflow store (read with MLflow's own "
+        f"client). llm-faults: {settings.get('jobs')} jobs through a stand-in LLM server "
+        f"that fails at random ({settings.get('fault_rate')} per fault kind), killed with "
+        f"SIGKILL {settings.get('kills')} times, then run to the end (seed "
+        f"{settings.get('seed')}).",
+        "",
+        "| " + " | ".join(["scenario", *COLUMNS]) + " |",
+        "|" + "---|" * (len(COLUMNS) + 1),
+    ]
+    for row in rows:
+        cells = [row.jobs, row.completed, row.recomputed, row.runs, row.duplicates, row.missing,
+                 row.stored_failures, row.tracebacks]  # fmt: skip
+        lines.append(
+            f"| {row.scenario} | " + " | ".join("-" if c is None else str(c) for c in cells) + " |"
+        )
+    lines += [
+        "",
+        "Goals: recomputed, duplicates, missing, stored failures and tracebacks all 0. "
+        "Bad-files: cases answered with one line naming the file (or read as the file "
+        "without its byte-order mark).",
+        "",
+        "## What each scenario printed",
+        "",
+        *(f"- {note}" for row in rows for note in row.notes),
+        "",
+    ]
+    return lines
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", default=",".join(SCENARIOS), help="comma-separated scenarios")
