@@ -311,8 +311,8 @@ def bench_index(pages: Sequence[Page] = PAGES, bench: Path = BENCH) -> str:
 
 
 ARCHIVED: dict[str, str] = {
-    "2026-11-25_conformance_before.txt": "the conformance bench before the current PDDL front end (20 of 30 loaded); replaced by conformance.json",
-    "2026-11-25_load_before.txt": "the load-time bench before the current PDDL front end; replaced by load.json",
+    "2026-11-24_conformance_before.txt": "the conformance bench before the current PDDL front end; replaced by conformance.json",
+    "2026-11-24_load_before.txt": "the load-time bench before the current PDDL front end; replaced by load.json",
 }
 
 

@@ -18,7 +18,7 @@ each construct fixture's ``expected.yaml``, derived by hand.
   ``sa_length``/``sa_cost`` are the plan's; MA and plan-deal schedules (N = 2) re-validate.
 
 Before issue 17 (twostep reading PDDL as Fast Downward does) seven construct fixtures and
-four of the IPC domains here failed (docs/bench/conformance_before.txt says why); they pass
+four of the IPC domains here failed (docs/bench/archive/2026-11-24_conformance_before.txt says why); they pass
 now, with no test marked as expected to fail.
 """
 
