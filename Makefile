@@ -49,9 +49,10 @@ test-slow: setup
 	$(VENV)/bin/pytest -q -m slow
 
 # Both UIs in headless Chromium (apt-get install -y chromium): services up, a 2-job sweep,
-# the Prefect flow runs and the MLflow runs table checked and screenshotted into docs/.
+# the Prefect flow runs and the MLflow runs table checked and screenshotted into docs/;
+# then the documentation site built and its pages and figures checked in the browser.
 ui-check: setup
-	TWOSTEP_UI_SCREENSHOTS=docs $(VENV)/bin/pytest -q -m slow tests/test_ui.py tests/test_ui_compare.py
+	TWOSTEP_UI_SCREENSHOTS=docs $(VENV)/bin/pytest -q -m slow tests/test_ui.py tests/test_ui_compare.py tests/test_docs_browser.py
 
 lint: setup
 	$(VENV)/bin/ruff check . && $(VENV)/bin/ruff format --check . && $(VENV)/bin/mypy

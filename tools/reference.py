@@ -35,6 +35,8 @@ from typing import Any
 
 import yaml
 
+from tools.griffe_roles import without_roles
+
 REPO = Path(__file__).resolve().parent.parent
 CONF = REPO / "conf"
 SCHEMA_FILE = REPO / "flows" / "config.py"
@@ -472,7 +474,7 @@ def modules(package: str) -> list[str]:
 def _summary(module_file: Path) -> str:
     docstring = ast.get_docstring(ast.parse(module_file.read_text())) or ""
     first = docstring.strip().split("\n\n")[0]
-    return " ".join(first.split())
+    return without_roles(" ".join(first.split()).replace("``", "`"))
 
 
 def api_page(package: str) -> str:
