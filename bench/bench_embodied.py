@@ -117,7 +117,7 @@ def twostep_plans(task: BenchmarkTask, agents: int) -> list[list[str]]:
 Rows = list[dict[str, Any]]
 
 
-def speed(repeats: int, size: int, rows: Rows | None = None) -> None:
+def speed(repeats: int, size: int, recorded: Rows | None = None) -> None:
     print(f"\n== speed ({load()})")
     header = (
         f"{'task':6} {'N':>2} {'plans':>5} {'actions':>7} {'steps':>7} {'waits':>6} "
@@ -142,8 +142,8 @@ def speed(repeats: int, size: int, rows: Rows | None = None) -> None:
                 backoffs.append(result.backoffs)
                 ok += result.success
             mean_time, mean_steps = statistics.mean(times), statistics.mean(steps)
-            if rows is not None:
-                rows.append({"section": "speed", "task": name, "agents": agents,
+            if recorded is not None:
+                recorded.append({"section": "speed", "task": name, "agents": agents,
                              "plans": sum(bool(p) for p in plans),
                              "actions": sum(len(p) for p in plans), "steps": mean_steps,
                              "waits": statistics.mean(waits), "backoffs": statistics.mean(backoffs),
@@ -190,7 +190,7 @@ def replayed(
     return result, report, record
 
 
-def check(seeds: int, rows: Rows | None = None) -> None:
+def check(seeds: int, recorded: Rows | None = None) -> None:
     print(f"\n== trace check: 4 tasks x MA, TwoStep (goal-split) x N = 2, 3 x {seeds} seeds")
     floor, own = load_floor_plan(KITCHEN), read_kitchen_file(KITCHEN)
     totals = {"traces": 0, "failed runs": 0, "commands": 0, "interactions": 0,
@@ -213,15 +213,15 @@ def check(seeds: int, rows: Rows | None = None) -> None:
                         print(f"  p{task_id} {method} N={agents} seed {seed}: {violation}")
     print("  " + ", ".join(f"{k} {v}" for k, v in totals.items()))
     print(f"  {time.perf_counter() - start:.1f} s with planning ({load()})")
-    if rows is not None:
-        rows.append({"section": "check", "seeds": seeds, **totals,
+    if recorded is not None:
+        recorded.append({"section": "check", "seeds": seeds, **totals,
                      "seconds": time.perf_counter() - start, "load": list(os.getloadavg())})  # fmt: skip
 
 
 # ------------------------------------------------------------------ render
 
 
-def render(rows: Rows | None = None) -> None:
+def render(recorded: Rows | None = None) -> None:
     floor = load_floor_plan(KITCHEN)
     task = load_task("alfworld", 1, ROOT / "data")
     run = method_run(task, "ma", 2, AGENT_PREDICATES)
@@ -239,8 +239,8 @@ def render(rows: Rows | None = None) -> None:
             took = time.perf_counter() - start
             sizes = ", ".join(f"{k} {p.stat().st_size // 1024} kB" for k, p in written.items())
             print(f"  {label}: {took:.2f} s ({sizes}; {load()})")
-            if rows is not None:
-                rows.append({"section": "render", "run": label, "seconds": took,
+            if recorded is not None:
+                recorded.append({"section": "render", "run": label, "seconds": took,
                              "steps": result.steps,
                              "kb": {k: p.stat().st_size // 1024 for k, p in written.items()},
                              "load": list(os.getloadavg())})  # fmt: skip
@@ -249,15 +249,15 @@ def render(rows: Rows | None = None) -> None:
 # ------------------------------------------------------------------ real
 
 
-def real(seeds: int, rows: Rows | None = None) -> None:
+def real(seeds: int, recorded: Rows | None = None) -> None:
     from twostep.alfworld_engine import engine_python, replay_trace
     from twostep.trace_check import alfworld_layouts_folder
 
     layouts = alfworld_layouts_folder()
     if layouts is None:
         print("\n== real: skipped (the alfworld wheel, extra 'embodied', is not installed)")
-        if rows is not None:
-            rows.append({"section": "real", "skipped": "the alfworld wheel is not installed"})
+        if recorded is not None:
+            recorded.append({"section": "real", "skipped": "the alfworld wheel is not installed"})
         return
     root = Path(tempfile.mkdtemp(prefix="twostep-alfred-"))
     (root / "alfred").mkdir()
@@ -284,8 +284,8 @@ def real(seeds: int, rows: Rows | None = None) -> None:
             if engine:
                 judged += replay_trace(record, problem_text, plays).ok
         actions = sum(len(p) for p in run.plans.values())
-        if rows is not None:
-            rows.append({"section": "real", "problem": str(fixture.relative_to(ROOT)),
+        if recorded is not None:
+            recorded.append({"section": "real", "problem": str(fixture.relative_to(ROOT)),
                          "floor_plan": floor.name, "method": method, "agents": agents,
                          "actions": actions, "lengths": lengths, "checked": checked,
                          "engine": judged if engine else None, "seeds": seeds})  # fmt: skip
@@ -403,19 +403,19 @@ def main() -> None:
     parser.add_argument("--json", type=Path, help="also write the rows here (a bench record)")
     args = parser.parse_args()
     run = bench_record.started()
-    rows: Rows = []
+    recorded: Rows = []
     sections = set(args.sections.split(","))
     print(f"python {platform.python_version()}, {os.cpu_count()} cpus ({load()})")
     if "speed" in sections:
-        speed(args.repeats, args.size, rows)
+        speed(args.repeats, args.size, recorded)
     if "check" in sections:
-        check(args.seeds, rows)
+        check(args.seeds, recorded)
     if "render" in sections:
-        render(rows)
+        render(recorded)
     if "real" in sections:
-        real(min(args.seeds, 5), rows)
+        real(min(args.seeds, 5), recorded)
     if args.json:
-        bench_record.write(args.json, run, rows, sections=sorted(sections), size=args.size)
+        bench_record.write(args.json, run, recorded, sections=sorted(sections), size=args.size)
 
 
 if __name__ == "__main__":
