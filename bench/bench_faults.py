@@ -499,7 +499,7 @@ def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
         "",
         "## What each scenario printed",
         "",
-        *(f"- {note}" for row in rows for note in row.notes),
+        *(f"- {' '.join(note.split())}" for row in rows for note in row.notes),  # one line each
         "",
     ]
     return lines
