@@ -19,6 +19,7 @@ import datetime
 import json
 import os
 import platform
+import re
 import shlex
 import subprocess
 import sys
@@ -129,12 +130,33 @@ def table(head: Sequence[str], rows: Iterable[Sequence[Any]]) -> list[str]:
     return lines
 
 
-def run_lines(run: Mapping[str, Any] | None, source: str) -> list[str]:
+def printed_commands(printed: Path) -> list[str]:
+    """The bench command lines a bench's printed output starts its runs with (``# bench/...``
+    comment lines, as the methods bench prints them), in order, each once."""
+    if not printed.is_file():
+        return []
+    found = [
+        re.split(r"\s{2,}[(#]", line.removeprefix("# ").removeprefix("python "))[0].strip()
+        for line in printed.read_text().splitlines()
+        if line.startswith(("# bench/", "# python bench/"))
+    ]  # fmt: skip (a trailing remark cut)
+    return [f"python {c}" for c in dict.fromkeys(found)]
+
+
+def run_lines(run: Mapping[str, Any] | None, source: str, printed: Path | None = None) -> list[str]:
     """The header of a results page: which rows, which command, when, at which commit, on
-    what machine and at what load."""
+    what machine and at what load. Rows written before bench records have none of it: the
+    commands their printed output (``printed``) names stand in for the command."""
     lines = [f"- rows: [`{source}`](../bench/{Path(source).name})"]
     if not run:
-        return [*lines, "- run: not recorded in the rows (written before bench records)"]
+        lines.append(
+            "- run: date, machine and load not recorded in the rows (written before bench records)"
+        )
+        commands = printed_commands(printed) if printed else []
+        if commands and printed is not None:
+            lines.append(f"- commands printed in [`{printed.name}`](../bench/{printed.name}):")
+            lines += [f"    - `{c}`" for c in commands]
+        return lines
     m = run.get("machine") or {}
     memory = f", {m['memory_gb']:g} GB" if m.get("memory_gb") else ""
     lines += [

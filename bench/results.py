@@ -199,7 +199,8 @@ def _header_lines(page: Page, records: Sequence[dict[str, Any]]) -> list[str]:
         if len(records) > 1:
             lines.append(f"**{name}**")
             lines.append("")
-        lines += record.run_lines(data.get("run"), f"docs/bench/{name}")
+        printed = BENCH / name.replace(".json", ".txt")
+        lines += record.run_lines(data.get("run"), f"docs/bench/{name}", printed)
         lines.append("")
     return lines
 
