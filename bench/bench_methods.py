@@ -758,11 +758,12 @@ def _page(rows: list[Row], figure: Figure, name: str, level: int = 2) -> list[st
     default = offline_default()
     ns = _ns(rows)
     heading = "#" * level
-    lines = [
+    report_lines = [
         f"{heading} Data root {line.removeprefix('## data root ')}"
         if line.startswith("## data root ") else line
         for line in report_all(rows, METHODS, ns, default, outside=False).splitlines()
     ]  # fmt: skip
+    lines: list[str] = []
     # the 100 tasks with the targets, else the rows' one data root
     roots = sorted({row_data(r) for r in rows})
     drawn_root = (
@@ -775,13 +776,13 @@ def _page(rows: list[Row], figure: Figure, name: str, level: int = 2) -> list[st
         targets = TARGETS if drawn_root == LEGACY["data"] else None
         drawn = plot_methods(table, present, ns, targets, default, None)
         alt = "Macro exec/SA of each method against N with the targets, and against planning time"
-        lines += ["", f"{heading} Figure", "", figure(drawn, name, alt), "",
+        lines += [f"{heading} Figure", "", figure(drawn, name, alt), "",
                   f"Data root {drawn_root}. Left: the macro exec/SA (the mean over domains of the "
                   "per-task exec length / SA length) against N"
                   + (", with the targets of the offline default" if targets else "")
                   + ". Right: the same against the macro planning time (log scale; dashed: the SA "
                   "plan's own).", ""]  # fmt: skip
-    return lines
+    return lines + report_lines
 
 
 def page_plan_deal(records: Sequence[Mapping[str, Any]], figure: Figure) -> list[str]:
@@ -791,8 +792,11 @@ def page_plan_deal(records: Sequence[Mapping[str, Any]], figure: Figure) -> list
 
 def page_methods(records: Sequence[Mapping[str, Any]], figure: Figure) -> list[str]:
     """A page of several methods' rows side by side (later files' rows replace earlier
-    ones', as ``--report`` takes them)."""
-    return _page(_rows_of_records(records), figure, "macro")
+    ones', as ``--report`` takes them): the 100 tasks' where the rows have them (the
+    other data roots of those files are the plan-deal page's), else every root's."""
+    rows = _rows_of_records(records)
+    legacy = [r for r in rows if row_data(r) == LEGACY["data"]]
+    return _page(legacy or rows, figure, "macro")
 
 
 def page_heldout(records: Sequence[Mapping[str, Any]], figure: Figure) -> list[str]:

@@ -16,6 +16,7 @@ import os
 import subprocess
 import sys
 import threading
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
@@ -91,6 +92,11 @@ def test_the_built_site_renders_its_pages_and_figures(tmp_path: Path) -> None:
                 assert not broken, f"{page}: images that did not load: {broken}"
                 if page.startswith("results/"):
                     assert any(str(i["src"]).endswith(".svg") for i in images), images
+                if images:  # the first figure in view
+                    browser.run(
+                        "document.querySelector('article img').scrollIntoView({block: 'center'})"
+                    )
+                    time.sleep(0.5)
                 name = page.replace("/", "-").removesuffix(".html")
                 browser.screenshot(shots / f"site-{name}.png")
             # a link of the nav leads somewhere: the reference's API index lists the packages
