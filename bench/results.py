@@ -277,8 +277,18 @@ def bench_index(pages: Sequence[Page] = PAGES, bench: Path = BENCH) -> str:
     rows = []
     for page in pages:
         for name in page.sources:
-            run = record.load(bench / name).get("run")
-            command = f"`{run['command']}`" if run else "not recorded in the rows"
+            data = record.load(bench / name)
+            run, meta = data.get("run"), data.get("meta")
+            printed = record.printed_commands(bench / name.replace(".json", ".txt"))
+            if run:
+                command = f"`{run['command']}`"
+            elif meta and "corpus" in meta:  # the conformance bench's own header
+                command = (f"`python bench/bench_conformance.py --corpus {meta['corpus']} "
+                           f"--agents {meta['agents_file']} --out docs/bench/{name}`")  # fmt: skip
+            elif printed:
+                command = f"`{printed[0]}` (printed in `{name.replace('.json', '.txt')}`)"
+            else:
+                command = "not recorded in the rows"
             rows.append(
                 (f"[`{name}`]({name})", command, f"[{page.title}](../results/{page.slug}.md)")
             )
