@@ -71,10 +71,10 @@ def blocks(tmp_path: Path) -> Path:
 TWOSTEP_CASES: list[tuple[str, Callable[[Path], None], int | None, str]] = [
     ("p01.pddl", binary, None, "not a text file (byte 0 is not UTF-8)"),
     ("p01.pddl", deep, 13, "expressions nested 20003 levels deep"),
-    ("p01.pddl", directory, None, "not a file (a directory?)"),
+    ("p01.pddl", directory, None, "is a directory, not a regular file"),
     ("domain.pddl", binary, None, "not a text file (byte 0 is not UTF-8)"),
     ("domain.pddl", deep, 14, "expressions nested 20003 levels deep"),
-    ("domain.pddl", directory, None, "not a file (a directory?)"),
+    ("domain.pddl", directory, None, "is a directory, not a regular file"),
     ("expert.yaml", not_yaml, 3, "not valid YAML"),
     ("expert.yaml", binary, None, "not a text file (byte 0 is not UTF-8)"),
     ("p01.nl", binary, None, "not a text file (byte 0 is not UTF-8)"),
@@ -171,10 +171,10 @@ def score(files: dict[str, Path], cwd: Path) -> subprocess.CompletedProcess[str]
 SCORE_CASES: list[tuple[str, Callable[[Path], None], int | None, str]] = [
     ("domain", binary, None, "not a text file"),
     ("domain", deep, 14, "expressions nested"),
-    ("domain", directory, None, "a directory, not a PDDL file"),
+    ("domain", directory, None, "is a directory, not a regular file"),
     ("problem", binary, None, "not a text file"),
     ("problem", deep, 13, "expressions nested"),
-    ("problem", directory, None, "a directory, not a PDDL file"),
+    ("problem", directory, None, "is a directory, not a regular file"),
     ("plan", binary, None, "not a text file (byte 0 is not UTF-8): expected a plan"),
     ("plan", directory, None, "cannot read plan"),
 ]

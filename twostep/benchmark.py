@@ -20,8 +20,9 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
-from twostep.files import NotTextError, read_text_file
+from twostep.files import NotTextError, exists, file_problem, read_text_file, read_yaml_file
 from twostep.pddl import PDDLError, Problem, load_problem
+from twostep.pddl.translator import GroundingLimits
 
 
 def _installed_data_root() -> Path:
@@ -62,7 +63,9 @@ class BenchmarkTask:
 
 
 def _read(path: Path) -> str:
-    if not path.is_file():
+    """An optional text file of the task (none there: empty); one that cannot be read as
+    text (binary, a FIFO, ...) is a :class:`BenchmarkError` naming it."""
+    if not exists(path):
         return ""
     try:
         return read_text_file(path)
@@ -71,16 +74,16 @@ def _read(path: Path) -> str:
 
 
 def load_pddl_files(
-    domain_path: Path, problem_path: Path, cache_dir: Path | None = None
+    domain_path: Path,
+    problem_path: Path,
+    cache_dir: Path | None = None,
+    limits: GroundingLimits | None = None,
 ) -> Problem:
     """Read a domain and a problem file (:func:`twostep.pddl.load_problem`) so that every
     bad file is one :class:`PDDLError` naming it: also a directory where a file belongs,
     and expressions nested deeper than the reader can follow (Python's recursion limit)."""
-    for path in (domain_path, problem_path):
-        if Path(path).is_dir():
-            raise PDDLError("a directory, not a PDDL file", str(path))
     try:
-        return load_problem(domain_path, problem_path, cache_dir)
+        return load_problem(domain_path, problem_path, cache_dir, limits)
     except RecursionError:
         depth, line, path = max((*_deepest(Path(p)), Path(p)) for p in (domain_path, problem_path))
         raise PDDLError(
@@ -130,8 +133,9 @@ def list_tasks(domain: str, root: Path = DEFAULT_DATA_ROOT) -> list[int]:
 
 def domain_dir(domain: str, root: Path = DEFAULT_DATA_ROOT) -> Path:
     folder = Path(root) / domain
-    if (folder / "domain.pddl").exists() and not (folder / "domain.pddl").is_file():
-        raise BenchmarkError(f"{folder / 'domain.pddl'}: not a file (a directory?)")
+    problem = file_problem(folder / "domain.pddl")
+    if problem is not None:  # a FIFO, a device, a directory, a symlink loop, too large
+        raise BenchmarkError(problem)
     if not domain_file(domain, root).is_file():
         known = ", ".join(list_domains(Path(root))) or "none"
         raise BenchmarkError(f"unknown domain '{domain}' in {root}; domains: {known}")
@@ -144,12 +148,14 @@ TITLES_FILE = "titles.yaml"
 def task_titles(domain: str, root: Path = DEFAULT_DATA_ROOT) -> dict[int, str]:
     """The domain's one-line task titles (``titles.yaml``: ``p01: "..."``), by task id;
     empty when the folder has none."""
-    import yaml
-
     path = domain_dir(domain, root) / TITLES_FILE
-    if not path.is_file():
+    if not exists(path):
         return {}
-    return parse_task_titles(yaml.safe_load(path.read_text()) or {}, path)
+    try:
+        data = read_yaml_file(path)
+    except (NotTextError, ValueError, OSError) as error:  # FileFormatError is a ValueError
+        raise BenchmarkError(str(error)) from None
+    return parse_task_titles(data or {}, path)
 
 
 def parse_task_titles(data: object, path: Path) -> dict[int, str]:
@@ -169,25 +175,31 @@ def parse_task_titles(data: object, path: Path) -> dict[int, str]:
 def task_path(domain: str, task: int, root: Path = DEFAULT_DATA_ROOT) -> Path:
     folder = domain_dir(domain, root)
     for candidate in (folder / f"p{task:02d}.pddl", folder / f"p{task}.pddl"):
+        problem = file_problem(candidate)
+        if problem is not None:  # a FIFO, a device, a directory, a symlink loop, too large
+            raise BenchmarkError(problem)
         if candidate.is_file():
             return candidate
-        if candidate.exists():
-            raise BenchmarkError(f"{candidate}: not a file (a directory?)")
     tasks = list_tasks(domain, root)
     listing = f"{tasks[0]}..{tasks[-1]}" if tasks else "none"
     raise BenchmarkError(f"unknown task {task} of domain '{domain}'; tasks: {listing}")
 
 
 def load_task(
-    domain: str, task: int, root: Path = DEFAULT_DATA_ROOT, cache_dir: Path | None = None
+    domain: str,
+    task: int,
+    root: Path = DEFAULT_DATA_ROOT,
+    cache_dir: Path | None = None,
+    limits: GroundingLimits | None = None,
 ) -> BenchmarkTask:
     """Load task ``task`` (1-based) of ``domain`` from the data root ``root``
-    (``cache_dir``: parsed problems kept for the next process, see ``load_problem``)."""
+    (``cache_dir``: parsed problems kept for the next process, see ``load_problem``;
+    ``limits``: what its grounding may use, :class:`~twostep.pddl.translator.GroundingLimits`)."""
     root = Path(root)
     folder = domain_dir(domain, root)
     path = task_path(domain, task, root)
     domain_path = domain_file(domain, root)
-    problem = load_pddl_files(domain_path, path, cache_dir)
+    problem = load_pddl_files(domain_path, path, cache_dir, limits)
     plan_text = _read(folder / "p_example.sol")
     example_plan = tuple(
         line.split(";", 1)[0].strip()

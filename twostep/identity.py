@@ -17,7 +17,8 @@ grouping of runs (``twostep/report``) all ask this module.
   finish its work (:func:`is_storable`): a re-run tries those again; a stored entry is
   reused only when it is a whole result (:func:`is_complete_result`).
 
-Plain data in, plain data out; the only I/O is reading the input files' bytes.
+Plain data in, plain data out; the only I/O is reading the input files' bytes (through
+:func:`twostep.files.read_input_bytes`).
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from twostep.files import NotTextError, read_input_bytes
+
 # Bump when a change to the pipeline makes stored results stale.
 # job-3: the methods moved into twostep/methods (one request, enums, typed SA time)
 # job-4: an embodied execution that fails fails the run (status embodied_failed)
@@ -39,12 +42,15 @@ JOB_VERSION = "job-4"
 NOT_IDENTITY_GROUPS: tuple[str, ...] = ("hydra", "output", "mlflow", "orchestration", "experiment")
 
 # Single keys that change how an answer is obtained or shown, never which answer.
+# ``planner.grounding_time_limit_s``: a grounding it stops fails the job (status
+# ``resource_limit``), which is never stored, so no stored result depends on it.
 NOT_IDENTITY_KEYS: frozenset[str] = frozenset(
-    {"llm.cache_dir", "llm.max_retries", "llm.backoff_s", "llm.api_key_env", "executor.render"}
-)
+    {"llm.cache_dir", "llm.max_retries", "llm.backoff_s", "llm.api_key_env", "executor.render",
+     "planner.grounding_time_limit_s"}
+)  # fmt: skip
 
 # Results with these statuses did not finish their work: never stored, retried by a re-run.
-UNFINISHED_STATUSES: frozenset[str] = frozenset({"error", "llm_error", "failed"})
+UNFINISHED_STATUSES: frozenset[str] = frozenset({"error", "llm_error", "failed", "resource_limit"})
 
 # What every result has (``RunResult.to_dict``): a stored entry without them is no result.
 RESULT_KEYS: frozenset[str] = frozenset({"domain", "task", "method", "agents", "success", "status"})
@@ -146,10 +152,13 @@ def job_input_files(config: Mapping[str, Any], problem_path: Path | None) -> dic
 
 
 def file_digest(path: Path) -> str:
-    """SHA-256 of a file's bytes; ``"missing"`` for a file that cannot be read."""
+    """SHA-256 of a file's bytes, read by the one checked reader of input files
+    (:func:`twostep.files.read_input_bytes`: a FIFO is never waited on, ``/dev/zero``
+    never read); ``"missing"`` for a file that cannot be read (the job's check before any
+    work names it)."""
     try:
-        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-    except OSError:
+        return hashlib.sha256(read_input_bytes(Path(path))).hexdigest()
+    except (OSError, NotTextError):
         return "missing"
 
 

@@ -34,7 +34,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-import yaml
+from twostep.files import read_yaml_file
 
 Cell = tuple[int, int]
 SExpr = str | list["SExpr"]
@@ -333,7 +333,7 @@ class Floor:
 
 def read_kitchen_file(path: str | Path) -> Floor:
     """A ``kitchen.yaml`` floor plan file."""
-    return read_kitchen(yaml.safe_load(Path(path).read_text()))
+    return read_kitchen(read_yaml_file(Path(path)))
 
 
 def read_kitchen(data: Mapping[str, Any]) -> Floor:

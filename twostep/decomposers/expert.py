@@ -17,13 +17,13 @@ from typing import Any
 
 from twostep.benchmark import BenchmarkError
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
-from twostep.files import FileFormatError, NotTextError, read_yaml_file
+from twostep.files import FileFormatError, NotTextError, exists, read_yaml_file
 
 
 def load_expert_subgoals(path: Path) -> dict[str, dict[int, list[str]]]:
     """``{"p01": {N: [subgoal of helper 1, ...]}}`` from an ``expert.yaml`` (none: empty);
     a file that cannot be read that way is a :class:`BenchmarkError` naming it."""
-    if not path.is_file():
+    if not exists(path):
         return {}
     try:
         raw: Any = read_yaml_file(path) or {}
@@ -33,6 +33,8 @@ def load_expert_subgoals(path: Path) -> dict[str, dict[int, list[str]]]:
         }
     except (NotTextError, FileFormatError) as error:
         raise BenchmarkError(str(error)) from None
+    except OSError as error:
+        raise BenchmarkError(f"{path}: cannot be read ({error.strerror or error})") from None
     except (AttributeError, TypeError, ValueError):
         raise BenchmarkError(
             f"{path}: expected 'p01: {{N: [helper 1's subgoal, ...]}}' entries"

@@ -26,10 +26,19 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
+from twostep.files import FileFormatError, NotTextError, read_yaml_file
 
 Cell = tuple[int, int]
 Rect = tuple[int, int, int, int]
+
+MAX_SIDE = 1000
+"""The widest and tallest grid a floor plan file may describe, in cells."""
+MAX_CELLS = 250_000
+"""The most cells a floor plan file's grid may have (width x height): every agent's walk
+searches it."""
+MAX_COVER = 4 * MAX_CELLS
+"""The most cells a floor plan file's walls and furniture may cover in all (overlaps
+counted each time): what reading them costs."""
 
 
 class FloorPlanError(Exception):
@@ -109,25 +118,69 @@ def build_floor_plan(
     return plan
 
 
+def _integers(value: Any, what: str, shape: str, count: int) -> tuple[int, ...]:
+    """``value`` as ``count`` integers (a number with a fraction is cut to its integer
+    part, as before); anything else is a :class:`FloorPlanError` naming ``what``."""
+    if not (isinstance(value, list | tuple) and len(value) == count):
+        raise FloorPlanError(f"{what}: expected {shape}, got {value!r}")
+    try:
+        if any(isinstance(v, bool) for v in value):
+            raise TypeError
+        return tuple(int(v) for v in value)
+    except (TypeError, ValueError, OverflowError):
+        raise FloorPlanError(f"{what}: expected {shape} of integers, got {value!r}") from None
+
+
 def _pair(value: Any, what: str) -> Cell:
-    if not (isinstance(value, list | tuple) and len(value) == 2):
-        raise FloorPlanError(f"{what}: expected [x, y], got {value!r}")
-    return int(value[0]), int(value[1])
+    x, y = _integers(value, what, "[x, y]", 2)
+    return x, y
 
 
 def _rect(value: Any, what: str) -> Rect:
-    if not (isinstance(value, list | tuple) and len(value) == 4):
-        raise FloorPlanError(f"{what}: expected [x, y, width, height], got {value!r}")
-    x, y, w, h = (int(v) for v in value)
+    x, y, w, h = _integers(value, what, "[x, y, width, height]", 4)
     return x, y, w, h
 
 
+def _check_grid(width: int, height: int, source: str) -> None:
+    """A grid of 1 to :data:`MAX_SIDE` cells a side and at most :data:`MAX_CELLS` cells."""
+    if not (1 <= width <= MAX_SIDE and 1 <= height <= MAX_SIDE):
+        raise FloorPlanError(
+            f"{source}: a {width} x {height} grid: width and height must be 1 to {MAX_SIDE}"
+        )
+    if width * height > MAX_CELLS:
+        raise FloorPlanError(
+            f"{source}: a {width} x {height} grid has more than the {MAX_CELLS:,} cells a "
+            "floor plan may have"
+        )
+
+
+def _check_rects(rects: Mapping[str, Rect], width: int, height: int, source: str) -> None:
+    """Walls and furniture of a positive size, no larger than the grid, covering at most
+    :data:`MAX_COVER` cells in all."""
+    for what, (_, _, w, h) in rects.items():
+        if not (1 <= w <= width and 1 <= h <= height):
+            raise FloorPlanError(
+                f"{source}: {what}: size {w} x {h} is out of range (1 to the grid's "
+                f"{width} x {height})"
+            )
+    cover = sum(w * h for _, _, w, h in rects.values())
+    if cover > MAX_COVER:
+        raise FloorPlanError(
+            f"{source}: walls and furniture cover {cover:,} cells in all, more than the "
+            f"{MAX_COVER:,} a floor plan may"
+        )
+
+
 def floor_plan_from_dict(data: Mapping[str, Any], source: str = "floor plan") -> FloorPlan:
-    """A floor plan from the parsed YAML layout above."""
+    """A floor plan from the parsed YAML layout above (bounded: :data:`MAX_SIDE`,
+    :data:`MAX_CELLS`, :data:`MAX_COVER`; walls and furniture of a positive size)."""
     try:
+        if isinstance(data["width"], bool) or isinstance(data["height"], bool):
+            raise TypeError
         width, height = int(data["width"]), int(data["height"])
-    except (KeyError, TypeError, ValueError):
+    except (KeyError, TypeError, ValueError, OverflowError):
         raise FloorPlanError(f"{source}: 'width' and 'height' must be integers") from None
+    _check_grid(width, height, source)
     locations = {
         str(k).lower(): _pair(v, f"{source}: location {k}")
         for k, v in (data.get("locations") or {}).items()
@@ -137,6 +190,9 @@ def floor_plan_from_dict(data: Mapping[str, Any], source: str = "floor plan") ->
         str(k).lower(): _rect(v, f"{source}: furniture {k}")
         for k, v in (data.get("furniture") or {}).items()
     }
+    rects = {f"wall {i + 1}": rect for i, rect in enumerate(walls)}
+    rects.update((f"furniture {name}", rect) for name, rect in furniture.items())
+    _check_rects(rects, width, height, source)
     blocked = [_pair(v, f"{source}: blocked cell") for v in data.get("blocked") or []]
     fixtures = {
         str(k).lower(): _pair(v, f"{source}: fixture {k}")
@@ -173,11 +229,17 @@ def floor_plan_to_dict(floor_plan: FloorPlan) -> dict[str, Any]:
 
 
 def load_floor_plan(path: str | Path) -> FloorPlan:
-    """Read a floor plan YAML file (see the module docstring)."""
+    """Read a floor plan YAML file (see the module docstring); a file that cannot be read
+    as one (not a regular file, not text, not YAML) is a :class:`FloorPlanError` naming it."""
     path = Path(path)
-    if not path.is_file():
-        raise FloorPlanError(f"{path}: no such floor plan file")
-    data = yaml.safe_load(path.read_text())
+    try:
+        data = read_yaml_file(path)
+    except (NotTextError, FileFormatError) as error:
+        raise FloorPlanError(str(error)) from None
+    except FileNotFoundError:
+        raise FloorPlanError(f"{path}: no such floor plan file") from None
+    except OSError as error:
+        raise FloorPlanError(f"{path}: cannot be read ({error.strerror or error})") from None
     if not isinstance(data, dict):
         raise FloorPlanError(f"{path}: expected a mapping with width, height and locations")
     return floor_plan_from_dict(data, str(path))

@@ -39,6 +39,7 @@ from twostep.embodied.floorplan import (
     load_floor_plan,
     unmangle,
 )
+from twostep.files import NotTextError, exists, read_text_file
 
 OPEN_GRID = "open"  # layout value: made-up coordinates on an open grid, no scene
 GRID_M = 0.25  # AI2-THOR's navigation grid, metres
@@ -119,8 +120,14 @@ def find_scene(
     """The scene of a real AlfWorld problem: the ``traj_data.json`` beside it, else a
     ``FloorPlanN`` in its name, else the scene whose receptacle ids the problem uses
     (most matches), else the one scene whose reachable points hold every location."""
-    if folder is not None and (Path(folder) / TRAJ_DATA).is_file():
-        data = json.loads((Path(folder) / TRAJ_DATA).read_text())
+    if folder is not None and exists(Path(folder) / TRAJ_DATA):
+        path = Path(folder) / TRAJ_DATA
+        try:
+            data = json.loads(read_text_file(path))
+        except (NotTextError, ValueError, OSError) as error:
+            raise FloorPlanError(f"{path}: cannot be read as JSON ({error})") from None
+        if not isinstance(data, dict):
+            raise FloorPlanError(f"{path}: expected a JSON object with its scene")
         scene = (data.get("scene") or {}).get("floor_plan") or (data.get("scene") or {}).get(
             "scene_num"
         )
@@ -227,8 +234,8 @@ def floor_plan_for_task(
     locations = list(location_names)
     if layout == OPEN_GRID:
         return floor_plan_from_locations(locations)
-    if layout is None and folder is not None and (Path(folder) / FLOOR_PLAN_FILE).is_file():
-        return load_floor_plan(Path(folder) / FLOOR_PLAN_FILE)
+    if layout is None and folder is not None and exists(Path(folder) / FLOOR_PLAN_FILE):
+        return load_floor_plan(Path(folder) / FLOOR_PLAN_FILE)  # a FIFO, a directory: named
     if layout is None and not (locations and all(alfworld_position(n) for n in locations)):
         raise FloorPlanError(
             f"no {FLOOR_PLAN_FILE} in {folder} and the locations are not AlfWorld's "

@@ -39,8 +39,8 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
-import yaml
 
+from twostep.files import FileFormatError, read_yaml_file
 from twostep.params import flatten_config
 from twostep.planner.limits import guard_stops, planner_limit_hits
 
@@ -287,8 +287,8 @@ def _read_hydra_config(job_dir: Path) -> dict[str, str]:
     if not path.is_file():
         return {}
     try:
-        loaded = yaml.safe_load(path.read_text())
-    except yaml.YAMLError:
+        loaded = read_yaml_file(path)
+    except FileFormatError:
         return {}
     return flatten_config(loaded) if isinstance(loaded, Mapping) else {}
 

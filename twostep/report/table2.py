@@ -25,9 +25,9 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
-import yaml
 
 from twostep.benchmark import TITLES_FILE, BenchmarkError, parse_task_titles
+from twostep.files import FileFormatError, NotTextError, read_yaml_file
 from twostep.report.aggregation import sample_std
 
 TABLE2_DOMAIN = "alfworld"
@@ -160,8 +160,8 @@ def read_task_titles(domain_dir: Path) -> dict[int, str]:
     if not path.is_file():
         return {}
     try:
-        return parse_task_titles(yaml.safe_load(path.read_text(encoding="utf-8")) or {}, path)
-    except (OSError, UnicodeDecodeError, yaml.YAMLError, BenchmarkError):
+        return parse_task_titles(read_yaml_file(path) or {}, path)
+    except (OSError, NotTextError, FileFormatError, BenchmarkError):
         return {}
 
 
