@@ -14,11 +14,11 @@ from __future__ import annotations
 
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, cast
 
 from flows.checks import JobError, check_values
 from flows.config import TwostepConfig
@@ -26,7 +26,8 @@ from twostep.benchmark import BenchmarkTask, load_task, task_path
 from twostep.decomposers.base import Decomposer
 from twostep.embodied import ExecutorSettings
 from twostep.execution import SearchBudget
-from twostep.files import yaml_problem
+from twostep.files import exists, file_problem, yaml_problem
+from twostep.identity import job_input_files
 from twostep.methods import (
     DIRECT,
     Method,
@@ -39,6 +40,7 @@ from twostep.methods import (
     run_single_agent,
 )
 from twostep.methods.registry import SUBGOAL_SOURCES
+from twostep.pddl.translator import GroundingLimits
 from twostep.planner import PlannerSettings
 
 if TYPE_CHECKING:
@@ -50,6 +52,16 @@ def planner_settings(cfg: TwostepConfig) -> PlannerSettings:
         alias=cfg.planner.alias,
         search_time_limit_s=float(cfg.planner.time_limit_s),
         memory_limit_mb=cfg.planner.memory_limit_mb,
+    )
+
+
+def grounding_limits(cfg: TwostepConfig) -> GroundingLimits:
+    """What grounding the task may use: ``planner.memory_limit_mb`` and
+    ``planner.grounding_time_limit_s`` (null: ``planner.time_limit_s``)."""
+    seconds = cfg.planner.grounding_time_limit_s
+    return GroundingLimits(
+        memory_mb=cfg.planner.memory_limit_mb,
+        time_s=float(cfg.planner.time_limit_s if seconds is None else seconds),
     )
 
 
@@ -100,7 +112,9 @@ def load_job_task(cfg: TwostepConfig) -> BenchmarkTask:
     """The job's task; says so on stderr when the data root's folder has no domain file
     and the tasks are read with twostep's own (:func:`twostep.benchmark.domain_file`)."""
     cache = Path(cfg.output.root) / "cache" / "tasks"  # parsed PDDL: see load_problem
-    task = load_task(cfg.domain.name, int(cfg.task), Path(cfg.data.root), cache)
+    task = load_task(
+        cfg.domain.name, int(cfg.task), Path(cfg.data.root), cache, grounding_limits(cfg)
+    )
     folder = Path(cfg.data.root) / cfg.domain.name
     if task.domain_path.parent != folder:
         print(f"note: {folder} has no domain.pddl: its tasks are read with twostep's own "
@@ -113,7 +127,12 @@ def check_job(cfg: TwostepConfig) -> None:
     anything heavy is imported): every value in range (one line naming the key and the
     allowed values), and the task's files where the config says they are."""
     check_values(cfg)
-    task_path(cfg.domain.name, int(cfg.task), Path(cfg.data.root))  # BenchmarkError
+    problem = task_path(cfg.domain.name, int(cfg.task), Path(cfg.data.root))  # BenchmarkError
+    config = cast("Mapping[str, Any]", cfg)  # Hydra's DictConfig: a mapping
+    for path in job_input_files(config, problem).values():  # no FIFO, device or loop read
+        bad = file_problem(path)
+        if bad is not None:
+            raise JobError(bad)
 
 
 def check_task(cfg: TwostepConfig, task: BenchmarkTask) -> None:
@@ -134,25 +153,31 @@ def check_task(cfg: TwostepConfig, task: BenchmarkTask) -> None:
             f"({task.domain_path}); its predicates: {', '.join(sorted(predicates))}{hint}"
         )
     if cfg.executor.name == "embodied":
-        check_kitchen(task)
+        check_kitchen(task, cfg.executor.layout)
 
 
-def check_kitchen(task: BenchmarkTask) -> None:
+def check_kitchen(task: BenchmarkTask, layout: str | None = None) -> None:
     """``executor=embodied`` runs plans on the task's floor plan: the domain folder's
-    kitchen.yaml, or the grid of its location objects. Neither there, or a kitchen.yaml
-    that cannot be read, is one line naming the file or the domain."""
+    kitchen.yaml, or the grid of its location objects, or the scene ``layout``
+    (``executor.layout``). Neither there, a kitchen.yaml that cannot be read or a layout
+    that does not exist, is one line naming the file, the domain or the key."""
     import yaml
 
     from twostep.embodied import FloorPlanError, task_floor_plan
 
     kitchen = task.domain_path.parent / "kitchen.yaml"
     try:
-        task_floor_plan(task.problem, task.domain_path.parent)
+        task_floor_plan(task.problem, task.domain_path.parent, layout)
     except yaml.YAMLError as error:
         raise JobError(yaml_problem(kitchen, error)) from None
     except FloorPlanError as error:
-        if kitchen.is_file():
-            raise JobError(f"{kitchen}: {error}") from None
+        if layout is not None:
+            raise JobError(f"executor.layout={layout}: {error}") from None
+        if exists(kitchen):
+            message = str(error)
+            raise JobError(
+                message if message.startswith(str(kitchen)) else f"{kitchen}: {message}"
+            ) from None
         raise JobError(
             f"executor=embodied needs a kitchen: domain '{task.domain_name}' has no "
             f"kitchen.yaml in {kitchen.parent} and no location objects to lay out "

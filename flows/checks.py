@@ -59,6 +59,7 @@ def value_problems(cfg: Any) -> list[str]:
     from twostep.llm.client import MODES as LLM_MODES
     from twostep.llm.client import key_env_problem
     from twostep.methods.registry import DECOMPOSERS, METHODS
+    from twostep.processes import DEFAULT_MEMORY_LIMIT_MB, MIN_MEMORY_LIMIT_MB
 
     problems = [
         _choice("score_mode", cfg.score_mode, SCORE_MODES),
@@ -76,8 +77,16 @@ def value_problems(cfg: Any) -> list[str]:
         problems.append(_choice("decomposer", cfg.decomposer.name, DECOMPOSERS))
     if int(cfg.agents) < 1:
         problems.append(f"agents={cfg.agents} must be at least 1")
-    if cfg.planner.memory_limit_mb is not None and int(cfg.planner.memory_limit_mb) <= 0:
-        problems.append(f"planner.memory_limit_mb={cfg.planner.memory_limit_mb} must be > 0")
+    memory = cfg.planner.memory_limit_mb
+    if memory is not None and int(memory) < MIN_MEMORY_LIMIT_MB:
+        problems.append(
+            f"planner.memory_limit_mb={memory} must be at least {MIN_MEMORY_LIMIT_MB} (MB; "
+            f"null: {DEFAULT_MEMORY_LIMIT_MB})"
+        )
+    if cfg.planner.grounding_time_limit_s is not None:
+        problems.append(
+            _seconds("planner.grounding_time_limit_s", cfg.planner.grounding_time_limit_s)
+        )
     if cfg.score_max_nodes is not None and int(cfg.score_max_nodes) < 0:
         problems.append(f"score_max_nodes={cfg.score_max_nodes} must be >= 0 (or null)")
     if cfg.score_time_limit_s is not None:

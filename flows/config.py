@@ -104,7 +104,10 @@ class PlannerConfig:
 
     alias: str = _PLANNER.alias  # lama (anytime, paper) | lama-first
     time_limit_s: float = _PLANNER.search_time_limit_s
+    # each Fast Downward process (grounding, the planner's translator and search); null: 4096
     memory_limit_mb: int | None = _PLANNER.memory_limit_mb
+    # CPU seconds to ground the task (Fast Downward's translator); null: time_limit_s
+    grounding_time_limit_s: float | None = None
 
 
 @dataclass

@@ -59,6 +59,9 @@ from twostep.embodied.run import draws_pictures
 from twostep.identity import is_complete_result, job_name
 from twostep.llm.client import LLMScriptError
 from twostep.pddl import PDDLError
+from twostep.processes import ResourceLimitError
+
+RESOURCE_LIMIT = "resource_limit"  # result.json status of a job a limit ended (exit 1)
 
 # Errors in what the user asked for: one line, no traceback.
 INPUT_ERRORS: tuple[type[Exception], ...] = (BenchmarkError, PDDLError, JobError, LLMScriptError)
@@ -79,7 +82,11 @@ class JobOutcome:
     tracking_error: str | None = None  # logging failed; the result itself is safe
 
 
-def failed_result(config: dict[str, Any], error: str) -> dict[str, Any]:
+def failed_result(
+    config: dict[str, Any], error: str, status: str = JobStatus.FAILED.value
+) -> dict[str, Any]:
+    """The result of a job that raised (``status``: ``failed``, or ``resource_limit`` for
+    a limit that ended it, :class:`~twostep.processes.ResourceLimitError`)."""
     return {
         "domain": config["domain"]["name"],
         "task": config.get("task"),
@@ -87,7 +94,7 @@ def failed_result(config: dict[str, Any], error: str) -> dict[str, Any]:
         "agents": config.get("agents"),
         "seed": config.get("seed"),
         "success": False,
-        "status": JobStatus.FAILED.value,
+        "status": status,
         "message": error,
         "error": error,
     }
@@ -294,7 +301,7 @@ def _run_or_reuse(
     """The job's outcome (the stored result, or computed and stored now) and, for a job
     that raised, its traceback (``identity``: its key and name; ``start``: when it started)."""
     key, name = identity
-    stats, error, details = StepStats(), refused, None
+    stats, error, details, status = StepStats(), refused, None, JobStatus.FAILED.value
     input_error = refused is not None
     compute_timings: dict[str, float] = {"server_wait_s": 0.0}
     if stored is not None:
@@ -304,12 +311,14 @@ def _run_or_reuse(
             result, compute_timings = compute_job(cfg, config, name, sweep, stats)
         except INPUT_ERRORS as exc:
             error, input_error = one_line(exc, name_type=False), True
+        except ResourceLimitError as exc:  # names the limit and its key; never stored
+            error, status = one_line(exc, name_type=False), RESOURCE_LIMIT
         except Exception as exc:
             error, details = one_line(exc), traceback.format_exc()
         if error is None:
             store.save(key, config, result)  # unless it did not finish (llm_error, error)
     if error is not None:
-        result = failed_result(config, error)
+        result = failed_result(config, error, status)
     outcome = _outcome(name, key, result, stored is not None, stats, compute_timings, start)
     outcome.input_error = input_error
     return outcome, details

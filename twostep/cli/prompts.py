@@ -24,6 +24,7 @@ from twostep.llm.prompts import (
     translator_messages,
 )
 from twostep.pddl import PDDLError
+from twostep.processes import ResourceLimitError
 
 PLACEHOLDER = "<the subgoal generated for agent{}>"
 
@@ -66,7 +67,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"--helper must be in 1..{args.agents - 1}")
     try:
         task = load_task(args.domain, args.task, args.data)
-    except (BenchmarkError, PDDLError) as exc:
+    except (BenchmarkError, PDDLError, ResourceLimitError) as exc:
         print(f"twostep-prompts: error: {exc}", file=sys.stderr)
         return 2
     earlier = [PLACEHOLDER.format(i) for i in range(1, args.helper)]

@@ -33,6 +33,7 @@ from twostep.cli import console_main
 from twostep.execution import DEFAULT_SEARCH_BUDGET, MODES, ScheduleError, parallel_length
 from twostep.files import NotTextError, read_text_file
 from twostep.pddl import PDDLError
+from twostep.processes import ResourceLimitError
 from twostep.strips import Grounder, PlanError, read_plan
 
 EXIT_VALID = 0
@@ -138,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
         problem = load_pddl_files(
             args.domain, args.problem, cache_dir=None if args.no_cache else args.cache_dir
         )
-    except PDDLError as error:
+    except (PDDLError, ResourceLimitError) as error:
         return _fail(str(error))
     if args.agent_predicates is None:
         print(

@@ -19,17 +19,19 @@ from dataclasses import replace
 from importlib import metadata
 from pathlib import Path
 
-from twostep.files import write_bytes_atomic
+from twostep.files import NotAFileError, file_problem, read_input_bytes, write_bytes_atomic
 from twostep.pddl.errors import PDDLError
 from twostep.pddl.goals import ground_goal
 from twostep.pddl.grounded import Fact, GroundTask, fact_to_pddl
 from twostep.pddl.lifted import conjunction_literals, read_domain, read_problem
+from twostep.pddl.lint import check_kinds, lint_domain, lint_problem
 from twostep.pddl.model import Goal, Problem
 from twostep.pddl.repairs import repair_task
 from twostep.pddl.sas import read_sas
 from twostep.pddl.sexp import read_sexp, write_sexp
-from twostep.pddl.translator import translate
+from twostep.pddl.translator import GroundingLimits, grounding_limits, translate
 from twostep.pddl.writer import planner_input, pretty_define, problem_to_pddl
+from twostep.processes import ResourceLimitError
 
 UNREACHABLE_GOAL: Fact = ("@unreachable-goal",)
 """The fact a goal formula stands for when the translator finds it unreachable: no state
@@ -52,8 +54,13 @@ def parse_problem(
         domain_text, problem_text, domain_source, problem_source
     )
     # line numbers come from the files as written (a repair only moves declarations)
+    check_kinds(
+        domain_body, problem_body, (domain_source, problem_source), (domain_text, problem_text)
+    )
     domain = read_domain(domain_body, domain_text, domain_source)
+    lint_domain(domain, domain_text, domain_source)  # types, arities, variables
     parts = read_problem(problem_body, domain, problem_text, problem_source)
+    lint_problem(domain, parts, problem_body, problem_text, problem_source)
     if repaired:
         domain = replace(domain, text=pretty_define(domain_body))
         problem_text = pretty_define(problem_body)
@@ -100,17 +107,21 @@ def ground_problem(problem: Problem) -> GroundTask:
     grounded towards the empty goal (its goal facts: :data:`UNREACHABLE_GOAL`).
     """
     domain_text, problem_text = planner_input(problem)
+    files = (
+        f"{problem.source} (domain {problem.domain.source})"
+        if problem.domain.source
+        else problem.source
+    )
     try:
         translation = translate(domain_text, problem_text)
     except PDDLError as error:  # the translator reads both files: name them
         if error.source is not None or problem.source is None:
             raise
-        files = (
-            f"{problem.source} (domain {problem.domain.source})"
-            if problem.domain.source
-            else problem.source
-        )
         raise PDDLError(error.message, files) from None
+    except ResourceLimitError as error:
+        if problem.source is None:
+            raise
+        raise ResourceLimitError(f"{files}: {error}", error.key) from None
     if translation.goal_unreachable:
         open_goal = problem.with_state(goal=Goal()) if problem.goal else problem
         translation = translate(domain_text, problem_to_pddl(open_goal))
@@ -125,8 +136,13 @@ def _without_goal(task: GroundTask) -> GroundTask:
 
 
 def read_pddl_file(path: Path) -> str:
-    """A PDDL file's text; a file that is not UTF-8 text is a :class:`PDDLError` naming it."""
-    data = path.read_bytes()
+    """A PDDL file's text, read by the checked reader (:func:`twostep.files.
+    read_input_bytes`); a file that is no regular file of bounded size, or not UTF-8 text,
+    is a :class:`PDDLError` naming it."""
+    try:
+        data = read_input_bytes(path)
+    except NotAFileError as error:
+        raise PDDLError(str(error).removeprefix(f"{path}: "), str(path)) from None
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as error:
@@ -136,7 +152,10 @@ def read_pddl_file(path: Path) -> str:
 
 
 def load_problem(
-    domain_path: str | Path, problem_path: str | Path, cache_dir: str | Path | None = None
+    domain_path: str | Path,
+    problem_path: str | Path,
+    cache_dir: str | Path | None = None,
+    limits: GroundingLimits | None = None,
 ) -> Problem:
     """Read a domain file and a problem file, grounded.
 
@@ -144,10 +163,19 @@ def load_problem(
     reads it back in milliseconds instead of parsing and running the translator. An entry
     is keyed by both files' paths and contents and by the reader's own code and the
     translator's release (:func:`_parser_version`): a change to any of them parses again.
-    Files that do not parse raise as without a cache (nothing is stored).
+    Files that do not parse raise as without a cache (nothing is stored). ``limits``:
+    what grounding may use (:class:`~twostep.pddl.translator.GroundingLimits`; None: the
+    limits set for the process, :func:`~twostep.pddl.translator.grounding_limits`).
     """
-    domain_path, problem_path = Path(domain_path), Path(problem_path)
+    with grounding_limits(limits):
+        return _load_problem(Path(domain_path), Path(problem_path), cache_dir)
+
+
+def _load_problem(domain_path: Path, problem_path: Path, cache_dir: str | Path | None) -> Problem:
     for path in (domain_path, problem_path):
+        bad = file_problem(path)  # a FIFO, a device, a directory, a loop, too large
+        if bad is not None:
+            raise PDDLError(bad.removeprefix(f"{path}: "), str(path))
         if not path.is_file():
             raise PDDLError("no such file", str(path))
     domain_text, problem_text = read_pddl_file(domain_path), read_pddl_file(problem_path)

@@ -21,20 +21,36 @@ Options, and why:
 A goal that is not reachable even when deletes are ignored makes the translator write an
 empty, unsolvable task; the grounding is then redone with an empty goal, so that the
 actions are still there (a hand-off problem or a subgoal may well be solvable).
+
+Grounding is bounded (:class:`GroundingLimits`): the translator runs under the guard of
+:mod:`twostep.processes` with a memory limit (``planner.memory_limit_mb``, default 4 GiB)
+and a CPU-time limit (``planner.grounding_time_limit_s``, default the planner's time
+limit), and never outlives the job; a limit it hits is a
+:class:`~twostep.processes.ResourceLimitError` naming the limit and its key. The limits
+are set per job (:func:`grounding_limits`) and read by every grounding in the process.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
-import subprocess
+import signal
 import sys
 import tempfile
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 from twostep.downward import translator_path
 from twostep.pddl.errors import PDDLError
+from twostep.processes import (
+    GROUNDING_TIME_KEY,
+    MEMORY_KEY,
+    ResourceLimitError,
+    memory_limit_mb,
+    run_guarded,
+)
 
 TRANSLATOR_OPTIONS = (
     "--full-encoding",
@@ -44,8 +60,49 @@ TRANSLATOR_OPTIONS = (
     "0",
     "--skip-variable-reordering",
 )
-TRANSLATOR_TIMEOUT_S = 300.0
+DEFAULT_GROUNDING_TIME_S = 60.0
+"""The translator's CPU-time limit when none is set: the planner's default time limit."""
+WALL_FACTOR, WALL_OFFSET_S = 4.0, 60.0
+"""The wall-clock guard of a grounding: its CPU limit x 4 + 60 s (a loaded machine)."""
+TRANSLATE_OUT_OF_MEMORY, TRANSLATE_OUT_OF_TIME = 20, 21  # the translator's own exit codes
+MODEL_BYTES_PER_SAS_BYTE = 24
+"""What the grounded model (:mod:`twostep.pddl.sas`) takes in memory per byte of the
+``output.sas`` it is read from: 22 measured (59,049 ground actions: 10.6 MB of SAS, 238 MB
+in the model), about what the translator itself needed."""
 _UNREACHABLE_GOAL = "No relaxed solution"
+
+
+@dataclass(frozen=True)
+class GroundingLimits:
+    """What one grounding may use: ``memory_mb`` of address space (None:
+    :data:`~twostep.processes.DEFAULT_MEMORY_LIMIT_MB`) and ``time_s`` of CPU time."""
+
+    memory_mb: int | None = None
+    time_s: float = DEFAULT_GROUNDING_TIME_S
+
+    @property
+    def wall_s(self) -> float:
+        return self.time_s * WALL_FACTOR + WALL_OFFSET_S
+
+
+_limits = GroundingLimits()
+
+
+def current_limits() -> GroundingLimits:
+    """The limits every grounding in this process runs under now."""
+    return _limits
+
+
+@contextlib.contextmanager
+def grounding_limits(limits: GroundingLimits | None) -> Iterator[GroundingLimits]:
+    """Ground under ``limits`` while the block runs (None: leave them as they are)."""
+    global _limits
+    before = _limits
+    _limits = limits or before
+    try:
+        yield _limits
+    finally:
+        _limits = before
 
 
 @dataclass(frozen=True)
@@ -65,6 +122,7 @@ def translate(domain_text: str, problem_text: str) -> Translation:
     Raises :class:`PDDLError` with the translator's own last words when it rejects the
     input (tasks are checked by the lifted reader first, which names file and line).
     """
+    limits = _limits
     with tempfile.TemporaryDirectory(prefix="twostep-translate-") as tmp:
         folder = Path(tmp)
         (folder / "domain.pddl").write_text(domain_text)
@@ -80,26 +138,73 @@ def translate(domain_text: str, problem_text: str) -> Translation:
             "output.sas",
             *TRANSLATOR_OPTIONS,
         ]
-        try:
-            done = subprocess.run(
-                command,
-                cwd=folder,
-                env=env,
-                capture_output=True,
-                text=True,
-                timeout=TRANSLATOR_TIMEOUT_S,
-                check=False,
-            )
-        except subprocess.TimeoutExpired:
-            raise PDDLError(
-                f"Fast Downward's translator did not finish in {TRANSLATOR_TIMEOUT_S:.0f} s"
-            ) from None
-        output = done.stdout + done.stderr
+        done = run_guarded(
+            command,
+            folder,
+            limits.wall_s,
+            env=env,
+            memory_mb=memory_limit_mb(limits.memory_mb),
+            cpu_s=limits.time_s,
+        )
+        limit = _limit_hit(done.code, done.output, limits, done.wall_s)
+        if limit is not None:
+            raise limit
         sas = folder / "output.sas"
-        if done.returncode != 0 or not sas.is_file():
-            tail = [line.strip() for line in output.splitlines() if line.strip()][-2:]
+        if done.code == 0 and sas.is_file():
+            _check_model_size(sas.stat().st_size, limits)
+        if done.code != 0 or not sas.is_file():
+            tail = [line.strip() for line in done.output.splitlines() if line.strip()][-2:]
             raise PDDLError(
                 "Fast Downward's translator rejects the task"
-                f" (exit {done.returncode}): {' | '.join(tail) or 'no output'}"
+                f" (exit {done.code}): {' | '.join(tail) or 'no output'}"
             )
-        return Translation(sas.read_text(), _UNREACHABLE_GOAL in output)
+        return Translation(sas.read_text(), _UNREACHABLE_GOAL in done.output)
+
+
+def _check_model_size(sas_bytes: int, limits: GroundingLimits) -> None:
+    """Refuse a grounding whose model would need more memory in the job's own process
+    than the memory limit: :data:`MODEL_BYTES_PER_SAS_BYTE` per byte of ``output.sas``."""
+    memory = memory_limit_mb(limits.memory_mb)
+    needed = sas_bytes * MODEL_BYTES_PER_SAS_BYTE / 2**20
+    if needed > memory:
+        raise ResourceLimitError(
+            f"the grounded task is too large: its {sas_bytes / 2**20:.0f} MB of Fast "
+            f"Downward's output would take about {needed:.0f} MB in twostep's model, more "
+            f"than the {memory} MB of {MEMORY_KEY} (raise it, e.g. "
+            f"{MEMORY_KEY}={2 * round(needed)})",
+            MEMORY_KEY,
+        )
+
+
+def _limit_hit(
+    code: int | None, output: str, limits: GroundingLimits, wall_s: float
+) -> ResourceLimitError | None:
+    """The limit that ended a translator run with exit ``code`` after ``wall_s`` seconds
+    (None: none did; a SIGKILL before its CPU time can have run out is no limit's)."""
+    memory = memory_limit_mb(limits.memory_mb)
+    no_memory = ("MemoryError", "failed to map segment", "Cannot allocate memory")
+    if code == TRANSLATE_OUT_OF_MEMORY or (
+        code not in (0, None) and any(words in output for words in no_memory)
+    ):
+        return ResourceLimitError(
+            f"grounding ran out of memory: Fast Downward's translator needs more than the "
+            f"{memory} MB of {MEMORY_KEY} (raise it, e.g. {MEMORY_KEY}={2 * memory})",
+            MEMORY_KEY,
+        )
+    seconds = f"{limits.time_s:g}"
+    killed = code == -signal.SIGKILL and wall_s >= limits.time_s  # the hard CPU limit
+    if code in (TRANSLATE_OUT_OF_TIME, -signal.SIGXCPU) or killed:
+        return ResourceLimitError(
+            f"grounding ran out of time: Fast Downward's translator needs more than the "
+            f"{seconds} s of CPU time of {GROUNDING_TIME_KEY} (raise it, e.g. "
+            f"{GROUNDING_TIME_KEY}={2 * limits.time_s:g})",
+            GROUNDING_TIME_KEY,
+        )
+    if code is None:
+        return ResourceLimitError(
+            f"grounding did not finish in {limits.wall_s:g} s of wall-clock time (the "
+            f"machine gave the translator too little of its {seconds} s of CPU time; raise "
+            f"{GROUNDING_TIME_KEY}, or run fewer jobs at once)",
+            GROUNDING_TIME_KEY,
+        )
+    return None

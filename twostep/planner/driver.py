@@ -1,7 +1,9 @@
 """Running Fast Downward's driver (shipped in the ``up-fast-downward`` wheel) on a task.
 
 It writes the problem as PDDL into a private temporary folder, runs the driver with a CPU
-search time limit and a wall-clock guard, reads the last complete plan file and turns the
+search time limit, a memory limit for its translator and search (``planner.memory_limit_mb``,
+default 4 GiB) and a wall-clock guard, under the guard process of :mod:`twostep.processes`
+(nothing of it outlives the job), reads the last complete plan file and turns the
 exit code into a :class:`~twostep.planner.results.Status`. The planner's own limit ends a
 search (its exit code says so); the guard is a safety net whose stops are flagged apart
 (:attr:`~twostep.planner.results.PlanResult.guard_stopped`).
@@ -9,10 +11,7 @@ search (its exit code says so); the guard is a safety net whose stops are flagge
 
 from __future__ import annotations
 
-import os
 import re
-import signal
-import subprocess
 import sys
 import tempfile
 import time
@@ -25,6 +24,7 @@ from twostep.planner.aliases import ALIASES
 from twostep.planner.plan_files import PlanFile, complete_plans, plan_files
 from twostep.planner.results import PlanResult, Status
 from twostep.planner.settings import PlannerSettings
+from twostep.processes import MEMORY_KEY, memory_limit_mb, run_guarded
 
 _PLANNER_TIME = re.compile(r"Planner time: ([0-9.]+)s")
 
@@ -50,9 +50,14 @@ def status_for(code: int | None, plan: PlanFile | None) -> tuple[Status, str]:
 
 
 def run_driver(
-    domain_file: Path, problem_file: Path, settings: PlannerSettings, workdir: Path
+    domain_file: Path,
+    problem_file: Path,
+    settings: PlannerSettings,
+    workdir: Path,
+    temporary: bool = False,
 ) -> PlanResult:
-    """Run the driver on PDDL files in ``workdir`` (which receives plan and SAS files)."""
+    """Run the driver on PDDL files in ``workdir`` (which receives plan and SAS files;
+    ``temporary``: the call's own folder, removed should the job die during the call)."""
     if settings.alias not in ALIASES:
         known = ", ".join(sorted(ALIASES))
         return PlanResult(
@@ -63,8 +68,8 @@ def run_driver(
             f"unknown planner alias '{settings.alias}' (known: {known})",
         )
     command = [sys.executable, str(driver_path())]
-    if settings.memory_limit_mb is not None:
-        command += ["--overall-memory-limit", f"{settings.memory_limit_mb}M"]
+    memory = memory_limit_mb(settings.memory_limit_mb)
+    command += ["--overall-memory-limit", f"{memory}M"]  # its translator and search each
     alias = ALIASES[settings.alias]
     # driver options go before the input files, a search configuration after them
     driver_options, search_options = (alias, ()) if alias[0] != "--search" else ((), alias)
@@ -75,21 +80,10 @@ def run_driver(
     ]
     command += ["--plan-file", "plan", str(domain_file), str(problem_file), *search_options]
     start = time.perf_counter()
-    process = subprocess.Popen(
-        command,
-        cwd=workdir,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-        start_new_session=True,  # so the guard can stop translator and search together
-    )
-    try:
-        output, _ = process.communicate(timeout=settings.wall_guard())
-        code: int | None = process.returncode
-    except subprocess.TimeoutExpired:
-        os.killpg(process.pid, signal.SIGKILL)
-        output, _ = process.communicate()
-        code = None
+    # Under the guard (twostep.processes): the driver, its translator and its search end
+    # with the job, and the wall-clock guard stops them together.
+    done = run_guarded(command, workdir, settings.wall_guard(), temporary=temporary)
+    output, code = done.output, done.code
     wall = time.perf_counter() - start
     plans = complete_plans(workdir)
     best = plans[-1] if plans else None
@@ -97,7 +91,9 @@ def run_driver(
     incomplete = len(plan_files(workdir)) - len(plans)
     if incomplete and status is not Status.SOLVED:
         message = f"{message} ({incomplete} incomplete plan file(s) ignored)"
-    if status is Status.ERROR:
+    if status is Status.ERROR and code in returncodes.OUT_OF_MEMORY:
+        message = f"{message} (the {memory} MB of {MEMORY_KEY}: raise it)"
+    elif status is Status.ERROR:
         tail = [line for line in output.splitlines() if line.strip()][-3:]
         message = f"{message}: {' | '.join(tail)}" if tail else message
     reported = [float(m) for m in _PLANNER_TIME.findall(output)]
@@ -121,7 +117,9 @@ def plan_pddl(domain_pddl: str, problem_pddl: str, settings: PlannerSettings) ->
         folder = Path(tmp)
         (folder / "domain.pddl").write_text(domain_pddl)
         (folder / "problem.pddl").write_text(problem_pddl)
-        return run_driver(folder / "domain.pddl", folder / "problem.pddl", settings, folder)
+        return run_driver(
+            folder / "domain.pddl", folder / "problem.pddl", settings, folder, temporary=True
+        )
 
 
 def plan(problem: Problem, settings: PlannerSettings | None = None) -> PlanResult:
