@@ -185,6 +185,15 @@ class Dealer:
         # per owner search: its walks' links, the owners found, the list schedule it ran
         # with (its number of agents)
         self._found: dict[SearchKey, tuple[bool, list[int], int]] = {}
+        self._timelines: list[Timeline] = []  # every run in time steps made (their work)
+
+    @property
+    def work(self) -> int:
+        """What this dealer's deals and searches have cost so far, in their own counts: the
+        runs in time steps (agents' turns), the walks' searches and the clean-ups (actions
+        simulated); the unit of plan-deal's budget (:mod:`twostep.methods.plan_deal`)."""
+        timelines = sum(timeline.work for timeline in self._timelines)
+        return timelines + self.walker.work + self.cleanup_work
 
     @contextmanager
     def _phase(self, name: str) -> Iterator[None]:
@@ -215,6 +224,19 @@ class Dealer:
     def movers(self) -> frozenset[str]:
         """The task's movers (:func:`~twostep.dealing.copies.task_movers`)."""
         return task_movers(self.problem, self.agent_predicates)
+
+    def most_pieces(self, cuts: Collection[str]) -> int:
+        """The most pieces any deal of these cuts has (with or without the walks' links):
+        no deal keeps more agents busy, as each piece goes to one agent (0 when no cut
+        can be made)."""
+        most = 0
+        for cut in cuts:
+            for keep_walks in (False, True):
+                try:
+                    most = max(most, len(self.pieces(cut, keep_walks)[0]))
+                except DealError:
+                    continue
+        return most
 
     def mover_cut_is_free(self) -> bool:
         """Whether the ``mover`` cut gives the ``free`` cut's pieces (a task without
@@ -299,6 +321,7 @@ class Dealer:
         order: str = "critical",
         steal: bool = True,
         after: SearchKey | None = None,
+        limit: int | None = None,
     ) -> Deal:
         """The deal of :meth:`deal` in time steps (the order without walks; with the walks'
         own causal links kept when the agents find no way on without them, as :meth:`deal`
@@ -307,22 +330,29 @@ class Dealer:
         when both fail. With ``after`` (the :attr:`Deal.search` of an
         earlier search of this dealer, for fewer agents), the search starts instead from the
         owners that one found, the other agents idle. ``moves`` says how many pieces changed
-        agent; made once per search."""
+        agent; made once per search. ``limit``: a lower bound on the search's work than
+        :func:`~twostep.dealing.improve.work_bound` (what is left of plan-deal's budget)."""
         key: SearchKey = (agents, cut, order, steal, after)
-        return self._once(("improve", key), lambda: self._improve(key))
+        bound = work_bound(agents) if limit is None else min(work_bound(agents), limit)
+        return self._once(("improve", key), lambda: self._improve(key, bound))
 
-    def _improve(self, key: SearchKey) -> Deal:
+    def _improve(self, key: SearchKey, bound: int) -> Deal:
         agents, after = key[0], key[4]
         if after is not None:
             keep_walks, owner, base = self._found[after]
-            return self._search(key, keep_walks, base, owner)
+            return self._search(key, keep_walks, base, bound, owner)
         try:
-            return self._search(key, False, agents)
+            return self._search(key, False, agents, bound)
         except DealError:  # the agents find no way on: the walks' own causal links kept
-            return self._search(key, True, agents)
+            return self._search(key, True, agents, bound)
 
     def _search(
-        self, key: SearchKey, keep_walks: bool, base: int, first: Sequence[int] | None = None
+        self,
+        key: SearchKey,
+        keep_walks: bool,
+        base: int,
+        bound: int,
+        first: Sequence[int] | None = None,
     ) -> Deal:
         """One attempt of :meth:`improve`, with or without the walks' links, from the list
         schedule for ``base`` agents (its owners, or ``first``)."""
@@ -351,7 +381,7 @@ class Dealer:
 
             start = schedule.owner if first is None else first
             found = search_owners(start, schedule.start, agents, simulate,
-                                  clean, spent, self.chain(cut), work_bound(agents))  # fmt: skip
+                                  clean, spent, self.chain(cut), bound)  # fmt: skip
             joint = self._joint_cleanup([pair for step in found.steps for pair in step], agents)
         self._found[key] = (keep_walks, found.owner, base)
         owner = ended[tuple(found.owner)]
@@ -432,8 +462,10 @@ class Dealer:
                     made = piece_copies(self.problem, self.space, self.steps, pieces,
                                         self.agent_predicates, self.movers)  # fmt: skip
                 self._copies[key] = made
-        return Timeline(self.walker, self.steps, pieces, piece_order.action_preds, self.goal,
-                        self.init, self._copies[key], self.walks_ahead)  # fmt: skip
+        timeline = Timeline(self.walker, self.steps, pieces, piece_order.action_preds,
+                            self.goal, self.init, self._copies[key], self.walks_ahead)  # fmt: skip
+        self._timelines.append(timeline)
+        return timeline
 
     def _deal_pieces(
         self, agents: int, order: str, cut: str, keep_walks: bool, steal: bool, timed: bool

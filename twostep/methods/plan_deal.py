@@ -58,6 +58,22 @@ over the objects that are left used (barman's shakers)."""
 BEST = "best"
 """The default cut: every cut of :data:`twostep.dealing.CUTS`, the shorter schedule kept."""
 
+DEAL_WORK = 2_000_000
+"""plan-deal's work budget for 2 agents, in the dealers' own counts
+(:attr:`~twostep.dealing.Dealer.work`: agents' turns, walk searches, clean-up steps);
+:func:`deal_budget` grows it with N."""
+DEAL_WORK_MAX = 20_000_000
+"""The most work plan-deal spends for any N (20 to 30 s of dealing here)."""
+
+
+def deal_budget(agents: int) -> int:
+    """plan-deal's work budget for ``agents`` agents: :data:`DEAL_WORK` x (N - 1)², at most
+    :data:`DEAL_WORK_MAX`. On the benchmark's 100 tasks (and the stress and large sets)
+    the deals to N <= 4 agents spend at most 1,641,222 units, a tenth of the budget for 4
+    (``docs/bench/methods_deal.json``'s SA plans dealt again); when it runs out, dealing
+    stops and the best deal so far is kept (result.json ``deal_budget`` says where)."""
+    return min(DEAL_WORK * max(agents - 1, 1) ** 2, DEAL_WORK_MAX)
+
 
 def deal_name(cut: str = BEST) -> str:
     """The run's ``decomposer`` name: ``plan-deal``, or ``plan-deal-<cut>`` for one cut."""
@@ -72,6 +88,8 @@ class Trials:
     best: tuple[ParallelExecution, list[list[str]]] | None = None
     seconds: dict[str, float] = field(default_factory=dict)
     invalid: str | None = None  # why the SA plan given does not apply (nothing dealt)
+    capped: int | None = None  # the most agents dealt to, when fewer than asked (the pieces)
+    stopped: dict[str, int] | None = None  # where the work budget ran out (None: it did not)
 
     @property
     def deal_time_s(self) -> float:
@@ -112,6 +130,14 @@ def run_plan_deal(
     run.score_time_s = trials.seconds.get("scoring", 0.0)
     run.extra["deal"] = trials.rows
     run.extra["deal_seconds"] = {phase: round(s, 6) for phase, s in trials.seconds.items()}
+    if trials.capped is not None:
+        run.extra["deal_agents"] = trials.capped
+    if trials.stopped is not None:
+        run.extra["deal_budget"] = trials.stopped
+        run.message = (
+            f"plan-deal's work budget ({trials.stopped['work']:,} units for N={request.agents}) "
+            f"ran out while dealing to {trials.stopped['agents']} agents: the best deal so far"
+        )
     run.planner_calls.append(AgentPlan("agent0", "single", request.problem.goal.to_pddl(), sa_plan))
     if trials.best is not None:
         run.fallback = longer_than_sa(request, trials.best[0].length, sa_steps)
@@ -179,13 +205,28 @@ def try_deals(
     dealers: list[tuple[str | None, Dealer]] = [(None, dealer)]
     dealers += [(kind, Dealer(problem, plan, request.agent_predicates, copies=copies))
                 for kind, plan in rebound.items()]  # fmt: skip
+    most = request.agents
+    if request.agents > 2:  # agents beyond the pieces would stay idle: not dealt to
+        cuts = {way.cut for way in tried}
+        most = min(most, max(2, *(one.most_pieces(cuts) for _, one in dealers)))
+        trials.capped = most if most < request.agents else None
+    budget = deal_budget(request.agents)
+
+    def left() -> int:
+        """What is left of the work budget (:func:`deal_budget`)."""
+        return budget - sum(one.work for _, one in dealers)
+
     searched: tuple[int, str | None, Dealer, Way, SearchKey | None] | None = None  # the last
-    for agents in range(2, request.agents + 1):
+    for agents in range(2, most + 1):
         made: list[tuple[int, int, str | None, Dealer, Way]] = []  # this number's deals
+        skipped = False  # a deal or the owner search left out: the budget ran out
         for kind, one in dealers:
             for way in tried:
                 if way.cut == "mover" and free_way_of(way, tried) and one.mover_cut_is_free():
                     continue  # the free cut's pieces: the free way's deal, tried beside it
+                if left() <= 0:
+                    skipped = True
+                    break
                 row = deal_row(agents, way, kind)
                 trials.rows.append(row)
                 try:
@@ -195,7 +236,8 @@ def try_deals(
                     continue
                 candidates.append(candidate(row, dealt))
                 made.append((len(dealt.schedule), len(made), kind, one, way))
-        if owner_search and made:  # the owner search, from this number's shortest deal
+        skipped = skipped or (owner_search and bool(made) and left() <= 0)
+        if owner_search and made and left() > 0:  # from this number's shortest deal
             length, _, kind, one, way = min(made, key=lambda entry: entry[:2])
             after = None
             if searched is not None and searched[0] < length:  # or where the last one ended
@@ -205,12 +247,15 @@ def try_deals(
                 row["after"] = after[0]
             trials.rows.append(row)
             try:
-                dealt = one.improve(agents, way.cut, way.order, way.steal, after)
+                dealt = one.improve(agents, way.cut, way.order, way.steal, after, left())
             except DealError as error:
                 row["error"] = str(error)
             else:
                 candidates.append(candidate(row, dealt))
                 searched = (len(dealt.schedule), kind, one, way, dealt.search)
+        if skipped or (left() <= 0 and agents < most):  # the deals so far are the candidates
+            trials.stopped = {"work": budget, "spent": budget - left(), "agents": agents}
+            break
     for _, one in dealers:  # the dealers' phases, and rebinding and scoring beside them
         for phase, seconds in one.seconds.items():
             trials.seconds[phase] = trials.seconds.get(phase, 0.0) + seconds
