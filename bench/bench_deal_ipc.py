@@ -41,10 +41,10 @@ from types import FrameType
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-import yaml
 
 from bench.independent import IndependentValidator
 from twostep.benchmark import BenchmarkTask, load_task
+from twostep.files import read_yaml_file
 from twostep.methods import MethodRequest, RunResult, check_run, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
 from twostep.planner import PlannerSettings
@@ -356,7 +356,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.domains is None:
         args.domains = [d for d in CASES if (args.sample / d).is_dir()]
     if args.agents_file.is_file():
-        given = yaml.safe_load(args.agents_file.read_text()) or {}
+        given = read_yaml_file(args.agents_file) or {}
         CASES.update({domain: [list(map(str, preds))] for domain, preds in given.items()})
     shown = " ".join(a for a in (argv if argv is not None else sys.argv[1:]))
     print(f".venv/bin/python bench/bench_deal_ipc.py {shown}".rstrip())

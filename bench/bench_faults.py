@@ -12,6 +12,16 @@ shows a traceback. One table, one row per scenario, each in an output root of it
     bad-files         a corpus of bad files (binary, a byte-order mark, 20,000 nested
                       `(and`, a directory, not YAML, wrong arity, an undeclared type, an
                       action twice) through every console script that reads files
+    hostile-inputs    inputs that used to hang or run away (issue 39): FIFOs, /dev/zero
+                      and symlink loops as task files, expert.yaml, LLM script or kitchen;
+                      a YAML alias bomb; a 100,000 x 100,000 or negative-size kitchen; a
+                      type typo; an unknown scene; the explosive grounding (`boom`, 40
+                      objects) under a low memory limit and a short time limit;
+                      `agents=1000`; each must answer in one line with the right exit code
+                      and store nothing wrong ("hangs": runs stopped by the bench's timeout)
+    orphans           `kill -9`, SIGTERM and SIGINT of a job while it grounds `boom`:
+                      processes and twostep-translate-* folders left ("completed": kills
+                      that left nothing)
 
 Columns (from the sweeps' job records, the job store and the MLflow store, read with
 MLflow's own client):
@@ -28,6 +38,7 @@ MLflow's own client):
 
     .venv/bin/python bench/bench_faults.py                          # every scenario
     .venv/bin/python bench/bench_faults.py --only bad-files,concurrent
+    .venv/bin/python bench/bench_faults.py --only hostile-inputs,orphans
     .venv/bin/python bench/bench_faults.py --jobs 10 --kills 1 --seed 3 --only llm-faults
 """
 
@@ -37,6 +48,7 @@ import argparse
 import collections
 import contextlib
 import json
+import os
 import random
 import shutil
 import signal
@@ -437,6 +449,266 @@ def bad_files_row(root: Path, args: argparse.Namespace) -> Row:
     return Row("bad-files", len(cases), answered, tracebacks=tracebacks, notes=notes)
 
 
+# ----------------------------------------------------------------- hostile inputs
+
+BOOM_DOMAIN = """(define (domain boom) (:requirements :strips)
+  (:predicates (p ?a) (q ?a ?b ?c ?d ?e) (done))
+  (:action big :parameters (?a ?b ?c ?d ?e)
+    :precondition (and (p ?a) (p ?b) (p ?c) (p ?d) (p ?e))
+    :effect (and (q ?a ?b ?c ?d ?e) (done))))
+"""
+ALIAS_BOMB = "a: &a ['lol','lol','lol','lol','lol','lol','lol','lol','lol']\n" + "".join(
+    f"{c}: &{c} [{','.join(['*' + p] * 9)}]\n" for p, c in zip("abcdefgh", "bcdefghi", strict=True)
+)
+HOSTILE_TIMEOUT_S = 240.0
+
+
+@dataclass(frozen=True)
+class Hostile:
+    """One probe: the command, the exit code it must give, and the words its one
+    ``error:`` line must hold (None: a success)."""
+
+    name: str
+    command: list[str]
+    out: Path
+    expected_exit: int
+    words: tuple[str, ...] | None
+
+
+def boom_data(root: Path, objects: int = 40) -> Path:
+    folder = root / "x"
+    folder.mkdir(parents=True)
+    (folder / "domain.pddl").write_text(BOOM_DOMAIN)
+    names = " ".join(f"o{i}" for i in range(objects))
+    facts = " ".join(f"(p o{i})" for i in range(objects))
+    (folder / "p01.pddl").write_text(
+        f"(define (problem b1) (:domain boom) (:objects {names}) (:init {facts}) (:goal (done)))"
+    )
+    return root
+
+
+def boom_command(data: Path, out: Path, *extra: str) -> list[str]:
+    return [str(TWOSTEP), f"data.root={data}", "domain.name=x", "domain.agent_predicates=[p]",
+            "task=1", "method=sa", f"output.root={out}", "mlflow.enabled=false",
+            "orchestration.prefect=false", *extra]  # fmt: skip
+
+
+def hostile_cases(root: Path) -> list[Hostile]:
+    """Set up every probe under ``root``."""
+    cases: list[Hostile] = []
+
+    def data(tag: str, domain: str = "blocksworld") -> Path:
+        folder = root / tag / "data"
+        shutil.copytree(DATA / domain, folder / domain)
+        return folder
+
+    def twostep(tag: str, root_: Path, *extra: str) -> list[str]:
+        return [str(TWOSTEP), "task=1", f"data.root={root_}", f"output.root={root / tag / 'out'}",
+                "mlflow.enabled=false", "orchestration.prefect=false", *extra]  # fmt: skip
+
+    def fifo(path: Path) -> None:
+        path.unlink(missing_ok=True)
+        os.mkfifo(path)
+
+    def zero(path: Path) -> None:
+        path.unlink(missing_ok=True)
+        path.symlink_to("/dev/zero")
+
+    def loop(path: Path) -> None:
+        path.unlink(missing_ok=True)
+        path.symlink_to(path.name)
+
+    spoilers = {"fifo": (fifo, "FIFO"), "dev-zero": (zero, "character device"),
+                "loop": (loop, "symlink loop")}  # fmt: skip
+    for file in ("domain.pddl", "p01.pddl", "expert.yaml"):
+        for kind, (spoil, words) in spoilers.items():
+            tag = f"{file}-{kind}"
+            folder = data(tag)
+            spoil(folder / "blocksworld" / file)
+            extra = ["method=twostep", "decomposer=expert"] if file == "expert.yaml" else []
+            cases.append(Hostile(tag, twostep(tag, folder, *extra), root / tag / "out", 2,
+                                 (str(folder / "blocksworld" / file), words)))  # fmt: skip
+    for kind, script_text in (("fifo", None), ("alias-bomb", ALIAS_BOMB + "answers: [*i]\n")):
+        tag = f"llm-script-{kind}"
+        folder = data(tag)
+        script = root / tag / "answers.yaml"
+        if script_text is None:
+            fifo(script)
+        else:
+            script.write_text(script_text)
+        words = "FIFO" if script_text is None else "aliases expand"
+        command = twostep(tag, folder, "decomposer=llm", "llm=scripted", f"llm.script={script}")
+        cases.append(Hostile(tag, command, root / tag / "out", 2, (str(script), words)))
+    kitchens = {
+        "kitchen-huge": ("width: 13\nheight: 11", "width: 100000\nheight: 100000", "must be 1 to"),
+        "kitchen-negative": ("diningtable1: [5, 5, 3, 2]", "diningtable1: [5, 5, -3, -2]",
+                             "out of range"),
+        "kitchen-not-a-number": ("loc-door: [6, 9]", 'loc-door: [6.5, "x"]', "of integers"),
+        "kitchen-binary": (None, None, "not a text file"),
+        "kitchen-fifo": (None, None, "FIFO"),
+    }  # fmt: skip
+    for tag, (old, new, words) in kitchens.items():
+        folder = data(tag, "alfworld")
+        kitchen = folder / "alfworld" / "kitchen.yaml"
+        if old is not None and new is not None:
+            kitchen.write_text(kitchen.read_text().replace(old, new, 1))
+        elif tag == "kitchen-binary":
+            bad_files.binary(kitchen)
+        else:
+            fifo(kitchen)
+        command = twostep(tag, folder, "domain=alfworld", "task=4", "method=sa",
+                          "executor=embodied", "executor.render=false")  # fmt: skip
+        cases.append(Hostile(tag, command, root / tag / "out", 2, (str(kitchen), words)))
+    tag = "unknown-scene"
+    folder = data(tag, "alfworld")
+    command = twostep(tag, folder, "domain=alfworld", "task=4", "method=sa", "executor=embodied",
+                      "executor.render=false", "executor.layout=FloorPlan99999")  # fmt: skip
+    cases.append(Hostile(tag, command, root / tag / "out", 2,
+                         ("executor.layout=FloorPlan99999", "no layout")))  # fmt: skip
+    tag = "type-typo"
+    folder = data(tag)
+    domain = folder / "blocksworld" / "domain.pddl"
+    text = domain.read_text()
+    typo = text.replace("(:predicates", "(:predicates (spare ?b - blok)", 1)
+    domain.write_text(typo)
+    cases.append(Hostile(tag, twostep(tag, folder), root / tag / "out", 2,
+                         (str(domain), "type 'blok' is not declared")))  # fmt: skip
+    for tag, extra, words in (
+        ("boom-memory", ["planner.memory_limit_mb=300"], "planner.memory_limit_mb"),
+        ("boom-time", ["planner.grounding_time_limit_s=5", "planner.memory_limit_mb=3000"],
+         "planner.grounding_time_limit_s"),
+    ):  # fmt: skip
+        folder = boom_data(root / tag / "data")
+        command = boom_command(folder, root / tag / "out", *extra)
+        cases.append(Hostile(tag, command, root / tag / "out", 1, (words,)))
+    tag = "agents-1000"
+    cases.append(Hostile(tag, twostep(tag, DATA, "agents=1000"), root / tag / "out", 0, None))
+    return cases
+
+
+MEASURED = """
+import json, resource, subprocess, sys
+try:
+    done = subprocess.run(sys.argv[2:], capture_output=True, text=True, timeout=float(sys.argv[1]))
+    code, out, err = done.returncode, done.stdout, done.stderr
+except subprocess.TimeoutExpired as expired:
+    code, out, err = None, str(expired.stdout or ""), str(expired.stderr or "")
+print(json.dumps({"code": code, "stdout": out, "stderr": err,
+                  "max_rss_kb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss}))
+"""
+
+
+def run_measured(command: list[str], timeout_s: float) -> dict[str, Any]:
+    """``command``'s outcome (code None: stopped by the timeout) and the largest resident
+    set of any process it ran, from a fresh process that only waits for it."""
+    done = run([sys.executable, "-c", MEASURED, str(timeout_s), *command])
+    return dict(json.loads(done.stdout))
+
+
+def hostile_row(root: Path, args: argparse.Namespace) -> Row:
+    cases = hostile_cases(root)
+    answered = tracebacks = hangs = stored = 0
+    notes: list[str] = []
+    for case in cases:
+        began = time.perf_counter()
+        outcome = run_measured(case.command, HOSTILE_TIMEOUT_S)
+        seconds = time.perf_counter() - began
+        output = f"{outcome['stdout']}{outcome['stderr']}"
+        tracebacks += output.count("Traceback")
+        hangs += outcome["code"] is None
+        errors = [line for line in str(outcome["stderr"]).splitlines() if line.startswith("error:")]
+        wrong = [json.loads(p.read_text()) for p in case.out.glob("jobs/*/result.json")]
+        stored += (
+            sum(1 for r in wrong if not r.get("success")) if case.words is None else len(wrong)
+        )
+        if case.words is None:
+            ok = outcome["code"] == case.expected_exit
+        else:
+            ok = (outcome["code"] == case.expected_exit and len(errors) == 1
+                  and all(w in errors[0] for w in case.words))  # fmt: skip
+        answered += ok
+        memory = int(outcome["max_rss_kb"]) // 1024
+        notes.append(f"hostile-inputs: {case.name}: exit {outcome['code']}, {seconds:.1f} s, "
+                     f"max RSS {memory} MB{'' if ok else ': ' + (errors or [output.strip()[-160:]])[0][:200]}")  # fmt: skip
+    row = Row("hostile-inputs", len(cases), answered, tracebacks=tracebacks, notes=notes)
+    row.stored_failures = stored
+    row.notes.insert(0, f"hostile-inputs: {hangs} hang(s) stopped at {HOSTILE_TIMEOUT_S:.0f} s; "
+                        f"{stored} wrong job-store entries")  # fmt: skip
+    return row
+
+
+def orphans_row(root: Path, args: argparse.Namespace) -> Row:
+    """Kill a job while it grounds ``boom``; count what it leaves."""
+    kills = [("SIGKILL", signal.SIGKILL), ("SIGTERM", signal.SIGTERM), ("SIGINT", signal.SIGINT)]
+    clean, notes = 0, []
+    for name, signum in kills:
+        tmp = root / name / "tmp"
+        tmp.mkdir(parents=True)
+        data = boom_data(root / name / "data")
+        command = boom_command(data, root / name / "out", "planner.memory_limit_mb=1500")
+        job = subprocess.Popen(command, env=dict(os.environ, TMPDIR=str(tmp)),
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                               preexec_fn=_default_sigint)  # fmt: skip
+        below: list[int] = []
+        try:
+            end = time.monotonic() + 120
+            while time.monotonic() < end and not any(
+                "fast_downward.translate" in _cmdline(p) for p in _descendants(job.pid)
+            ):
+                time.sleep(0.1)
+            time.sleep(2.0)
+            below = _descendants(job.pid)
+            job.send_signal(signum)
+            job.wait(timeout=60)
+            time.sleep(5.0)
+        finally:
+            if job.poll() is None:
+                job.kill()
+                job.wait()
+        left = [p for p in below if _running(p)]
+        folders = list(tmp.glob("twostep-translate-*"))
+        clean += not left and not folders and bool(below)
+        notes.append(f"orphans: {name} during grounding: {len(below)} processes below the job, "
+                     f"{len(left)} still running 5 s later, {len(folders)} temp folder(s) left")  # fmt: skip
+        for pid in left:  # ours: stopped by PID
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+    return Row("orphans", len(kills), clean, notes=notes)
+
+
+def _default_sigint() -> None:  # in the job before it starts: a background shell ignores ^C
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def _descendants(pid: int) -> list[int]:
+    children: dict[int, list[int]] = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            with contextlib.suppress(OSError, IndexError):
+                parent = int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1])
+                children.setdefault(parent, []).append(int(entry.name))
+    found, todo = [], [pid]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            found.append(child)
+            todo.append(child)
+    return found
+
+
+def _cmdline(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+    except OSError:
+        return ""
+
+
+def _running(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except (OSError, IndexError):
+        return False
+
+
 # ----------------------------------------------------------------- the table
 
 SCENARIOS: dict[str, Callable[[Path, argparse.Namespace], Row]] = {
@@ -446,6 +718,8 @@ SCENARIOS: dict[str, Callable[[Path, argparse.Namespace], Row]] = {
     "concurrent": concurrent,
     "concurrent+svc": concurrent_services,
     "bad-files": bad_files_row,
+    "hostile-inputs": hostile_row,
+    "orphans": orphans_row,
 }
 COLUMNS = ("jobs", "completed", "recomputed", "MLflow runs", "duplicates", "missing",
            "stored failures", "tracebacks")  # fmt: skip

@@ -67,6 +67,7 @@ from twostep.dealing.cleanup import clean_plan
 from twostep.decomposers.base import Decomposer
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.decomposers.plan_split import PlanSplitDecomposer
+from twostep.files import read_yaml_file
 from twostep.generators import DOMAINS as BENCHMARK_DOMAINS
 from twostep.methods import MethodRequest, RunResult, check_run, method_for
 from twostep.methods.registry import TWOSTEP_METHODS
@@ -889,7 +890,7 @@ def main() -> int:
     run = record.started()
     # rows of this very run: every method
     known.update(reusable_rows(earlier, ("sa", *METHODS), args.alias, args.time_limit, fallback))
-    given = yaml.safe_load(args.agent_predicates.read_text()) if args.agent_predicates else {}
+    given = read_yaml_file(args.agent_predicates) if args.agent_predicates else {}
     jobs = []
     for data in args.data:
         label = data_label(Path(data))

@@ -214,6 +214,10 @@ def none_left(pids: list[int], tmp: Path, prefix: str) -> None:
     assert not list(tmp.glob(f"{prefix}*"))
 
 
+def default_sigint() -> None:  # runs in the job before it starts
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.mark.parametrize("signum", [signal.SIGKILL, signal.SIGTERM, signal.SIGINT])
 def test_killing_a_job_mid_translation_leaves_nothing(
     boom: Path, tmp_path: Path, signum: int
@@ -222,7 +226,10 @@ def test_killing_a_job_mid_translation_leaves_nothing(
     tmp.mkdir()
     env = dict(os.environ, TMPDIR=str(tmp))
     command = boom_command(boom, tmp_path / "out", "planner.memory_limit_mb=1500")
-    job = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    job = subprocess.Popen(
+        command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        preexec_fn=default_sigint,  # a shell's background job ignores Ctrl-C: not the job
+    )  # fmt: skip
     try:
         below = wait_for(job.pid, "fast_downward.translate")
         assert list(tmp.glob("twostep-translate-*"))

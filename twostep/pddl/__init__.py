@@ -15,8 +15,9 @@ One job per module:
 - :mod:`twostep.pddl.errors`      :class:`PDDLError`, with file and line
 - :mod:`twostep.pddl.sexp`        the s-expression reader and writer
 - :mod:`twostep.pddl.lifted`      s-expressions to the lifted model, checked
+- :mod:`twostep.pddl.lint`        types, arities and variables checked before Fast Downward
 - :mod:`twostep.pddl.repairs`     repairs of real-world quirks on s-expressions
-- :mod:`twostep.pddl.translator`  Fast Downward's translator, run as a subprocess
+- :mod:`twostep.pddl.translator`  Fast Downward's translator, run as a bounded subprocess
 - :mod:`twostep.pddl.sas`         its ``output.sas`` to the grounded model
 - :mod:`twostep.pddl.goals`       quantified subgoals grounded by static facts
 - :mod:`twostep.pddl.reader`      ``parse_problem``, ``load_problem`` (cached), ``parse_goal``
