@@ -314,3 +314,24 @@ def test_kitchen_bounds_in_the_library() -> None:
     ]:
         with pytest.raises(FloorPlanError, match=__import__("re").escape(words)):
             floor_plan_from_dict(bad)
+
+
+def test_data_check_and_generate_never_open_a_fifo(blocks: Path, tmp_path: Path) -> None:
+    """``twostep-data check`` lists a FIFO among the files that differ; ``generate``
+    replaces it (opening it, to read or to write, would block)."""
+    path = blocks / "blocksworld" / "p01.pddl"
+    fifo(path)
+    command = [str(BIN / "twostep-data"), "check", "--data", str(blocks), "--domain", "blocksworld"]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 1 and f"{path}: is a FIFO (named pipe)" in done.stderr, done.stderr
+    generate = [
+        str(BIN / "twostep-data"),
+        "generate",
+        "--out",
+        str(blocks),
+        "--domain",
+        "blocksworld",
+    ]
+    done = subprocess.run(generate, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and path.is_file(), done.stderr
+    assert path.read_text() == (DATA / "blocksworld" / "p01.pddl").read_text()

@@ -17,6 +17,7 @@ from pathlib import Path
 
 from twostep.benchmark import DEFAULT_DATA_ROOT
 from twostep.cli import console_main
+from twostep.files import file_problem, read_input_bytes, write_text_atomic
 from twostep.generators import (
     DOMAINS,
     GENERATORS,
@@ -46,8 +47,14 @@ def write_files(folder: Path, files: dict[str, str]) -> int:
     changed = 0
     for name, text in files.items():
         path = folder / name
-        if not path.is_file() or path.read_text() != text:
-            path.write_text(text)
+        # a FIFO or a device there is replaced, never opened (opening a FIFO blocks)
+        same = (
+            file_problem(path) is None
+            and path.is_file()
+            and read_input_bytes(path) == text.encode()
+        )
+        if not same:
+            write_text_atomic(path, text)
             changed += 1
     return changed
 
@@ -57,11 +64,15 @@ def compare_files(folder: Path, files: dict[str, str]) -> list[str]:
     problems = []
     for name, text in files.items():
         path = folder / name
+        bad = file_problem(path)  # a FIFO, a device, a directory, a loop: never opened
+        if bad is not None:
+            problems.append(bad)
+            continue
         if not path.is_file():
             problems.append(f"{path}: missing")
             continue
         try:
-            found = path.read_bytes().decode("utf-8")  # byte for byte: a BOM is a difference
+            found = read_input_bytes(path).decode("utf-8")  # byte for byte: a BOM differs
         except UnicodeDecodeError as error:
             problems.append(f"{path}: not a text file (byte {error.start} is not UTF-8)")
             continue
