@@ -277,3 +277,16 @@ def test_the_planner_runs_under_the_memory_limit() -> None:
     domain, problem = BOOM_DOMAIN, boom_problem(2)
     result = plan_pddl(domain, problem, PlannerSettings("lama-first", 10, None, 64))
     assert result.solved and len(result.plan or ()) == 1, result.message
+
+
+def test_a_search_out_of_memory_names_the_limit() -> None:
+    """Fast Downward's search ends itself at the limit (exit 22): an error, not a proof."""
+    folder = DATA / "large" / "blocksworld"
+    settings = PlannerSettings("astar-blind", 120, None, 100)  # blind search fills memory
+    result = plan_pddl(
+        (folder / "domain.pddl").read_text(), (folder / "p01.pddl").read_text(), settings
+    )
+    assert (result.status.value, result.exit_code) == ("error", 22)
+    assert (
+        result.message == "search out of memory (the 100 MB of planner.memory_limit_mb: raise it)"
+    )
