@@ -1,17 +1,22 @@
-"""Checks before any work: every config value in its allowed range, and every location a
-job writes to writable. Each problem is one line naming the key (or the location) and
-what is allowed; the command prints it and exits 2.
+"""Checks before any work: every config value in its allowed range (one table,
+:data:`VALUE_RULES`), the task where the config says it is, and every location a job
+writes to writable. Each problem is one line naming the key (or the location) and what is
+allowed; the command prints it and exits 2.
 
-:func:`check_values` runs from :func:`flows.build.check_job` (every job, before any
-planning); :func:`check_writable` runs from the Hydra callback (:mod:`flows.sweep_callback`)
-before Hydra creates the run directory of a single run or the sweep directory of a
-multirun (the jobs of a sweep write where the sweep was checked).
+The Hydra callback (:mod:`flows.sweep_callback`) runs them before Hydra creates the run
+directory of a single run (:func:`input_problem`, :func:`check_writable`) or the sweep
+directory of a multirun (:func:`sweep_problem`: every value the sweep lists), so a refused
+command leaves no folder, file or record behind; :func:`flows.build.check_job` runs
+:func:`check_values` again for every job (a job started from Python, or by another
+sweeper), before any planning.
 """
 
 from __future__ import annotations
 
+import copy
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Collection, Iterable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -27,11 +32,62 @@ class ValidationError(Exception):
     """A config value out of range, or a location that cannot be written (exit 2)."""
 
 
-def _choice(key: str, value: Any, allowed: Iterable[str]) -> str | None:
-    allowed = tuple(allowed)
-    if str(value) in allowed:
+# ----------------------------------------------------------------- value rules
+# One table: every config value's allowed range (:data:`VALUE_RULES`), checked by
+# :func:`value_problems` for one job and for every value a sweep lists. A new range is one
+# row here. Each check gets the key's name as shown (``method``, not ``method.name``) and
+# its value, and returns the problem as one line (None: allowed).
+
+Check = Callable[[str, Any], "str | None"]
+
+
+def one_of(allowed: Callable[[], Iterable[str]]) -> Check:
+    """A choice among ``allowed()`` (read when checked: the lists live in the library)."""
+
+    def check(key: str, value: Any) -> str | None:
+        choices = tuple(allowed())
+        if str(value) in choices:
+            return None
+        return f"{key}={value} is not allowed (allowed: {', '.join(choices)})"
+
+    return check
+
+
+def at_least(low: int, optional: bool = False, hint: str = "") -> Check:
+    """An integer >= ``low`` (``optional``: or null)."""
+
+    def check(key: str, value: Any) -> str | None:
+        if value is None and optional:
+            return None
+        try:
+            ok = int(value) >= low
+        except (TypeError, ValueError):
+            ok = False
+        if ok:
+            return None
+        if low > 0:
+            return f"{key}={value} must be at least {low}"
+        return f"{key}={value} must be >= {low}{hint}"
+
+    return check
+
+
+def memory_mb(key: str, value: Any) -> str | None:
+    """A memory limit in MB: at least the planner's smallest, or null (its default)."""
+    from twostep.processes import DEFAULT_MEMORY_LIMIT_MB, MIN_MEMORY_LIMIT_MB
+
+    if value is None:
         return None
-    return f"{key}={value} is not allowed (allowed: {', '.join(allowed)})"
+    try:
+        ok = int(value) >= MIN_MEMORY_LIMIT_MB
+    except (TypeError, ValueError):
+        ok = False
+    if ok:
+        return None
+    return (
+        f"{key}={value} must be at least {MIN_MEMORY_LIMIT_MB} (MB; null: "
+        f"{DEFAULT_MEMORY_LIMIT_MB})"
+    )
 
 
 # The longest time limit a key may set: the planner's wall-clock guard (1.25 x its limit +
@@ -39,61 +95,121 @@ def _choice(key: str, value: Any, allowed: Iterable[str]) -> str | None:
 MAX_SECONDS = 1_000_000
 
 
-def _seconds(key: str, value: Any) -> str | None:
-    """A time limit: a finite number of seconds, > 0 and at most :data:`MAX_SECONDS`."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        return f"{key}={value} must be a number > 0"
-    if not number > 0:
-        return f"{key}={value} must be > 0"
-    if not math.isfinite(number) or number > MAX_SECONDS:
-        return f"{key}={value} is too large (allowed: > 0 and at most {MAX_SECONDS} seconds)"
-    return None
+def seconds(optional: bool = False) -> Check:
+    """A time limit: a finite number of seconds, > 0 and at most :data:`MAX_SECONDS`
+    (``optional``: or null, no limit)."""
+
+    def check(key: str, value: Any) -> str | None:
+        if value is None and optional:
+            return None
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            return f"{key}={value} must be a number > 0"
+        if not number > 0:
+            return f"{key}={value} must be > 0"
+        if not math.isfinite(number) or number > MAX_SECONDS:
+            return f"{key}={value} is too large (allowed: > 0 and at most {MAX_SECONDS} seconds)"
+        return None
+
+    return check
 
 
-def value_problems(cfg: Any) -> list[str]:
-    """Every out-of-range value of a job config (an empty list: all fine)."""
-    # Imported here: the writability check of every run needs none of this.
-    from twostep.execution.model import MODES as SCORE_MODES
-    from twostep.llm.client import MODES as LLM_MODES
+def _not_a_key(key: str, value: Any) -> str | None:
     from twostep.llm.client import key_env_problem
-    from twostep.methods.registry import DECOMPOSERS, METHODS
-    from twostep.processes import DEFAULT_MEMORY_LIMIT_MB, MIN_MEMORY_LIMIT_MB
 
-    problems = [
-        _choice("score_mode", cfg.score_mode, SCORE_MODES),
-        _choice("method", cfg.method.name, METHODS),
-        _choice("llm.mode", cfg.llm.mode, LLM_MODES),
-        _seconds("planner.time_limit_s", cfg.planner.time_limit_s),
-        _seconds("llm.timeout_s", cfg.llm.timeout_s),
-        _seconds("mlflow.connect_timeout_s", cfg.mlflow.connect_timeout_s),
-        _seconds(
-            "orchestration.server_startup_timeout_s", cfg.orchestration.server_startup_timeout_s
-        ),
-        key_env_problem(cfg.llm.api_key_env),
-    ]
-    if cfg.method.name == "twostep":
-        problems.append(_choice("decomposer", cfg.decomposer.name, DECOMPOSERS))
-    if int(cfg.agents) < 1:
-        problems.append(f"agents={cfg.agents} must be at least 1")
-    memory = cfg.planner.memory_limit_mb
-    if memory is not None and int(memory) < MIN_MEMORY_LIMIT_MB:
-        problems.append(
-            f"planner.memory_limit_mb={memory} must be at least {MIN_MEMORY_LIMIT_MB} (MB; "
-            f"null: {DEFAULT_MEMORY_LIMIT_MB})"
-        )
-    if cfg.planner.grounding_time_limit_s is not None:
-        problems.append(
-            _seconds("planner.grounding_time_limit_s", cfg.planner.grounding_time_limit_s)
-        )
-    if cfg.score_max_nodes is not None and int(cfg.score_max_nodes) < 0:
-        problems.append(f"score_max_nodes={cfg.score_max_nodes} must be >= 0 (or null)")
-    if cfg.score_time_limit_s is not None:
-        problems.append(_seconds("score_time_limit_s", cfg.score_time_limit_s))
-    if int(cfg.llm.max_retries) < 0:
-        problems.append(f"llm.max_retries={cfg.llm.max_retries} must be >= 0")
-    return [p for p in problems if p]
+    return key_env_problem(None if value is None else str(value))
+
+
+def _score_modes() -> Iterable[str]:
+    from twostep.execution.model import MODES
+
+    return MODES
+
+
+def _llm_modes() -> Iterable[str]:
+    from twostep.llm.client import MODES
+
+    return MODES
+
+
+def _methods() -> Iterable[str]:
+    from twostep.methods.registry import METHODS
+
+    return METHODS
+
+
+def _decomposers() -> Iterable[str]:
+    from twostep.methods.registry import DECOMPOSERS
+
+    return DECOMPOSERS
+
+
+@dataclass(frozen=True)
+class Rule:
+    """The allowed values of one config key (``key``: dotted; ``shown``: its name in the
+    message, default the key)."""
+
+    key: str
+    check: Check
+    shown: str = ""
+
+    @property
+    def name(self) -> str:
+        return self.shown or self.key
+
+
+VALUE_RULES: tuple[Rule, ...] = (
+    Rule("score_mode", one_of(_score_modes)),
+    Rule("method.name", one_of(_methods), "method"),
+    Rule("decomposer.name", one_of(_decomposers), "decomposer"),
+    Rule("llm.mode", one_of(_llm_modes)),
+    Rule("agents", at_least(1)),
+    Rule("planner.time_limit_s", seconds()),
+    Rule("planner.memory_limit_mb", memory_mb),
+    Rule("planner.grounding_time_limit_s", seconds(optional=True)),
+    Rule("llm.timeout_s", seconds()),
+    Rule("llm.max_retries", at_least(0)),
+    Rule("llm.api_key_env", _not_a_key),
+    Rule("score_max_nodes", at_least(0, optional=True, hint=" (or null)")),
+    Rule("score_time_limit_s", seconds(optional=True)),
+    Rule("mlflow.connect_timeout_s", seconds()),
+    Rule("orchestration.server_startup_timeout_s", seconds()),
+)
+
+
+def rule_applies(rule: Rule, cfg: Any) -> bool:
+    """Whether the job reads the rule's key (``decomposer.*`` only TwoStep does)."""
+    if rule.key.startswith("decomposer."):
+        return str(cfg.method.name) == "twostep"
+    return True
+
+
+def value_problems(cfg: Any, keys: Collection[str] | None = None) -> list[str]:
+    """Every value of a job config out of its range (an empty list: all fine); ``keys``:
+    only the rules of those dotted keys."""
+    from omegaconf import OmegaConf
+
+    problems = []
+    for rule in VALUE_RULES:
+        if keys is not None and rule.key not in keys:
+            continue
+        if not rule_applies(rule, cfg):
+            continue
+        if OmegaConf.is_config(cfg):
+            value = OmegaConf.select(cfg, rule.key)
+        else:
+            value = _dotted(cfg, rule.key)
+        problem = rule.check(rule.name, value)
+        if problem:
+            problems.append(problem)
+    return problems
+
+
+def _dotted(cfg: Any, key: str) -> Any:
+    for part in key.split("."):
+        cfg = cfg[part] if isinstance(cfg, Mapping) else getattr(cfg, part)
+    return cfg
 
 
 def check_values(cfg: Any) -> None:
@@ -101,6 +217,103 @@ def check_values(cfg: Any) -> None:
     problems = value_problems(cfg)
     if problems:
         raise JobError(problems[0])
+
+
+def input_problem(cfg: Any) -> str | None:
+    """What makes a job's config unable to run, found without reading its task (None:
+    nothing): a value out of range, or a data root, domain or task that is not there."""
+    from twostep.benchmark import BenchmarkError, task_path
+
+    problems = value_problems(cfg)
+    if problems:
+        return problems[0]
+    try:
+        task_path(str(cfg.domain.name), int(cfg.task), Path(str(cfg.data.root)))
+    except BenchmarkError as error:
+        return str(error)
+    return None
+
+
+def sweep_values(config: Any) -> dict[str, list[Any]]:
+    """Every value a multirun lists per key (the sweeper's parameters, then the command
+    line: a later value of a key replaces an earlier one, as in the sweeper), parsed with
+    Hydra's override parser; keys without a sweep have their one value."""
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+
+    params = config.hydra.sweeper.get("params") or {}
+    arguments = [f"{k}={v}" for k, v in params.items()]
+    arguments += [str(o) for o in config.hydra.overrides.task]
+    values: dict[str, list[Any]] = {}
+    for override in OverridesParser.create().parse_overrides(arguments):
+        if override.is_delete():
+            continue
+        key = override.key_or_group
+        sweep = override.is_sweep_override()
+        values[key] = list(override.sweep_iterator()) if sweep else [override.value()]
+    return values
+
+
+def _domain_name(option: str) -> str:
+    """The ``name`` a domain option's YAML sets (the option's own name when it cannot
+    be read: a config of the user's own folder, say)."""
+    from importlib import resources
+
+    import yaml
+
+    try:
+        text = (resources.files("flows.conf") / "domain" / f"{option}.yaml").read_text()
+        data = yaml.safe_load(text)
+    except (OSError, ValueError, yaml.YAMLError):
+        return option
+    name = data.get("name") if isinstance(data, dict) else None
+    return str(name) if name else option
+
+
+def sweep_problem(config: Any) -> str | None:
+    """The first value a multirun lists that a job could not run with (None: none), found
+    before the sweep starts: each listed value of a key with a rule, set on the sweep's
+    config (which holds every key's single value), and every (domain, task, data root) of
+    the grid. Cheap: no job config is composed."""
+    from omegaconf import OmegaConf
+    from omegaconf.errors import OmegaConfBaseException
+
+    from twostep.benchmark import BenchmarkError, task_path
+
+    try:
+        values = sweep_values(config)
+    except Exception:  # another sweeper's syntax: each job checks its own values
+        return None
+    base = config
+    rules = {rule.key: rule for rule in VALUE_RULES}
+    groups = {"method": "method.name", "decomposer": "decomposer.name"}
+    for key, listed in values.items():
+        dotted = groups.get(key, key)
+        rule = rules.get(dotted)
+        if key.startswith("hydra") or (rule is None and key != "task"):
+            continue
+        for value in listed:
+            if rule is not None and key in groups:  # a group's option names the value
+                problem = rule.check(rule.name, value)
+            else:
+                job = copy.deepcopy(base)  # typed as the schema says
+                try:  # the schema's type (agents=two)
+                    OmegaConf.update(job, dotted, value)
+                except OmegaConfBaseException as error:
+                    return f"{key}={value}: {str(error).splitlines()[0]}"
+                problem = next(iter(value_problems(job, {dotted})), None) if rule else None
+            if problem:
+                return problem
+    domains = [_domain_name(str(d)) for d in values.get("domain", [])] or [str(base.domain.name)]
+    tasks = values.get("task", [base.task])
+    roots = values.get("data.root", [base.data.root])
+    for domain in domains:
+        for task in tasks:
+            for root in roots:
+                try:
+                    task_path(domain, int(task), Path(str(root)))
+                except (BenchmarkError, ValueError) as error:
+                    return str(error)
+    return None
 
 
 def secret_problem(cfg: Any) -> str | None:

@@ -23,7 +23,7 @@ from hydra.types import RunMode
 from omegaconf import DictConfig
 
 from flows.artifacts import picture_paths
-from flows.config import agents_run, register
+from flows.config import agents_run, override_problem, register
 from flows.console import format_schedule, format_summary
 from flows.environment import quiet_defaults
 from flows.sweep_callback import SweepCallback
@@ -67,7 +67,7 @@ def app(cfg: DictConfig) -> None:
         return
     global _SINGLE_RUN_DONE
     _SINGLE_RUN_DONE = not multirun
-    line = format_summary(outcome.result)
+    line = format_summary(outcome.result, outcome.name)
     if outcome.reused:
         line += " | reused (job store)"
     elif outcome.stats.plan_cache_hits:
@@ -148,12 +148,17 @@ def main() -> None:
 
         print(version_text())
         return
-    try:  # flows.command (the console script) has started the MLflow logging process
-        app()
-    except SystemExit as stop:
-        code = stop.code
+    problem = override_problem(sys.argv[1:])  # a typo'd key never runs
+    if problem is not None:
+        print(f"error: {problem}", file=sys.stderr, flush=True)
+        code: Any = 2
     else:
-        code = 0
+        try:  # flows.command (the console script) has started the MLflow logging process
+            app()
+        except SystemExit as stop:
+            code = stop.code
+        else:
+            code = 0
     if "flows.tracking.worker" in sys.modules:
         from flows.tracking.worker import TrackingWorker
 

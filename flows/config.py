@@ -12,9 +12,14 @@ setting); the one place that turns a config into library objects is :mod:`flows.
 
 from __future__ import annotations
 
+import contextlib
+import difflib
 import enum
-from dataclasses import dataclass, field
-from typing import Any, cast
+from collections.abc import Sequence
+from dataclasses import dataclass, field, fields, is_dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any, cast, get_type_hints
 
 from hydra.core.config_store import ConfigStore
 from omegaconf import OmegaConf
@@ -199,3 +204,126 @@ def typed(cfg: object) -> TwostepConfig:
     """A job's config, composed over this schema (Hydra's DictConfig, validated by
     OmegaConf on every assignment), seen as what it is: a :class:`TwostepConfig`."""
     return cast(TwostepConfig, cfg)
+
+
+# ----------------------------------------------------------------- command-line keys
+# Hydra refuses an unknown key with several lines ending in a hint to add it with `+`,
+# and then takes `+agnets=3` silently: a typo would run another experiment. The command
+# checks its overrides against the schema first (:func:`override_problem`).
+
+HYDRA_GROUP_PREFIX = "hydra"
+
+
+def schema_keys(node: type = TwostepConfig, prefix: str = "") -> dict[str, bool]:
+    """Every dotted key of the schema -> whether it holds any value (``Any``: keys below
+    it are its own, e.g. ``experiment``)."""
+    keys: dict[str, bool] = {}
+    hints = get_type_hints(node)
+    for item in fields(node):  # type: ignore[arg-type]
+        name = f"{prefix}{item.name}"
+        kind = hints[item.name]
+        keys[name] = kind is Any
+        if is_dataclass(kind):
+            keys.update(schema_keys(kind, f"{name}."))  # type: ignore[arg-type]
+    return keys
+
+
+def group_options(group: str, config_dirs: Sequence[str] = (), complete: bool = False) -> list[str]:
+    """The options of a config group: its YAML files in the installed configs and in the
+    folders given with ``--config-dir``; ``complete``: with Hydra's own list for Hydra's
+    groups (its plugins' options too: slower)."""
+    options: set[str] = set()
+    folders = [resources.files("flows.conf") / group, *(Path(d) / group for d in config_dirs)]
+    for folder in folders:
+        with contextlib.suppress(OSError):
+            options |= {
+                item.name.removesuffix(".yaml")
+                for item in folder.iterdir()
+                if item.name.endswith(".yaml")
+            }
+    if complete and group.startswith(HYDRA_GROUP_PREFIX + "/"):
+        from hydra import initialize_config_module
+        from hydra.core.global_hydra import GlobalHydra
+
+        with initialize_config_module(config_module="flows.conf", version_base="1.3"):
+            options |= set(GlobalHydra.instance().config_loader().get_group_options(group))
+    return sorted(options)
+
+
+def config_groups(config_dirs: Sequence[str] = ()) -> list[str]:
+    """The app's config groups (top-level folders of its configs, Hydra's own apart)."""
+    groups: set[str] = set()
+    for folder in [resources.files("flows.conf"), *(Path(d) for d in config_dirs)]:
+        with contextlib.suppress(OSError):
+            groups |= {
+                item.name
+                for item in folder.iterdir()
+                if item.is_dir() and not item.name.startswith(("_", HYDRA_GROUP_PREFIX))
+            }
+    return sorted(groups)
+
+
+def did_you_mean(key: str, known: Sequence[str]) -> str:
+    """``unknown key 'agnets': did you mean 'agents'?`` (without a close one: the
+    top-level keys)."""
+    close = difflib.get_close_matches(key, known, n=1, cutoff=0.6)
+    if not close and "." in key:  # a typo in the last part: its siblings
+        parent, _, last = key.rpartition(".")
+        siblings = [k.rpartition(".")[2] for k in known if k.rpartition(".")[0] == parent]
+        near = difflib.get_close_matches(last, siblings, n=1, cutoff=0.6)
+        close = [f"{parent}.{near[0]}"] if near else []
+    if close:
+        return f"unknown key '{key}': did you mean '{close[0]}'?"
+    top = sorted({k.split(".")[0] for k in known})
+    return f"unknown key '{key}' (keys: {', '.join(top)})"
+
+
+def _option_values(override: Any) -> list[str]:
+    """The options an override of a group names (a sweep's each; none for functions
+    such as ``glob(*)``, which Hydra expands)."""
+    if override.is_sweep_override():
+        try:
+            return [str(v) for v in override.sweep_iterator()]
+        except Exception:
+            return []
+    value = override.value()
+    return [] if value is None or not isinstance(value, str | int) else [str(value)]
+
+
+def override_problem(arguments: Sequence[str]) -> str | None:
+    """The first override of a command line (``twostep``'s arguments) that names a key or
+    a group option the app does not have, as one line (None: every one is known, or Hydra
+    reports the line itself). ``+key=...`` of an unknown key is refused as well: the
+    schema has every key a job reads."""
+    from hydra._internal.utils import get_args_parser
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+
+    try:
+        parsed = get_args_parser().parse_args(list(arguments))
+        overrides = OverridesParser.create().parse_overrides(parsed.overrides)
+    except (Exception, SystemExit):  # Hydra says what is wrong with the line itself
+        return None
+    config_dirs = [parsed.config_dir] if parsed.config_dir else []
+    keys = schema_keys()
+    groups = config_groups(config_dirs)
+    for override in overrides:
+        key = override.key_or_group
+        if override.is_hydra_override() and "/" not in key:
+            continue  # Hydra's own settings: Hydra checks them
+        if "/" in key or (key in groups and override.package is None and not override.is_delete()):
+            if "/" in key and not key.startswith(HYDRA_GROUP_PREFIX + "/"):
+                continue  # a nested group (domain/x=...): Hydra's to resolve
+            values = [v for v in _option_values(override) if v != "null"]
+            options = group_options(key, config_dirs)
+            if not set(values) <= set(options):
+                options = group_options(key, config_dirs, complete=True)
+            for value in values:
+                if value not in options:
+                    return f"unknown {key} '{value}' (choices: {', '.join(options)})"
+            continue
+        if key in keys or any(key.startswith(f"{k}.") for k, open_ in keys.items() if open_):
+            if override.is_add() and not override.is_force_add() and key in keys:
+                return f"{key} is a key already: set it without '+' ({key}=...)"
+            continue
+        return did_you_mean(key, [*keys, *groups])
+    return None

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from flows.status import reason_line
-from twostep.identity import display_name
+from twostep.identity import job_name
 from twostep.redaction import redact_text
 
 if TYPE_CHECKING:
@@ -51,16 +51,23 @@ class MaskCredentials(logging.Filter):
 # ----------------------------------------------------------------- one job
 
 
-def format_summary(result: RunResult | Mapping[str, Any]) -> str:
-    """One line for the terminal (from a result or its result.json dict)."""
+def format_summary(result: RunResult | Mapping[str, Any], name: str | None = None) -> str:
+    """One line for the terminal (from a result or its result.json dict), starting with
+    the job's name (``name``, else made from the result: :func:`twostep.identity.job_name`)."""
     r = result if isinstance(result, Mapping) else result.to_dict()
+    name = name or job_name(r)
     if r.get("status") == "failed" and "error" in r:
-        return f"{display_name(r)} | FAILED: {r['error']}"
+        return f"{name} | FAILED: {r['error']}"
     status, message = str(r.get("status")), str(r.get("message") or "")
+    if r.get("success"):
+        outcome = "success"
+    elif status == "timeout":  # a timeout is not a failure of the job: it is counted apart
+        outcome = f"TIMED OUT ({message or 'planner time limit'})"
+    else:
+        outcome = f"FAILED ({reason_line(status, message)})"
     parts = [
-        display_name(r),
-        f"N={r.get('agents')}",
-        "success" if r.get("success") else f"FAILED ({reason_line(status, message)})",
+        name,
+        outcome,
         f"exec_length={r.get('exec_length')}",
     ]
     if r.get("sa_length") is not None:
@@ -149,18 +156,26 @@ def eta_seconds(state: SweepState, records: list[dict[str, Any]], elapsed: float
     return sum(times) / len(times) * math.ceil(left / state.parallel)
 
 
+def outcome_counts(records: list[dict[str, Any]]) -> str:
+    """``3 ok, 1 failed, 1 timed out``: how the finished jobs ended (the three add up to
+    the jobs finished)."""
+    statuses = [r.get("status") for r in records]
+    ok = statuses.count("success")
+    timed_out = statuses.count("timeout")
+    return f"{ok} ok, {len(records) - ok - timed_out} failed, {timed_out} timed out"
+
+
 def progress_line(state: SweepState, now: float | None = None) -> str:
-    """``[3/4 done | 0 failed | 1 reused | 0:41 elapsed, ~0:14 left]`` (``now``: the
-    time to measure from, default the clock's)."""
+    """``[5/8: 3 ok, 1 failed, 1 timed out | 1 reused | 0:41 elapsed, ~0:14 left]``
+    (``now``: the time to measure from, default the clock's)."""
     from flows.sweep_state import job_records
 
     records = job_records(Path(state.sweep_dir))
     done = len(records)
-    failed = sum(1 for r in records if r.get("status") == "failed")
     reused = sum(1 for r in records if r.get("reused"))
     elapsed = (time.time() if now is None else now) - state.started_at
     total = state.total_jobs
-    parts = [f"{done}/{total if total is not None else '?'} done", f"{failed} failed"]
+    parts = [f"{done}/{total if total is not None else '?'}: {outcome_counts(records)}"]
     if reused:
         parts.append(f"{reused} reused")
     timing = f"{clock(elapsed)} elapsed"
@@ -186,9 +201,10 @@ def header(state: SweepState) -> str:
 
 
 def footer(state: SweepState, summary: Mapping[str, Any], failed: list[dict[str, Any]]) -> str:
+    ok = summary["jobs_done"] - summary["jobs_failed"] - summary["jobs_timeout"]
     lines = [
-        f"sweep finished: {summary['jobs_done']}/{summary['jobs_total']} jobs, "
-        f"{summary['jobs_failed']} failed, {summary['jobs_timeout']} timed out, "
+        f"sweep finished: {summary['jobs_done']}/{summary['jobs_total']} jobs: {ok} ok, "
+        f"{summary['jobs_failed']} failed, {summary['jobs_timeout']} timed out | "
         f"{summary['jobs_reused']} reused | planner calls: {summary['planner_calls_run']} run, "
         f"{summary['plan_cache_hits']} from cache | {clock(summary['sweep_wall_time_s'])}"
     ]

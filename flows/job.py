@@ -38,7 +38,7 @@ from typing import Any
 from flows.artifacts import write_job_files
 from flows.build import Job, build_job, check_job
 from flows.checks import JobError
-from flows.config import TwostepConfig, typed
+from flows.config import TwostepConfig, agents_run, typed
 from flows.console import one_line
 from flows.services import running_prefect_api
 from flows.status import JobStatus, job_status
@@ -52,7 +52,6 @@ from flows.tracking.runs import (
     check_store,
     job_record,
     run_exists,
-    run_name,
 )
 from twostep.benchmark import BenchmarkError
 from twostep.embodied.run import draws_pictures
@@ -199,12 +198,17 @@ def _run_flow(
 
 def _flow_tags(config: dict[str, Any], sweep: SweepState | None) -> list[str]:
     """Tags to find a job's flow runs in the Prefect UI and API."""
+    method = config["method"]["name"]
     tags = [
         "twostep",
         f"domain:{config['domain']['name']}",
-        f"method:{config['method']['name']}",
-        f"agents:{config.get('agents')}",
+        f"task:{config.get('task')}",
+        f"method:{method}",
+        f"agents:{agents_run(str(method), config.get('agents'))}",  # the N it runs: SA 1
+        f"seed:{config.get('seed')}",
     ]
+    if method == "twostep":
+        tags.append(f"decomposer:{config['decomposer']['name']}")
     if sweep is not None:
         tags += [sweep.sweep_tag, sweep.run_tag]
     return tags
@@ -409,7 +413,7 @@ def _log_run(
         if record is None:
             record = job_record(
                 key=outcome.key,
-                name=run_name(outcome.name, config),
+                name=outcome.name,
                 status=outcome.status.value,
                 error=outcome.error,
                 reused=outcome.reused,

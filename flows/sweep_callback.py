@@ -70,10 +70,20 @@ def _set_hydra_config(config: DictConfig) -> None:
 
 def _check_before_writing(config: DictConfig, run_dir: Path) -> None:
     """Before Hydra writes the run's (or sweep's) directory and config: no key where a
-    variable's name belongs, and every output location writable. One line, exit 2."""
-    from flows.checks import ValidationError, check_writable, secret_problem
+    variable's name belongs, every value in range and the task there (a single run's, or
+    every value a sweep lists), every output location writable. One line, exit 2."""
+    from flows.checks import (
+        ValidationError,
+        check_writable,
+        input_problem,
+        secret_problem,
+        sweep_problem,
+    )
 
     problem = secret_problem(config)
+    if problem is None:
+        multirun = config.hydra.mode == RunMode.MULTIRUN
+        problem = sweep_problem(config) if multirun else input_problem(config)
     if problem is None:
         try:
             check_writable(config, run_dir)
@@ -82,6 +92,24 @@ def _check_before_writing(config: DictConfig, run_dir: Path) -> None:
     if problem is not None:
         print(f"error: {problem}", file=sys.stderr, flush=True)
         sys.exit(2)
+
+
+# The launchers' own lines ("Launching 8 jobs locally", "#3 : domain=...") between the
+# progress lines: shown only with hydra.verbose.
+LAUNCHER_LOGGERS = (
+    "hydra._internal.core_plugins.basic_launcher",
+    "hydra_plugins.hydra_joblib_launcher._core",
+    "hydra_plugins.hydra_joblib_launcher.joblib_launcher",
+    "hydra_plugins.hydra_submitit_launcher.submitit_launcher",
+)
+
+
+def _launcher_lines(config: DictConfig) -> None:
+    import logging
+
+    level = logging.DEBUG if config.hydra.verbose else logging.WARNING
+    for name in LAUNCHER_LOGGERS:
+        logging.getLogger(name).setLevel(level)
 
 
 def _refuse_running_sweep(sweep_dir: Path) -> None:
@@ -201,6 +229,7 @@ class SweepCallback(Callback):
 
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
         quiet_defaults()
+        _launcher_lines(config)
         _set_hydra_config(config)
         sweep_dir = Path(str(config.hydra.sweep.dir)).resolve()
         _check_before_writing(config, sweep_dir)

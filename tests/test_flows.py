@@ -33,10 +33,11 @@ from flows.job import execute_job
 from flows.servers import pid_alive
 from flows.store import JobStore, job_config, job_key
 from flows.sweep_state import SweepState, record_job
-from flows.tracking.contents import config_tags, job_metrics, job_params, run_name
+from flows.tracking.contents import config_tags, job_metrics, job_params
 from flows.tracking.runs import TrackingError
 from tests.conftest import blocks_problem
 from tests.test_prompts import make_blocksworld_data
+from twostep.identity import job_name
 
 REPO = Path(__file__).resolve().parent.parent
 CONF = REPO / "conf"
@@ -215,7 +216,7 @@ def test_unusable_tracking_store_fails_before_any_work(
 def test_cli_errors_are_one_line(shared: dict[str, Path], tmp_path: Path) -> None:
     common = [f"data.root={shared['data']}", f"output.root={tmp_path}", "domain=blocksworld"]
     cases = [
-        (["mlflow.tracking_uri=http://127.0.0.1:9"], "MLflow tracking server"),
+        (["task=1", "mlflow.tracking_uri=http://127.0.0.1:9"], "MLflow tracking server"),
         (["task=99"], "unknown task 99"),
     ]
     for extra, expected in cases:
@@ -334,7 +335,8 @@ def test_sa_logs_the_one_agent_it_ran_and_the_grid_n_as_a_tag() -> None:
     assert tags["twostep.grid_agents"] == "3" and tags["twostep.data_root"] == "/somewhere/data"
     rest = json.loads(tags["twostep.config"])
     assert rest["score_max_nodes"] == "2000" and "decomposer.cut" not in rest
-    assert run_name("grippers-p01-sa-n3-s0", GRID_JOB) == "grippers-p01-sa-n1-s0 (grid N=3)"
+    # one name everywhere (console, Prefect, MLflow): SA runs N = 1 (the grid's N: a tag)
+    assert job_name(GRID_JOB) == "grippers-p01-sa-n1-s0"
 
 
 def test_twostep_with_the_llm_logs_at_most_15_params_and_no_credentials() -> None:
@@ -345,7 +347,7 @@ def test_twostep_with_the_llm_logs_at_most_15_params_and_no_credentials() -> Non
     assert params["llm.model"] == "openai/gpt-4o" and params["planner.alias"] == "lama-first"
     rest = json.loads(config_tags(config)["twostep.config"])
     assert rest["decomposer.cut"] == "best" and rest["llm.api_base"] == "https://***@h/v1"
-    assert run_name("grippers-p01-twostep-n3-s0", config) == "grippers-p01-twostep-n3-s0"
+    assert job_name(config) == "grippers-p01-twostep-llm-n3-s0"  # the decomposer named
 
 
 def test_job_files_layout(tmp_path: Path) -> None:
@@ -392,9 +394,12 @@ def test_progress_line_counts_and_estimates(tmp_path: Path) -> None:
     record_job(tmp_path, 0, {"status": "success"})
     record_job(tmp_path, 1, {"status": "failed", "reused": False})
     record_job(tmp_path, 2, {"status": "success", "reused": True})
+    record_job(tmp_path, 3, {"status": "timeout"})
     now = state.started_at + 30  # a fixed clock: a busy machine cannot make it 0:31
+    state.total_jobs = 5
     line = progress_line(state, now)
-    assert line == "[3/4 done | 1 failed | 1 reused | 0:30 elapsed, ~0:10 left]"
+    # 2 ok + 1 failed + 1 timed out = the 4 finished: a timeout is counted, apart
+    assert line == "[4/5: 2 ok, 1 failed, 1 timed out | 1 reused | 0:30 elapsed, ~0:08 left]"
 
 
 def test_eta_uses_the_finished_jobs_times_without_the_server_start(tmp_path: Path) -> None:
@@ -406,7 +411,7 @@ def test_eta_uses_the_finished_jobs_times_without_the_server_start(tmp_path: Pat
     record_job(tmp_path, 1, {"status": "success", "job_wall_time_s": 5.0, "server_wait_s": 0.0})
     record_job(tmp_path, 2, {"status": "success", "job_wall_time_s": 6.0})
     line = progress_line(state, state.started_at + 50)
-    assert line == "[3/6 done | 0 failed | 0:50 elapsed, ~0:11 left]"
+    assert line == "[3/6: 3 ok, 0 failed, 0 timed out | 0:50 elapsed, ~0:11 left]"
 
 
 def test_job_store_round_trip(tmp_path: Path) -> None:
@@ -544,7 +549,7 @@ def test_two_job_sweep_on_a_local_dask_cluster(
         )  # fmt: skip
         assert done.returncode == 0, done.stdout + done.stderr
         executed = client.run(lambda dask_worker: dask_worker.state.executed_count)
-    assert "2/2 done | 0 failed" in done.stdout
+    assert "[2/2: 2 ok, 0 failed, 0 timed out" in done.stdout
     (summary_path,) = tmp_path.glob("multiruns/*/*/.twostep/summary.json")
     summary = json.loads(summary_path.read_text())
     assert summary["prefect_flow_runs"] == {"COMPLETED": 2}

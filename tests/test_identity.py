@@ -124,9 +124,15 @@ def test_unfinished_results_are_not_stored() -> None:
 
 
 def test_job_names() -> None:
-    assert identity.job_name(BASE) == "grippers-p09-twostep-n2-s0"
-    result = {"domain": "grippers", "task": 9, "method": "sa"}
-    assert identity.display_name(result) == "grippers p09 sa"
+    """One name per job: domain, task, method, the decomposer of TwoStep, the N it runs
+    and the seed, from its config or its result."""
+    assert identity.job_name(BASE) == "grippers-p09-twostep-llm-n2-s0"
+    sa = {**BASE, "method": {"name": "sa"}, "agents": 3}
+    assert identity.job_name(sa) == "grippers-p09-sa-n1-s0"  # SA runs one agent, whatever N
+    ma = {**BASE, "method": {"name": "ma"}, "seed": 2}
+    assert identity.job_name(ma) == "grippers-p09-ma-n2-s2"  # no decomposer: MA reads none
+    result = {"domain": "grippers", "task": 9, "method": "sa", "agents": 1, "seed": 0}
+    assert identity.job_name(result) == "grippers-p09-sa-n1-s0"
 
 
 def test_sweep_identity_keeps_the_experiment() -> None:

@@ -161,7 +161,7 @@ def test_default_single_run_starts_no_prefect_server(tmp_path: Path) -> None:
     argv += ["method=sa", "mlflow.enabled=false"]
     done = run_reporting_imports(argv, ("prefect", "litellm"))
     assert done.returncode == 0, done.stdout + done.stderr
-    assert "blocksworld p01 sa" in done.stdout and "success" in done.stdout
+    assert "blocksworld-p01-sa-n1-s0" in done.stdout and "success" in done.stdout
     assert "prefect imported: False" in done.stdout
     assert "litellm imported: False" in done.stdout
     assert not (out / "prefect").exists()  # no server database was created
@@ -179,7 +179,7 @@ def test_a_logged_single_run_imports_nothing_of_the_reports(tmp_path: Path) -> N
     heavy = ("pandas", "matplotlib", "twostep.report")
     done = run_reporting_imports(argv, heavy)
     assert done.returncode == 0, done.stdout + done.stderr
-    assert "blocksworld p01 sa" in done.stdout
+    assert "blocksworld-p01-sa-n1-s0" in done.stdout
     for name in heavy:
         assert f"{name} imported: False" in done.stdout
     from mlflow.tracking import MlflowClient  # the run was logged, with the counts

@@ -91,7 +91,8 @@ def test_the_job_log_holds_the_runs_summary(tmp_path: Path) -> None:
     printed = done.stdout.splitlines()
     logged = log.read_text().splitlines()
     summary, table = printed[0], [line for line in printed if line.startswith("   1  ")]
-    assert summary.startswith("blocksworld p06 twostep | N=2 | success") and summary in logged
+    assert summary.startswith("blocksworld-p06-twostep-plan-deal-n2-s0 | success")
+    assert summary in logged
     assert table and table[0] in logged  # the schedule's first step
 
 
@@ -229,7 +230,7 @@ def test_installed_wheel_runs_the_demo_from_a_fresh_directory(tmp_path: Path) ->
     twostep = venv / "bin" / "twostep"
     demo = run([str(twostep), "domain=grippers", "task=1", "method=sa"], work, 600)
     assert demo.returncode == 0, demo.stdout + demo.stderr
-    assert demo.stdout.startswith("grippers p01 sa | N=1 | success | exec_length=")
+    assert demo.stdout.startswith("grippers-p01-sa-n1-s0 | success | exec_length=")
     assert list(work.glob("outputs/runs/*/*/result.json"))
     assert (work / "outputs" / "mlflow.db").is_file()  # logged to MLflow by default
     version = run([str(twostep), "--version"], work).stdout.splitlines()[0]

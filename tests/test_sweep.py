@@ -90,7 +90,7 @@ def test_four_job_joblib_sweep_then_the_same_command_plans_nothing(tmp_path: Pat
     assert facts["jobs_done"] == 4 and facts["jobs_failed"] == 0 and facts["jobs_reused"] == 0
     assert facts["prefect_flow_runs"] == {"COMPLETED": 4}  # the server's own record
     assert facts["prefect_server_started"] is True
-    assert "4/4 done | 0 failed" in first.stdout
+    assert "[4/4: 4 ok, 0 failed, 0 timed out" in first.stdout
 
     client, runs = mlflow_experiment(out)
     parents = [r for r in runs if r.data.tags["twostep.kind"] == "sweep"]

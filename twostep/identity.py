@@ -211,18 +211,20 @@ def _task_text(task: Any) -> str:
     return f"{task:02d}" if isinstance(task, int) else str(task)
 
 
+def _name_of(value: Any) -> Any:
+    return value.get("name") if isinstance(value, Mapping) else value
+
+
 def job_name(config: Mapping[str, Any]) -> str:
-    """The job's name for run directories, MLflow runs and flow runs:
-    ``grippers-p09-sa-n2-s0``."""
-    domain, method = config.get("domain"), config.get("method")
-    domain_name = domain.get("name") if isinstance(domain, Mapping) else domain
-    method_name = method.get("name") if isinstance(method, Mapping) else method
+    """The job's one name, on the console, in Prefect and in MLflow, from its config or
+    its result.json dict: domain, task, method, decomposer (TwoStep), the N the job runs
+    and the seed, e.g. ``grippers-p09-twostep-goal-split-n2-s0``. SA runs one agent: it is
+    ``-n1-`` whatever ``agents`` says (a sweep over ``agents=2,3`` runs it once per N
+    value, under one name; MLflow's tag ``twostep.grid_agents`` tells them apart)."""
+    method = _name_of(config.get("method"))
+    decomposer = _name_of(config.get("decomposer")) if method == "twostep" else None
+    runs = 1 if method == "sa" else config.get("agents")
     return (
-        f"{domain_name}-p{_task_text(config.get('task'))}-{method_name}"
-        f"-n{config.get('agents')}-s{config.get('seed')}"
+        f"{_name_of(config.get('domain'))}-p{_task_text(config.get('task'))}-{method}"
+        f"{f'-{decomposer}' if decomposer else ''}-n{runs}-s{config.get('seed')}"
     )
-
-
-def display_name(result: Mapping[str, Any]) -> str:
-    """The job's name on the console, from a result dict: ``grippers p09 sa``."""
-    return f"{result.get('domain')} p{_task_text(result.get('task'))} {result.get('method')}"

@@ -104,16 +104,6 @@ def _method_of(config: Mapping[str, Any]) -> tuple[str | None, str | None]:
     return flat.get("method.name"), flat.get("decomposer.name")
 
 
-def run_name(name: str, config: Mapping[str, Any]) -> str:
-    """The job run's name in MLflow: the job's name (:func:`twostep.identity.job_name`),
-    with the N it ran: an SA job of a grid's N=3 is ``grippers-p01-sa-n1-s0 (grid N=3)``."""
-    method, _ = _method_of(config)
-    agents = config.get("agents")
-    if method != "sa" or agents is None or str(agents) == "1":
-        return name
-    return name.replace(f"-n{agents}-", "-n1-", 1) + f" (grid N={agents})"
-
-
 def job_params(config: Mapping[str, Any]) -> dict[str, str]:
     """What defines the job's experiment (:data:`EXPERIMENT_PARAMS`, those its method
     reads); ``agents`` is the N the job ran: 1 for SA (the grid's N is a tag). Secret-looking

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 from flows.locations import sqlite_path
 from flows.servers import file_lock
 from flows.tracking.client import Tracker, TrackingError, check_store, log_job_run, run_exists
-from flows.tracking.contents import DEFAULT_EXPERIMENT, experiment_name_for, job_record, run_name
+from flows.tracking.contents import DEFAULT_EXPERIMENT, experiment_name_for, job_record
 from flows.tracking.worker import TrackingWorker
 from twostep.files import write_json_atomic
 
@@ -42,7 +42,6 @@ __all__ = [
     "experiment_name_for",
     "job_record",
     "run_exists",
-    "run_name",
     "sweep_run_ids",
 ]
 
