@@ -44,6 +44,7 @@ import pandas as pd
 
 from flows.locations import sqlite_path
 from flows.sweep_state import job_records
+from flows.tracking.contents import unsolved_name
 from twostep.benchmark import DEFAULT_DATA_ROOT
 from twostep.cli import console_main
 from twostep.files import NotTextError, read_text_file
@@ -156,9 +157,10 @@ def _run_row(run: Any) -> dict[str, Any] | None:
     row["run_id"] = run.info.run_id
     row["job_key"] = tags.get(JOB_KEY_TAG, "")
     row["start_time"] = run.info.start_time
-    for metric in METRICS:
-        if metric in metrics:
-            row[metric] = metrics[metric]
+    for metric in METRICS:  # an unsuccessful job's values: under unsolved.<name>
+        for name in (metric, unsolved_name(metric)):
+            if name in metrics:
+                row[metric] = metrics[name]
     status = tags.get(STATUS_TAG)
     lifecycle = str(run.info.status).upper()
     if status is None and lifecycle in ("RUNNING", "SCHEDULED"):

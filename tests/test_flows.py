@@ -184,6 +184,26 @@ def test_bad_input_is_a_failed_job(shared: dict[str, Path], tmp_path: Path) -> N
     assert runs["9"].info.status == "FAILED" and runs["9"].data.metrics["success"] == 0.0
 
 
+def test_a_timed_out_job_is_not_a_success_in_mlflow(
+    shared: dict[str, Path], tmp_path: Path, data_root: Path
+) -> None:
+    """Issue 37: a timed-out run was FINISHED (a green check) with planning_time_s at the
+    limit, and MLflow's grouped mean of planning_time_s took it in. termes p06's SA search
+    runs out of a 1 s limit (its first plan takes seconds more: README, termes)."""
+    cfg = job_cfg(shared, tmp_path, "method=sa", "domain=termes", "task=6",
+                  f"data.root={data_root}", "planner.time_limit_s=1")  # fmt: skip
+    outcome = execute_job(cfg, tmp_path / "job")
+    assert outcome.status == "timeout"
+    (run,) = mlflow_runs(shared, tmp_path.name)
+    metrics, tags = run.data.metrics, run.data.tags
+    assert run.info.status == "KILLED" and tags["twostep.status"] == "timeout"
+    # no metric of a success's name but the shared ones: the timed-out time stands apart
+    assert "planning_time_s" not in metrics and "exec_length" not in metrics
+    assert metrics["unsolved.planning_time_s"] == outcome.result["planning_time_s"] > 0
+    assert metrics["success"] == 0.0 and metrics["planner_timeouts"] == 1.0
+    assert tags["twostep.distinct_runs"].startswith("1 (deterministic")
+
+
 def test_crash_is_recorded_with_its_traceback(
     shared: dict[str, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

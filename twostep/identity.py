@@ -207,6 +207,28 @@ def is_complete_result(result: Mapping[str, Any]) -> bool:
     )
 
 
+# Where a job's answer depends on its seed: the LLM's answers (the seed is part of every
+# request) and the embodied executor's start cells and backoffs. Every other job is
+# deterministic: its seeds repeat one run (same plans, same lengths; the planner's times
+# of later seeds are the first seed's, from the planner cache).
+SEEDED_DECOMPOSERS: frozenset[str] = frozenset({"llm"})
+SEEDED_EXECUTORS: frozenset[str] = frozenset({"embodied"})
+
+
+def seed_matters(method: str | None, decomposer: str | None, executor: str | None = None) -> bool:
+    """Whether runs of ``method`` (``decomposer``, ``executor``) differ by seed; False: a
+    deterministic method, one distinct run whatever the seed."""
+    if executor is not None and str(executor) in SEEDED_EXECUTORS:
+        return True
+    return method == "twostep" and str(decomposer) in SEEDED_DECOMPOSERS
+
+
+def config_seed_matters(config: Mapping[str, Any]) -> bool:
+    """:func:`seed_matters` of a job's config."""
+    method, decomposer = _method_of(config)
+    return seed_matters(method, decomposer, _name_of(config.get("executor")))
+
+
 def _task_text(task: Any) -> str:
     return f"{task:02d}" if isinstance(task, int) else str(task)
 

@@ -343,6 +343,12 @@ def batches(params: list[Any], metrics: list[Any], tags: list[Any]) -> list[dict
     return calls
 
 
+# MLflow's run status of a job, by how it ended (``twostep.status``): a timed-out job was
+# stopped by its time limit, KILLED; any other job without success FAILED. Only a
+# success is FINISHED (the green check of MLflow's runs table).
+RUN_STATUSES: dict[str, str] = {"success": "FINISHED", "timeout": "KILLED", "failed": "FAILED"}
+
+
 def log_job_run(
     tracker: Tracker, experiment_id: str, parent: str | None, record: Mapping[str, Any]
 ) -> str:
@@ -369,7 +375,7 @@ def log_job_run(
         job_tags(record),
         [(Path(path), folder) for path, folder in record["files"]],
         existing_params=dict(found.data.params) if found is not None else None,
-        terminated="FAILED" if record["status"] == "failed" else "FINISHED",
+        terminated=RUN_STATUSES.get(str(record["status"]), "FAILED"),
         end_ms=record.get("end_ms"),
     )
     return run_id

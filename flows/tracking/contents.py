@@ -13,7 +13,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-from twostep.identity import identity_config, is_relevant
+from twostep.identity import config_seed_matters, identity_config, is_relevant
 from twostep.params import flatten_config
 from twostep.redaction import redact_config
 
@@ -34,6 +34,10 @@ NOTE = "mlflow.note.content"
 GRID_AGENTS = "twostep.grid_agents"  # the grid's N (an SA job runs one agent whatever it is)
 CONFIG = "twostep.config"  # the rest of the job's identity config, as JSON
 DATA_ROOT = "twostep.data_root"
+# Whether the job's seeds differ (the LLM, the embodied executor) or repeat one run.
+DISTINCT_RUNS = "twostep.distinct_runs"
+ONE_RUN = "1 (deterministic: every seed repeats this run)"
+PER_SEED = "one per seed"
 
 # The params of a job run: what defines the experiment (where it runs goes to tags). A
 # key the job's method never reads (``decomposer.*`` for SA, ``llm.*`` without the LLM
@@ -130,6 +134,7 @@ def config_tags(config: Mapping[str, Any]) -> dict[str, str]:
         tags[GRID_AGENTS] = flat["agents"]
     if "data.root" in flat:
         tags[DATA_ROOT] = flat["data.root"]
+    tags[DISTINCT_RUNS] = PER_SEED if config_seed_matters(config) else ONE_RUN
     rest = {
         key: value
         for key, value in flatten_config(redact_config(identity_config(config))).items()
@@ -149,8 +154,36 @@ def _number(value: Any) -> float | None:
     return None
 
 
+# A job that did not succeed (timed out, failed) logs its outcome's values under these
+# names, which no successful run has: MLflow's grouped means of ``planning_time_s``,
+# ``exec_length``... are then over the same successful runs (a timed-out run's planning
+# time, the time limit, never enters them). Shared by every run: ``success``, the counts
+# of planner calls stopped by their limit, and the job's orchestration timings.
+UNSOLVED_PREFIX = "unsolved."
+SHARED_METRICS: frozenset[str] = frozenset({"success", "planner_timeouts", "planner_guard_stops"})
+
+
+def unsolved_name(metric: str) -> str:
+    """The name a metric of an unsuccessful job is logged under (``unsolved.<metric>``)."""
+    return f"{UNSOLVED_PREFIX}{metric}"
+
+
 def job_metrics(result: Mapping[str, Any], timings: Mapping[str, float]) -> dict[str, Any]:
-    """Metrics of one job (docs/tracking.md); a value that is absent is not logged."""
+    """Metrics of one job (docs/tracking.md); a value that is absent is not logged; an
+    unsuccessful job's outcome values go under ``unsolved.<name>`` (:data:`UNSOLVED_PREFIX`)."""
+    metrics = _outcome_metrics(result)
+    if not result.get("success"):
+        metrics = {
+            key if key in SHARED_METRICS else unsolved_name(key): value
+            for key, value in metrics.items()
+        }
+    for key, value in timings.items():
+        metrics[key] = float(value)
+    return metrics
+
+
+def _outcome_metrics(result: Mapping[str, Any]) -> dict[str, Any]:
+    """What the job's result says, as metrics (timings of the orchestration apart)."""
     metrics: dict[str, Any] = {"success": 1.0 if result.get("success") else 0.0}
     for key in (
         "exec_length",
@@ -189,8 +222,6 @@ def job_metrics(result: Mapping[str, Any], timings: Mapping[str, float]) -> dict
 
         metrics["planner_timeouts"] = float(planner_limit_hits(result))
         metrics["planner_guard_stops"] = float(guard_stops(result))
-    for key, value in timings.items():
-        metrics[key] = float(value)
     return metrics
 
 
