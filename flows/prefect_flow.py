@@ -10,12 +10,15 @@ started (a missing server is an error, not a silent 10-second start-up); the Das
 runner is used when ``orchestration.task_runner=dask``.
 
 =================  =================================================  ===================
-task               library function                                   cache / retries
+task (run name)    library function                                   cache / retries
 =================  =================================================  ===================
 ``plan``           :func:`twostep.planner.plan_pddl`                  cached on PDDL text
+(``plan sa``, ``plan ma``, ``plan helper agent1``, ``plan main agent0``)
 ``generate``       :func:`~twostep.decomposers.llm.generate_subgoal`  no (see below)
+(``generate helper agent1``; ``translate`` alike)
 ``translate``      :func:`~twostep.decomposers.llm.translate_subgoal` no (see below)
 ``progress_state`` :func:`twostep.methods.steps.progress`             no (microseconds)
+(``progress after agent1``)
 ``score``          :func:`twostep.methods.steps.score`                no (milliseconds)
 =================  =================================================  ===================
 
@@ -34,7 +37,11 @@ crash: the task ends in a state named :data:`LLM_ERROR_STATE`, with no traceback
 
 The flow run's own state tells the truth: a job that ends without success (``llm_error``,
 ``error``, ``timeout``, an embodied execution that failed, ...) ends its flow run in a
-Failed state named after it, with the reason (:func:`final_state`).
+Failed state named after it, with the reason (:func:`final_state`); a planner call that
+ran out of its time limit ends its task run Failed, ``TimedOut``, with the reason
+(:func:`mark_timed_out`), though its result stays cached. The flow run's log says what
+the job is, what each step did and the job's result line (:func:`flow_log`); its
+parameters are the config groups the job reads (:func:`flow_parameters`).
 """
 
 from __future__ import annotations
@@ -66,12 +73,14 @@ from prefect.settings import (
 from prefect.states import Completed, Failed
 from prefect.utilities.annotations import quote
 
+from flows.console import format_summary
 from flows.status import JobStatus, job_status, reason_line
 from flows.step_stats import StepStats
 from twostep import planner
 from twostep.execution import DEFAULT_SEARCH_BUDGET, ParallelExecution, SearchBudget
+from twostep.identity import is_relevant, job_name
 from twostep.methods import Steps
-from twostep.methods.steps import progress, score
+from twostep.methods.steps import SA_CALL, PlanCall, progress, score
 from twostep.pddl import Fact, Problem
 from twostep.planner import PlannerSettings, PlanResult, Status
 from twostep.redaction import redact_config
@@ -127,22 +136,31 @@ def plan_cache_key(context: TaskRunContext, parameters: dict[str, Any]) -> str:
     )
 
 
-@task(name="plan", persist_result=True, cache_key_fn=plan_cache_key)
-def plan_task(domain_pddl: str, problem_pddl: str, settings: PlannerSettings) -> PlanResult:
+@task(name="plan", persist_result=True, cache_key_fn=plan_cache_key, task_run_name="plan {call}")
+def plan_task(
+    domain_pddl: str, problem_pddl: str, settings: PlannerSettings, call: str = "sa"
+) -> PlanResult:
+    """One planner call (``call``: which, e.g. ``helper agent1``: the task run's name, not
+    part of its cache key)."""
     result = planner.plan_pddl(domain_pddl, problem_pddl, settings)
     if result.status is Status.ERROR:
         raise PlannerCrashed(result)
     return result
 
 
-@task(name="progress_state", cache_policy=NO_CACHE, persist_result=False)
+@task(
+    name="progress_state",
+    cache_policy=NO_CACHE,
+    persist_result=False,
+    task_run_name="progress after {agent}",
+)
 def progress_task(
-    problem: Problem, plan_steps: Sequence[str], agent_predicates: Collection[str]
+    problem: Problem, plan_steps: Sequence[str], agent_predicates: Collection[str], agent: str
 ) -> frozenset[Fact]:
     return progress(problem, plan_steps, agent_predicates)
 
 
-@task(name="score", cache_policy=NO_CACHE, persist_result=False)
+@task(name="score", cache_policy=NO_CACHE, persist_result=False, task_run_name="score")
 def score_task(
     problem: Problem,
     plans: Sequence[Sequence[str]],
@@ -172,7 +190,22 @@ def _llm_call_outcome(call: Callable[[], LLMStepResult]) -> Any:
         return Completed(name=LLM_ERROR_STATE, message=str(error), data=error)
 
 
-@task(name="generate", cache_policy=NO_CACHE, persist_result=False, retries=0)
+def _helper_run_name(step: str) -> Callable[..., str]:
+    """``generate helper agent1``: an LLM task run named by its step and helper."""
+
+    def name(parameters: dict[str, Any]) -> str:
+        return f"{step} helper agent{parameters.get('helper', 1)}"
+
+    return name
+
+
+@task(
+    name="generate",
+    cache_policy=NO_CACHE,
+    persist_result=False,
+    retries=0,
+    task_run_name=_helper_run_name("generate"),
+)
 def generate_task(
     client: Any,
     task: Any,
@@ -192,7 +225,13 @@ def generate_task(
     )
 
 
-@task(name="translate", cache_policy=NO_CACHE, persist_result=False, retries=0)
+@task(
+    name="translate",
+    cache_policy=NO_CACHE,
+    persist_result=False,
+    retries=0,
+    task_run_name=_helper_run_name("translate"),
+)
 def translate_task(
     client: Any,
     task: Any,
@@ -224,6 +263,10 @@ def _llm_step(task_fn: Any, stats: StepStats) -> Callable[..., LLMStepResult]:
             llm_cache_hits=1 if cached else 0,
             llm_wall_s=0.0 if cached else time.perf_counter() - start,
         )
+        # generate(client, task, agents, helper, ...); translate(..., helper=k)
+        helper = kwargs.get("helper", args[1] if task_fn.name == "generate" else 1)
+        said = "failed" if failed else "answered" + (" (cached)" if cached else "")
+        flow_log(f"{task_fn.name} helper agent{helper}: {said}", failed)
         if failed:
             raise outcome
         text, exchange = outcome
@@ -244,6 +287,61 @@ def _run(task_fn: Any, submit: bool, *args: Any, **kwargs: Any) -> State[Any]:
     return task_fn(*args, return_state=True, **kwargs)  # type: ignore[no-any-return]
 
 
+# ----------------------------------------------------------------- what a flow run says
+
+# A timed-out planner call's task run: a Failed state of this name, never the green
+# Completed or Cached its result gets (the result stays cached: a re-run does not wait
+# for the limit again).
+TIMED_OUT_STATE = "TimedOut"
+FLOW_LOGGER = "twostep.flow"
+
+
+def mark_timed_out(state: State[Any], result: PlanResult, cached: bool) -> None:
+    """Set a planner call's task run, which ran out of its time limit, to Failed
+    :data:`TIMED_OUT_STATE` with the reason (through the API: Prefect keeps a cached
+    result Completed)."""
+    task_run_id = state.state_details.task_run_id
+    if task_run_id is None:
+        return
+    reason = f"timeout: {result.message or 'search time limit'}"
+    reason += f" ({result.planner_time_s:.2f} s{', cached result' if cached else ''})"
+    from prefect.client.orchestration import get_client
+
+    with contextlib.suppress(Exception), get_client(sync_client=True) as client:
+        client.set_task_run_state(
+            task_run_id, Failed(name=TIMED_OUT_STATE, message=reason), force=True
+        )
+
+
+def plan_line(call: PlanCall, result: PlanResult, cached: bool) -> str:
+    """``plan helper agent1: solved, 5 steps, 0.12 s (cached)``: a planner call's outcome."""
+    what = result.status.value
+    if result.plan is not None:
+        what += f", {len(result.plan)} steps"
+    elif result.message:
+        what += f" ({result.message})"
+    return f"plan {call.name}: {what}, {result.planner_time_s:.2f} s{' (cached)' if cached else ''}"
+
+
+@cache
+def _flow_logger() -> logging.Logger:
+    """The flow runs' own log lines: sent to the Prefect API only (the job's console and
+    log file have the summary already), whatever level Prefect's loggers are kept at."""
+    from prefect.logging.handlers import APILogHandler
+
+    logger = logging.getLogger(FLOW_LOGGER)
+    logger.setLevel(logging.INFO)
+    logger.propagate = False
+    logger.addHandler(APILogHandler())
+    return logger
+
+
+def flow_log(message: str, warning: bool = False) -> None:
+    """One line in the log of the flow run this thread runs (a step's outcome)."""
+    with contextlib.suppress(Exception):  # a log line is never worth failing a job
+        _flow_logger().log(logging.WARNING if warning else logging.INFO, message)
+
+
 def prefect_steps(stats: StepStats, submit: bool = False) -> Steps:
     """The pipeline's steps as task runs; ``submit`` sends planner calls to the task runner.
 
@@ -251,12 +349,14 @@ def prefect_steps(stats: StepStats, submit: bool = False) -> Steps:
     progress_state and score take micro- to milliseconds and run inline.
     """
 
-    def plan(problem: Problem, settings: PlannerSettings) -> PlanResult:
+    def plan(problem: Problem, settings: PlannerSettings, call: PlanCall = SA_CALL) -> PlanResult:
         if problem.goal.holds(problem.init):
             # The library answers this without calling the planner: no task run needed.
-            return planner.plan(problem, settings)
+            result = planner.plan(problem, settings)
+            flow_log(f"plan {call.name}: the goal holds already (no planner call)")
+            return result
         domain_pddl, problem_pddl = planner.planner_input(problem)
-        state = _run(plan_task, submit, domain_pddl, problem_pddl, settings)
+        state = _run(plan_task, submit, domain_pddl, problem_pddl, settings, call.name)
         outcome = state.result(raise_on_failure=False)
         if isinstance(outcome, PlannerCrashed):
             result = outcome.result
@@ -270,10 +370,16 @@ def prefect_steps(stats: StepStats, submit: bool = False) -> Steps:
             plan_cache_hits=1 if cached else 0,
             planner_wall_s=0.0 if cached else result.wall_time_s,
         )
+        if result.status is Status.TIMEOUT:
+            mark_timed_out(state, result, cached)
+        flow_log(plan_line(call, result, cached), result.status is not Status.SOLVED)
         return result
 
     def progress_step(
-        problem: Problem, plan_steps: Sequence[str], agent_predicates: Collection[str]
+        problem: Problem,
+        plan_steps: Sequence[str],
+        agent_predicates: Collection[str],
+        agent: str = "",
     ) -> frozenset[Fact]:
         # quote(): Prefect must not walk the problem's fact sets looking for futures; it
         # hands the task the problem itself.
@@ -281,7 +387,9 @@ def prefect_steps(stats: StepStats, submit: bool = False) -> Steps:
             quote(problem),  # type: ignore[call-overload]
             list(plan_steps),
             list(agent_predicates),
+            agent or "?",
         )
+        flow_log(f"progress after {agent or '?'}: {len(environment)} environment facts")
         return environment
 
     def score_step(
@@ -298,6 +406,8 @@ def prefect_steps(stats: StepStats, submit: bool = False) -> Steps:
             mode,
             budget,
         )
+        exact = "exact" if execution.exact else f"best found, lower bound {execution.lower_bound}"
+        flow_log(f"score: execution length {execution.length} ({mode}, {exact})")
         return execution
 
     return Steps(
@@ -406,13 +516,46 @@ def final_state(result: Mapping[str, Any]) -> dict[str, Any] | State[Any]:
     return Failed(name=name, message=reason_line(kind, str(reason)), data=dict(result))
 
 
+def start_line(config: Mapping[str, Any]) -> str:
+    """The flow run's first log line: what the job plans, with which planner settings."""
+    method = str(config["method"]["name"])
+    what = {"sa": "SA", "ma": "MA"}.get(method, "TwoStep")
+    if method == "twostep":
+        what += f" with {config['decomposer']['name']} subgoals"
+    planner_settings = config.get("planner") or {}
+    return (
+        f"start {job_name(config)}: {what} on {config['domain']['name']} task "
+        f"{config.get('task')}, N = {1 if method == 'sa' else config.get('agents')}, seed "
+        f"{config.get('seed')}; planner {planner_settings.get('alias')}, "
+        f"{planner_settings.get('time_limit_s')} s"
+    )
+
+
 @flow(name="twostep-job", persist_result=False, validate_parameters=False, log_prints=False)
 def job_flow(job: dict[str, Any]) -> dict[str, Any] | State[Any]:
-    """One job (``job``: its resolved config); the steps, the LLM calls among them, run as
-    tasks and the library keeps the control flow. A job that did not succeed ends its
-    flow run Failed (:func:`final_state`)."""
+    """One job (``job``: the config groups it reads); the steps, the LLM calls among them,
+    run as tasks and the library keeps the control flow; the flow run's log says what
+    each step did. A job that did not succeed ends its flow run Failed
+    (:func:`final_state`)."""
     built, stats, submit = running_job()
-    return final_state(built.run(prefect_steps(stats, submit=submit)).to_dict())
+    flow_log(start_line(job))
+    result = built.run(prefect_steps(stats, submit=submit)).to_dict()
+    flow_log(f"result: {format_summary(result, job_name(job))}", not result.get("success"))
+    return final_state(result)
+
+
+def flow_parameters(config: Mapping[str, Any]) -> dict[str, Any]:
+    """The flow run's parameters: the job's config without the groups its method never
+    reads (``decomposer`` but for TwoStep, ``llm`` but for its LLM decomposer) or that
+    are empty; credentials inside URLs masked."""
+    method = str(config["method"]["name"])
+    decomposer = str((config.get("decomposer") or {}).get("name"))
+    used = {
+        key: value
+        for key, value in config.items()
+        if value is not None and is_relevant(f"{key}.", method, decomposer)
+    }
+    return dict(redact_config(used))
 
 
 def run_flow(
@@ -439,7 +582,7 @@ def run_flow(
     try:
         with job_settings(api_url, storage), tags(*flow_tags):
             # The parameter is what Prefect stores and shows: no URL credentials in it.
-            state = job_flow.with_options(**options)(redact_config(dict(config)), return_state=True)
+            state = job_flow.with_options(**options)(flow_parameters(config), return_state=True)
     finally:
         _RUNNING.reset(running)
     result = state.result(raise_on_failure=False)

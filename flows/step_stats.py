@@ -9,6 +9,7 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 from twostep.methods import DIRECT, Steps
+from twostep.methods.steps import SA_CALL, PlanCall
 from twostep.pddl import Problem
 from twostep.planner import PlannerSettings, PlanResult
 
@@ -42,8 +43,10 @@ class StepStats:
 def counting_steps(stats: StepStats, steps: Steps = DIRECT) -> Steps:
     """``steps`` with every planner call counted in ``stats`` (the path without Prefect)."""
 
-    def counted_plan(problem: Problem, settings: PlannerSettings) -> PlanResult:
-        result = steps.plan(problem, settings)
+    def counted_plan(
+        problem: Problem, settings: PlannerSettings, call: PlanCall = SA_CALL
+    ) -> PlanResult:
+        result = steps.plan(problem, settings, call)
         stats.add(plan_calls=1, planner_wall_s=result.wall_time_s)
         return result
 

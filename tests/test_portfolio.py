@@ -173,7 +173,7 @@ def scripted_planner(helper: tuple[str, ...]) -> Steps:
     """Steps whose planner returns ``helper`` for the helper's subgoal (served g1) and
     :data:`CUPS_MAIN_PLAN` for the whole goal (every plan written by hand)."""
 
-    def plan(problem: Problem, settings: PlannerSettings) -> PlanResult:
+    def plan(problem: Problem, settings: PlannerSettings, call: object = None) -> PlanResult:
         whole = "g3" in problem.goal.to_pddl()
         return PlanResult(Status.SOLVED, CUPS_MAIN_PLAN if whole else helper, 0.0, 0.0)
 

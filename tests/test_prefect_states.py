@@ -5,9 +5,11 @@ still recorded and a sweep goes on. Before: an ``llm_error`` job's flow run was 
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -68,7 +70,7 @@ def test_failed_jobs_flow_runs_are_failed_on_the_server_and_the_sweep_goes_on(
         capture_output=True, text=True, timeout=300, env=environment,
     )  # fmt: skip
     assert done.returncode == 1, done.stdout + done.stderr  # a job failed ...
-    assert "sweep finished: 2/2 jobs, 1 failed" in done.stdout  # ... and the sweep went on
+    assert "sweep finished: 2/2 jobs: 1 ok, 1 failed, 0 timed out" in done.stdout  # goes on
     assert "prefect: " in done.stdout and "flow runs: 1 completed, 1 failed" in done.stdout
     (sweep_dir,) = (tmp_path / "out" / "multiruns").glob("*/*")
     tag = f"multirun:{sweep_dir.parent.name}_{sweep_dir.name}"
@@ -78,3 +80,85 @@ def test_failed_jobs_flow_runs_are_failed_on_the_server_and_the_sweep_goes_on(
     (failed,) = [r for r in runs if r["state"]["type"] == "FAILED"]
     assert failed["state"]["message"].startswith("llm_error: ")
     assert "LLM credentials missing" in failed["state"]["message"]
+
+
+def _job(prefect_server: str, out: Path, *overrides: str) -> dict[str, Any]:
+    """One job through the ``twostep`` command as a flow on the server; its result.json."""
+    done = subprocess.run(
+        [str(Path(sys.executable).parent / "twostep"), *overrides, f"output.root={out}",
+         "mlflow.enabled=false", f"orchestration.prefect_api_url={prefect_server}"],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode in (0, 1), done.stdout + done.stderr  # 1: no plan (timed out)
+    (path,) = out.glob("runs/*/*/result.json")
+    result: dict[str, Any] = json.loads(path.read_text())
+    return result
+
+
+def _flow_run(prefect_server: str, name: str, out: Path) -> dict[str, Any]:
+    """The flow run of that name whose parameters are this test's (output.root)."""
+    runs = api(prefect_server, "/flow_runs/filter", {"flow_runs": {"name": {"any_": [name]}}})
+    (run,) = [r for r in runs if r["parameters"]["job"]["output"]["root"] == str(out)]
+    return run
+
+
+def _task_runs(prefect_server: str, flow_run_id: str) -> list[dict[str, Any]]:
+    body = {"flow_runs": {"id": {"any_": [flow_run_id]}}}
+    return list(api(prefect_server, "/task_runs/filter", body))
+
+
+def _log_lines(prefect_server: str, flow_run_id: str) -> list[str]:
+    body = {"logs": {"flow_run_id": {"any_": [flow_run_id]}}, "sort": "TIMESTAMP_ASC"}
+    for _ in range(20):  # logs reach the server from a background worker
+        lines = [entry["message"] for entry in api(prefect_server, "/logs/filter", body)]
+        if any(line.startswith("result: ") for line in lines):
+            return lines
+        time.sleep(0.5)
+    return lines
+
+
+@pytest.mark.integration
+def test_prefect_tells_the_story_of_a_job(
+    tmp_path: Path, prefect_server: str, data_root: Path
+) -> None:
+    """Issue 37: task runs named by step, role and agent (``plan-505`` before); a planner
+    call that ran out of time is not green; log lines; only the config groups the job
+    reads; tags to filter by. Checked through Prefect's API, against the jobs' result.json
+    (which the library writes, not Prefect)."""
+    split = _job(prefect_server, tmp_path / "a", "domain=grippers", "task=1", "method=twostep",
+                 "decomposer=goal-split", "agents=3", f"data.root={data_root}")  # fmt: skip
+    run = _flow_run(prefect_server, "grippers-p01-twostep-goal-split-n3-s0", tmp_path / "a")
+    names = sorted(t["name"] for t in _task_runs(prefect_server, run["id"]))
+    calls = split["planner_calls"]
+    roles = {"single": "sa", "multi": "ma"}
+    planned = [f"plan {roles.get(c['role']) or c['role'] + ' ' + c['agent']}" for c in calls]
+    if "sa_planning_time_s" in split:  # the SA plan solved beside it (sa_length, fallback)
+        planned.append("plan sa")
+    helpers = [c["agent"] for c in calls if c["role"] == "helper" and c["status"] == "solved"]
+    assert helpers  # grippers p01: a helper takes a ball (README)
+    want = [*planned, *(f"progress after {agent}" for agent in helpers), "score"]
+    assert names == sorted(want)
+    assert "plan sa" in names and "plan main agent0" in names  # SA first, then main
+    # what the job reads, nothing else: no llm block for goal-split
+    assert "llm" not in run["parameters"]["job"] and "decomposer" in run["parameters"]["job"]
+    tags = set(run["tags"])
+    assert {"task:1", "seed:0", "decomposer:goal-split", "agents:3", "method:twostep"} <= tags
+    lines = _log_lines(prefect_server, run["id"])
+    assert lines[0].startswith("start grippers-p01-twostep-goal-split-n3-s0: TwoStep")
+    assert any(line.startswith("plan helper agent1: solved, ") for line in lines)
+    assert lines[-1].startswith("result: grippers-p01-twostep-goal-split-n3-s0 | success")
+
+    # termes p06's SA search runs out of a 1 s limit (its plan takes seconds more)
+    timed = _job(prefect_server, tmp_path / "b", "domain=termes", "task=6", "method=sa",
+                 "planner.time_limit_s=1", f"data.root={data_root}")  # fmt: skip
+    assert timed["status"] == "timeout"
+    run = _flow_run(prefect_server, "termes-p06-sa-n1-s0", tmp_path / "b")
+    assert (run["state"]["type"], run["state"]["name"]) == ("FAILED", "TimedOut")
+    (plan,) = _task_runs(prefect_server, run["id"])
+    assert plan["name"] == "plan sa"
+    assert (plan["state"]["type"], plan["state"]["name"]) == ("FAILED", "TimedOut")
+    assert plan["state"]["message"].startswith("timeout: ")
+    assert "llm" not in run["parameters"]["job"] and "decomposer" not in run["parameters"]["job"]
+    lines = _log_lines(prefect_server, run["id"])
+    assert any(line.startswith("plan sa: timeout") for line in lines)
+    assert lines[-1].startswith("result: termes-p06-sa-n1-s0 | TIMED OUT")

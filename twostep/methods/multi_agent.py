@@ -14,6 +14,7 @@ from twostep.methods.result import (
     adopt_schedule,
     new_run,
 )
+from twostep.methods.steps import PlanCall
 from twostep.multiagent import compile_multi_agent_problem, split_plan
 
 
@@ -22,7 +23,7 @@ def run_multi_agent(request: MethodRequest) -> RunResult:
     start = time.perf_counter()
     agents = request.agents
     compiled, names = compile_multi_agent_problem(request.problem, agents, request.agent_predicates)
-    result = request.plan(compiled)
+    result = request.plan(compiled, call=PlanCall("multi", "all"))
     run = new_run(request, MethodName.MA)
     run.planner_calls.append(AgentPlan("all", "multi", compiled.goal.to_pddl(), result))
     run.planning_time_s = result.planner_time_s

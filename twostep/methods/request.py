@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from twostep.benchmark import BenchmarkTask
 from twostep.decomposers.base import Decomposer
 from twostep.execution import DEFAULT_SEARCH_BUDGET, ParallelExecution, SearchBudget
-from twostep.methods.steps import DIRECT, Steps
+from twostep.methods.steps import DIRECT, SA_CALL, PlanCall, Steps
 from twostep.pddl import Problem
 from twostep.planner import PlannerSettings, PlanResult
 
@@ -53,9 +53,12 @@ class MethodRequest:
     def problem(self) -> Problem:
         return self.task.problem
 
-    def plan(self, problem: Problem, settings: PlannerSettings | None = None) -> PlanResult:
-        """One planner call through the request's steps (default: the request's settings)."""
-        return self.steps.plan(problem, settings or self.planner)
+    def plan(
+        self, problem: Problem, settings: PlannerSettings | None = None, call: PlanCall = SA_CALL
+    ) -> PlanResult:
+        """One planner call through the request's steps (default: the request's settings);
+        ``call``: which one (its role and agent, for names and logs)."""
+        return self.steps.plan(problem, settings or self.planner, call)
 
     def score(self, plans: Sequence[Sequence[str]]) -> ParallelExecution:
         """The parallel execution of ``plans`` (hand-off order) on the whole task."""

@@ -9,7 +9,7 @@ the parallel execution length.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection, Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -56,6 +56,60 @@ def progress(
     return progress_state(problem.init, Grounder(problem).ground_plan(plan_steps), agent_predicates)
 
 
+@dataclass(frozen=True)
+class PlanCall:
+    """Which of a method's planner calls a ``plan`` step makes: its role (``single``: the
+    task itself, ``multi``: MA's compiled task, ``helper``, ``main``) and its agent, as the
+    run's :class:`~twostep.methods.result.AgentPlan` records them."""
+
+    role: str = "single"
+    agent: str = "agent0"
+
+    @property
+    def name(self) -> str:
+        """``sa``, ``ma``, ``helper agent1``, ``main agent0``."""
+        return {"single": "sa", "multi": "ma"}.get(self.role) or f"{self.role} {self.agent}"
+
+
+SA_CALL = PlanCall()
+
+
+class PlanStep(Protocol):
+    """A planner call: :func:`twostep.planner.plan` of ``problem`` with ``settings``;
+    ``call`` says which one it is (for names and logs: never for the answer)."""
+
+    def __call__(
+        self, problem: Problem, settings: PlannerSettings, call: PlanCall = ...
+    ) -> PlanResult: ...
+
+
+class ProgressStep(Protocol):
+    """:func:`progress`'s signature; ``agent``: whose plan moves the environment on."""
+
+    def __call__(
+        self,
+        problem: Problem,
+        plan_steps: Sequence[str],
+        agent_predicates: Collection[str],
+        agent: str = ...,
+    ) -> frozenset[Fact]: ...
+
+
+def plan_step(problem: Problem, settings: PlannerSettings, call: PlanCall = SA_CALL) -> PlanResult:
+    """The library's planner call (``call`` only names it)."""
+    return plan(problem, settings)
+
+
+def progress_step(
+    problem: Problem,
+    plan_steps: Sequence[str],
+    agent_predicates: Collection[str],
+    agent: str = "",
+) -> frozenset[Fact]:
+    """:func:`progress` (``agent`` only names it)."""
+    return progress(problem, plan_steps, agent_predicates)
+
+
 class ScoreStep(Protocol):
     """:func:`score`'s signature."""
 
@@ -75,8 +129,8 @@ class Steps:
 
     generate: LLMStep = generate_subgoal
     translate: LLMStep = translate_subgoal
-    plan: Callable[[Problem, PlannerSettings], PlanResult] = plan
-    progress: Callable[[Problem, Sequence[str], Collection[str]], frozenset[Fact]] = progress
+    plan: PlanStep = plan_step
+    progress: ProgressStep = progress_step
     score: ScoreStep = score
 
 

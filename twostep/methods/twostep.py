@@ -45,6 +45,7 @@ from twostep.methods.result import (
     solved_steps,
 )
 from twostep.methods.single_agent import single_agent_plan
+from twostep.methods.steps import PlanCall
 from twostep.pddl import Fact, Goal, Problem
 from twostep.planner import PlannerSettings, PlanResult, Status
 from twostep.progression import environment_part, handoff_problem
@@ -228,17 +229,18 @@ def plan_helpers(
         edit_start = time.perf_counter()
         helper_problem = handoff_problem(problem, handoff.environment, goal, predicates)
         handoff.editing_time_s += time.perf_counter() - edit_start
-        result = request.plan(helper_problem, settings)
+        call = PlanCall("helper", f"agent{proposal.helper}")
+        result = request.plan(helper_problem, settings, call)
         handoff.planner_time_s += result.planner_time_s
-        run.planner_calls.append(
-            AgentPlan(f"agent{proposal.helper}", "helper", goal.to_pddl(), result)
-        )
+        run.planner_calls.append(AgentPlan(call.agent, call.role, goal.to_pddl(), result))
         if not result.solved or result.plan is None:
             proposal.status = SubgoalStatus.DISCARDED
             proposal.reason = HELPER_FAILURES.get(result.status, f"planner error: {result.message}")
             continue
         edit_start = time.perf_counter()
-        handoff.environment = request.steps.progress(helper_problem, result.plan, predicates)
+        handoff.environment = request.steps.progress(
+            helper_problem, result.plan, predicates, call.agent
+        )
         handoff.editing_time_s += time.perf_counter() - edit_start
         proposal.status = SubgoalStatus.ACCEPTED
         handoff.goals[proposal.helper] = goal
@@ -257,9 +259,10 @@ def plan_main(
         problem, handoff.environment, problem.goal, request.agent_predicates
     )
     handoff.editing_time_s += time.perf_counter() - edit_start
-    result = request.plan(main_problem, settings)
+    call = PlanCall("main", "agent0")
+    result = request.plan(main_problem, settings, call)
     handoff.planner_time_s += result.planner_time_s
-    run.planner_calls.append(AgentPlan("agent0", "main", problem.goal.to_pddl(), result))
+    run.planner_calls.append(AgentPlan(call.agent, call.role, problem.goal.to_pddl(), result))
     if result.solved and result.plan is not None:
         return list(result.plan)
     detail = f"{result.status.value} ({result.message})"
