@@ -6,7 +6,7 @@ builds the report with :mod:`twostep.report` (pure analysis), writes PNG / PDF /
 CSV / Markdown files, and logs them back to MLflow as the artifacts of a report run (tag
 ``twostep.kind=report``) in the same experiment.
 
-    twostep-report --experiment NAME [--tracking-uri URI] [--out DIR] [--no-log]
+    twostep-report --experiment NAME_OR_ID [--tracking-uri URI] [--out DIR] [--no-log]
     twostep-report --sweep-dir outputs/multiruns/2026-01-01/12-00-00 [--out DIR]
     twostep-report --runs-csv docs/report/runs.csv --out docs/report
 
@@ -25,6 +25,7 @@ For a test or a notebook, the building blocks are::
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import logging
 import os
@@ -116,6 +117,7 @@ class MlflowRuns:
     experiment_id: str
     ignored: int  # runs of the experiment that are not jobs (sweep/report parents, others)
     sweep_dirs: tuple[str, ...] = ()  # the sweeps' directories (their parents' tags)
+    name: str = ""  # the experiment's name (it may have been asked for by id)
 
     def missing_jobs(self) -> tuple[int, int, list[str]]:
         """(job keys with a run, job keys the sweeps' records list, the record folders
@@ -189,12 +191,13 @@ def read_mlflow_runs(tracking_uri: str, experiment: str) -> MlflowRuns:
 
     try:
         client = MlflowClient(tracking_uri=tracking_uri)
-        found = client.get_experiment_by_name(experiment)
+        found = find_experiment(client, experiment)
         if found is None:
-            known = sorted(e.name for e in client.search_experiments())
-            listed = ", ".join(known) if known else "none"
+            known = [f"{e.experiment_id} {e.name}" for e in client.search_experiments()]
+            listed = "; ".join(sorted(known, key=lambda k: int(k.split()[0]))) or "none"
             raise ReportInputError(
-                f"unknown experiment '{experiment}' in {tracking_uri} (known: {listed})"
+                f"unknown experiment '{experiment}' in {tracking_uri} (known, id and name: "
+                f"{listed})"
             )
         runs: list[Any] = []
         token: str | None = None
@@ -230,7 +233,20 @@ def read_mlflow_runs(tracking_uri: str, experiment: str) -> MlflowRuns:
             f"experiment '{experiment}' has no job runs (tag {KIND_TAG}=job) in {tracking_uri}"
         )
     frame = normalise_runs(pd.DataFrame.from_records(rows))
-    return MlflowRuns(frame, str(found.experiment_id), len(runs) - len(rows), sweep_dirs)
+    return MlflowRuns(
+        frame, str(found.experiment_id), len(runs) - len(rows), sweep_dirs, str(found.name)
+    )
+
+
+def find_experiment(client: Any, experiment: str) -> Any | None:
+    """The experiment named ``experiment``, else the one with that id (None: neither)."""
+    found = client.get_experiment_by_name(experiment)
+    if found is None and experiment.strip().isdigit():
+        with contextlib.suppress(Exception):  # MLflow raises for an unknown id
+            found = client.get_experiment(experiment.strip())
+    if found is not None and found.lifecycle_stage != "active":
+        return None
+    return found
 
 
 def load_runs_from_mlflow(tracking_uri: str, experiment: str) -> pd.DataFrame:
@@ -299,7 +315,11 @@ def _parser() -> argparse.ArgumentParser:
         "MLflow as a report run.",
     )
     source = parser.add_mutually_exclusive_group(required=True)
-    source.add_argument("--experiment", metavar="NAME", help="MLflow experiment of the sweep")
+    source.add_argument(
+        "--experiment",
+        metavar="NAME_OR_ID",
+        help="MLflow experiment of the sweep: its name or its id (a sweep prints the command)",
+    )
     source.add_argument(
         "--sweep-dir",
         metavar="DIR",
@@ -428,7 +448,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             read_line = f"read {len(runs)} run(s) from {args.runs_csv}"
         else:
             loaded = read_mlflow_runs(args.tracking_uri, args.experiment)
-            runs, experiment_id, name = loaded.runs, loaded.experiment_id, args.experiment
+            runs, experiment_id, name = loaded.runs, loaded.experiment_id, loaded.name
             source = f"MLflow experiment `{name}` (id {experiment_id}) at `{args.tracking_uri}`"
             read_line = f"read {len(runs)} job run(s) from MLflow experiment '{name}'"
             if loaded.ignored:

@@ -168,8 +168,11 @@ def _sweep_report(sweep_dir: Path) -> list[tuple[Path, str | None]]:
 
 
 def _ui_links(state: SweepState, output_root: str) -> list[str]:
-    """Where to watch the sweep: the Prefect UI's flow runs and the MLflow UI's experiment
-    page, when ``twostep-services`` serves them (a sweep's own server is stopped by now)."""
+    """The sweep's last lines: the Prefect UI's flow runs of this sweep (its tag) when
+    ``twostep-services`` serves them (a sweep's own server is stopped by now), the MLflow
+    UI's experiment page, and the exact command that reports the sweep."""
+    from urllib.parse import quote
+
     from flows.services import experiment_page, read_record
     from flows.tracking.runs import sweep_run_ids
 
@@ -177,18 +180,22 @@ def _ui_links(state: SweepState, output_root: str) -> list[str]:
     lines = []
     prefect = services.get("prefect")
     if prefect is not None and state.prefect_api_url == prefect.url and prefect.healthy():
-        lines.append(f"prefect UI: {prefect.ui_url}")
-    mlflow = services.get("mlflow")
+        lines.append(f"prefect UI: {prefect.ui_url}?tag={quote(state.run_tag, safe=':')}")
     ids = sweep_run_ids(state)
-    served = f"sqlite:///{Path(output_root).resolve() / 'mlflow.db'}"  # the services' store
-    if ids is None or state.tracking_uri != served:
+    if state.tracking_uri is None or (ids is None and state.experiment is None):
         return lines
-    if mlflow is not None and mlflow.healthy():
-        lines.append(f"mlflow UI: {experiment_page(mlflow.url, ids[0])}")
-    else:
-        lines.append(
-            f"mlflow UI: twostep-services up --root {output_root}, then experiment {ids[0]}"
-        )
+    mlflow = services.get("mlflow")
+    served = f"sqlite:///{Path(output_root).resolve() / 'mlflow.db'}"  # the services' store
+    if ids is not None and state.tracking_uri == served:
+        if mlflow is not None and mlflow.healthy():
+            lines.append(f"mlflow UI: {experiment_page(mlflow.url, ids[0])}")
+        else:
+            lines.append(
+                f"mlflow UI: twostep-services up --root {output_root}, then experiment {ids[0]}"
+            )
+    experiment = ids[0] if ids is not None else str(state.experiment)
+    command = ["twostep-report", "--experiment", experiment, "--tracking-uri", state.tracking_uri]
+    lines.append(f"report: {redact_text(shlex.join(command))}")
     return lines
 
 
@@ -257,7 +264,9 @@ class SweepCallback(Callback):
             state.tracking_uri = str(config.mlflow.tracking_uri)
             location = config.mlflow.artifact_location
             state.artifact_location = str(location) if location else None
-            state.experiment = config.mlflow.experiment or experiment_name_for(overrides)
+            state.experiment = config.mlflow.experiment or experiment_name_for(
+                overrides, state.sweep_key
+            )
         orchestration = config.orchestration
         # Read by Prefect at import, here and in Dask workers started below.
         os.environ.setdefault("PREFECT_LOGGING_LEVEL", str(orchestration.prefect_log_level))

@@ -105,12 +105,12 @@ def test_a_timeout_never_improves_a_mean() -> None:
     # the figure compares every series on tasks 1-3: MA is flat at 0.5 * 20 = 10 steps
     figure = domain_figure(report, "termes")
     length_axis = figure.axes[0]
-    ma_color = legend_of(figure)["MA (1 timeout)"].get_color()
-    drawn = {int(m.get_xdata()[0]): m for m in markers(length_axis, ma_color)}
+    ma_color = legend_of(figure)["MA (n = 1; 1 timeout)"].get_color()
+    drawn = {round(m.get_xdata()[0]): m for m in markers(length_axis, ma_color)}
     assert {n: float(m.get_ydata()[0]) for n, m in drawn.items()} == {2: 10.0, 3: 10.0, 4: 10.0}
     assert drawn[4].get_markerfacecolor() == "white"  # hollow: the cell lost a run
     assert drawn[3].get_markerfacecolor() != "white"
-    sa_color = legend_of(figure)["SA"].get_color()
+    sa_color = legend_of(figure)["SA (n = 1)"].get_color()
     assert [float(m.get_ydata()[0]) for m in markers(length_axis, sa_color)] == [20.0]
     assert "3 of 4 tasks" in figure.get_suptitle()
     assert any("left out: task 4" in note for note in report.notes)
@@ -126,10 +126,10 @@ def test_a_cell_that_solved_nothing_is_marked_not_dropped() -> None:
     assert "MA N=4 solved none" in coverage["lost_cells"]
     figure = domain_figure(report, "termes")
     legend = legend_of(figure)
-    assert "MA (4 timeouts)" in legend and "x: no task solved" in legend
-    ma_color = legend["MA (4 timeouts)"].get_color()
+    assert "MA (n = 1; 4 timeouts)" in legend and "x: no task solved" in legend
+    ma_color = legend["MA (n = 1; 4 timeouts)"].get_color()
     crosses = [m for m in markers(figure.axes[0], ma_color) if m.get_marker() == "x"]
-    assert [float(c.get_xdata()[0]) for c in crosses] == [4.0]
+    assert [round(c.get_xdata()[0]) for c in crosses] == [4]
 
 
 # ------------------------------------------------------------------ one style per series
@@ -150,9 +150,9 @@ def two_runs() -> tuple[pd.DataFrame, pd.DataFrame]:
 
 
 def styles_drawn(figure: Figure) -> dict[str, tuple[str, str]]:
-    """Series legend label -> (colour, marker) of its legend handle."""
+    """Series name (its legend label without n) -> (colour, marker) of its legend handle."""
     return {
-        label: (handle.get_color(), handle.get_marker())
+        label.split(" (n = ")[0]: (handle.get_color(), handle.get_marker())
         for label, handle in legend_of(figure).items()
         if label.startswith(("SA", "MA", "TwoStep"))
     }
@@ -192,7 +192,9 @@ def test_variants_of_a_series_share_its_colour_and_differ_in_line_style() -> Non
         for limit in ("10", "20")
     ]
     figure = domain_figure(build_report(pd.DataFrame(rows)), "A")
-    handles = {k: v for k, v in legend_of(figure).items() if k.startswith("TwoStep")}
+    handles = {
+        k.split(" (n = ")[0]: v for k, v in legend_of(figure).items() if k.startswith("TwoStep")
+    }
     assert len(handles) == 2
     ten, twenty = (
         handles[f"TwoStep (goal-split) [planner.time_limit_s={v}]"] for v in ("10", "20")
@@ -369,3 +371,105 @@ def test_a_reports_runs_csv_redraws_the_same_report(tmp_path: Path) -> None:
     pd.testing.assert_frame_equal(again.compared, report.compared)
     assert main(["--runs-csv", str(tmp_path / "runs.csv"), "--out", str(tmp_path / "r")]) == 0
     assert main(["--runs-csv", str(tmp_path / "absent.csv")]) == 1
+
+
+# ------------------------------------------------------------------ seeds, n, issue 37
+
+
+def three_seed_sweep() -> pd.DataFrame:
+    """Two domains, tasks 1-2, seeds 0-2, as a sweep over ``agents=2,3`` logs them: SA
+    (launched at N = 2 and 3: each job twice), MA and TwoStep with the LLM at N = 2, 3.
+    SA and MA are deterministic: every seed repeats one run (the same numbers); SA times
+    out on B's task 2 in every seed. The LLM's lengths differ by seed (+1 per seed)."""
+    rows = []
+    for domain, base in (("A", 10.0), ("B", 20.0)):
+        for task in (1, 2):
+            for seed in (0, 1, 2):
+                for grid in (2, 3):
+                    if (domain, task) == ("B", 2):
+                        rows.append(run(domain, task, "sa", 1, None, time=None, seed=seed,
+                                        status="timeout", agents_param=grid))  # fmt: skip
+                    else:
+                        rows.append(run(domain, task, "sa", 1, base * task, time=2.0,
+                                        seed=seed, agents_param=grid))  # fmt: skip
+                    rows.append(run(domain, task, "ma", grid, 0.8 * base * task, seed=seed))
+                    rows.append(run(domain, task, "twostep", grid, 0.5 * base * task + seed,
+                                    seed=seed, decomposer="llm"))  # fmt: skip
+    return pd.DataFrame.from_records(rows)
+
+
+def test_seeds_mean_what_they_say_in_tables_and_legends(tmp_path: Path) -> None:
+    """Issue 37: a deterministic method is one distinct run (no ±, n = 1), a method whose
+    runs differ by seed is a mean ± std over its n seeds, n in every table row and legend
+    label; SA's grid duplicates count once per (task, seed): 3 timeouts, not 6."""
+    report = build_report(three_seed_sweep())
+    summary = report.summary.set_index(["domain", "series", "agents"])
+    # SA on A: one distinct run per task, (10 + 20) / 2; no spread, n = 1
+    sa = summary.loc[("A", "SA", 1)]
+    assert sa["exec_length_mean"] == 15.0 and sa["exec_length_n_seeds"] == 1
+    assert math.isnan(sa["exec_length_std"])
+    assert sa["n_runs"] == 6  # 2 tasks x 3 seeds: the grid's N=2 and N=3 are one run
+    assert summary.loc[("B", "SA", 1), "n_timeout"] == 3
+    # the LLM on A at N = 2: per seed (5 + s + 10 + s) / 2 = 7.5 + s over s = 0, 1, 2
+    llm = summary.loc[("A", "TwoStep (llm)", 2)]
+    assert llm["exec_length_mean"] == 8.5 and llm["exec_length_n_seeds"] == 3
+    assert llm["exec_length_std"] == pytest.approx(1.0)  # stdev(7.5, 8.5, 9.5)
+
+    written = write_report(report, tmp_path, "t", "s")
+    markdown = (tmp_path / "report.md").read_text()
+    results = markdown.split("## Results per domain")[1].split("## Change")[0]
+    rows = [line for line in results.splitlines() if line.startswith("| ") and "---" not in line]
+    body = [row for row in rows if not row.startswith("| series")]
+    assert len(body) == 2 * 5  # per domain: SA, MA at 2 and 3, TwoStep (llm) at 2 and 3
+    for row in body:
+        n = row.rstrip(" |").rsplit("| ", 1)[1]
+        if row.startswith(("| SA ", "| MA ")):
+            assert n == "1 distinct run" and " ± " not in row, row
+        else:
+            assert n == "3 seeds" and " ± " in row, row
+    assert {p.name for p in written} >= {"fig3_overview.png", "fig3_normalised.png"}
+
+    legend = legend_of(domain_figure(report, "B"))
+    assert "SA (n = 1; 3 timeouts)" in legend  # per task and seed, not per grid duplicate
+    assert "MA (n = 1)" in legend and "TwoStep (llm) (n = 3)" in legend
+    overview = overview_figure(report)
+    labels = set(legend_of(overview))
+    assert {"SA (n = 1; 3 timeouts)", "MA (n = 1)", "TwoStep (llm) (n = 3)"} <= labels
+
+
+def test_normalised_panels_say_what_they_show_and_no_marker_hides_another() -> None:
+    """Issue 37: the overview's normalised column sat under row labels with units; a mean
+    over fewer domains looked like the others; the expert's diamond hid MA's triangle."""
+    rows = [
+        *(run(d, t, "sa", 1, 10.0 * t + i, time=1.0 + i) for i, d in enumerate("ABC")
+          for t in (1, 2)),
+        *(run(d, t, "ma", 2, 8.0 * t + i, time=3.0) for i, d in enumerate("ABC") for t in (1, 2)),
+        # the expert's subgoals exist for A and B only, at the same N (and length) as MA
+        *(run(d, t, "twostep", 2, 8.0 * t + i, time=3.0, decomposer="expert")
+          for i, d in enumerate("AB") for t in (1, 2)),
+        *(run(d, t, "twostep", n, 6.0 * t, time=2.0) for d in "ABC" for t in (1, 2)
+          for n in (2, 3)),
+    ]  # fmt: skip
+    report = build_report(pd.DataFrame.from_records(rows))
+    overview = overview_figure(report)
+    normalised_axes = [ax for ax in overview.axes if ax.get_title().startswith("All domains")]
+    (top,) = normalised_axes
+    column = [ax for ax in overview.axes if ax.get_position().x0 == top.get_position().x0]
+    labels = sorted(ax.get_ylabel() for ax in column)
+    assert labels == ["Length, normalised 0-1", "Planning time, normalised 0-1"]
+    assert all(ax.yaxis.get_label_position() == "right" for ax in column)
+    # the expert's normalised point averages 2 of the 3 domains: half-filled, "2/3" beside it
+    expert_color = legend_of(overview)["TwoStep (expert) (n = 1)"].get_color()
+    (expert,) = markers(top, expert_color)
+    assert expert.get_fillstyle() == "left"
+    assert "2/3" in [t.get_text() for t in top.texts]
+    assert "half-filled, k/3: normalised over fewer domains" in legend_of(overview)
+    # in domain A, MA and the expert have the same mean at N = 2: set apart, both visible
+    figure = domain_figure(report, "A")
+    legend = legend_of(figure)
+    ma = markers(figure.axes[0], legend["MA (n = 1)"].get_color())
+    (expert_a,) = markers(figure.axes[0], legend["TwoStep (expert) (n = 1)"].get_color())
+    (ma_2,) = [m for m in ma if round(m.get_xdata()[0]) == 2]
+    assert ma_2.get_ydata()[0] == expert_a.get_ydata()[0]
+    gap = abs(ma_2.get_xdata()[0] - expert_a.get_xdata()[0])
+    assert gap >= 0.19  # in N: about a marker's width (4.5 pt) in a one-column panel

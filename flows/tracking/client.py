@@ -193,10 +193,16 @@ class Tracker:
 
     # ------------------------------------------------------------- experiments
 
-    def experiment_id(self, name: str, description: str | None = None) -> str:
+    def experiment_id(
+        self, name: str, description: str | None = None, extra: Mapping[str, str] | None = None
+    ) -> str:
         """The experiment ``name`` (created, or restored if deleted), marked to open on
-        MLflow's runs table (:data:`EXPERIMENT_KIND`); ``description``: its note."""
-        tags = {EXPERIMENT_KIND: CLASSIC_RUNS}
+        MLflow's runs table (:data:`EXPERIMENT_KIND`); ``description``: its note; ``extra``:
+        more tags (a sweep's key and overrides)."""
+        tags = {
+            EXPERIMENT_KIND: CLASSIC_RUNS,
+            **{k: clip(v, TAG_LIMIT) for k, v in (extra or {}).items()},
+        }
         if description:
             tags[NOTE] = clip(description, TAG_LIMIT)
         found = self.client.get_experiment_by_name(name)

@@ -6,7 +6,6 @@ that every writer takes (:func:`job_record`); also the experiment name of a swee
 
 from __future__ import annotations
 
-import hashlib
 import json
 import re
 from collections.abc import Iterable, Mapping
@@ -20,6 +19,7 @@ from twostep.redaction import redact_config
 KIND = "twostep.kind"
 JOB_KEY = "twostep.job_key"
 SWEEP_KEY = "twostep.sweep_key"
+OVERRIDES = "twostep.overrides"  # a sweep's overrides (its parent run's and experiment's tag)
 STATUS = "twostep.status"
 ERROR = "twostep.error"
 SCRIPTED = "twostep.scripted_llm"
@@ -94,13 +94,19 @@ def job_tags(record: Mapping[str, Any]) -> dict[str, str]:
     return tags
 
 
-def experiment_name_for(overrides: Iterable[str]) -> str:
-    """A readable experiment name from a sweep's overrides (same command, same name)."""
-    name = "sweep " + " ".join(overrides) if overrides else "sweep (defaults)"
-    if len(name) > 200:
-        digest = hashlib.sha256(name.encode()).hexdigest()[:10]
-        name = f"{name[:180]} ... #{digest}"
-    return name
+EXPERIMENT_NAME_LIMIT = 60
+
+
+def experiment_name_for(overrides: Iterable[str], sweep_key: str) -> str:
+    """A sweep's experiment name: short, told apart by its first characters, the same
+    for the same command: ``sweep`` and the sweep key's first 12 characters (its Prefect
+    tag ``sweep:<those>``), then as many of the overrides as fit in
+    :data:`EXPERIMENT_NAME_LIMIT` characters (all of them are the experiment's
+    description and its tag ``twostep.overrides``)."""
+    name = f"sweep {sweep_key[:12]}"
+    shown = " ".join(overrides) or "(defaults)"
+    room = EXPERIMENT_NAME_LIMIT - len(name) - 1
+    return f"{name} {shown if len(shown) <= room else shown[: room - 3].rstrip() + '...'}"
 
 
 def _method_of(config: Mapping[str, Any]) -> tuple[str | None, str | None]:

@@ -26,7 +26,13 @@ from typing import TYPE_CHECKING, Any
 from flows.locations import sqlite_path
 from flows.servers import file_lock
 from flows.tracking.client import Tracker, TrackingError, check_store, log_job_run, run_exists
-from flows.tracking.contents import DEFAULT_EXPERIMENT, experiment_name_for, job_record
+from flows.tracking.contents import (
+    DEFAULT_EXPERIMENT,
+    OVERRIDES,
+    SWEEP_KEY,
+    experiment_name_for,
+    job_record,
+)
 from flows.tracking.worker import TrackingWorker
 from twostep.files import write_json_atomic
 
@@ -113,7 +119,12 @@ def sweep_parent(state: SweepState) -> tuple[Tracker, str, str]:
         ids = sweep_run_ids(state)
         if ids is not None:
             return tracker, ids[0], ids[1]
-        experiment_id = tracker.experiment_id(state.experiment, state.command or None)
+        overrides = " ".join(state.overrides)
+        experiment_id = tracker.experiment_id(
+            state.experiment,
+            state.command or None,
+            {SWEEP_KEY: state.sweep_key, OVERRIDES: overrides},
+        )
         folder = Path(state.sweep_dir)
         parent = tracker.sweep_run(
             experiment_id,
@@ -121,7 +132,7 @@ def sweep_parent(state: SweepState) -> tuple[Tracker, str, str]:
             name=f"sweep {folder.parent.name}/{folder.name}",
             tags={
                 "twostep.sweep_dir": state.sweep_dir,
-                "twostep.overrides": " ".join(state.overrides),
+                OVERRIDES: overrides,
             },
         )
         write_json_atomic(record, {"experiment_id": experiment_id, "parent_run_id": parent})

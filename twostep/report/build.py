@@ -11,8 +11,11 @@
 * **Means.** Only successful runs with the metric recorded enter a mean. For each
   (domain, series, N, seed) the metric is averaged over tasks; the table shows the mean
   and the sample standard deviation (ddof = 1) of those per-seed averages over seeds, as
-  the paper does for its 3 runs. One seed: no std ("1 seed").
-* **Counts.** Failed, timed-out and still-running runs are counted in every cell.
+  the paper does for its 3 runs, with n (the seeds). A deterministic series (SA, MA,
+  TwoStep with an offline decomposer) repeats one distinct run in every seed: its mean is
+  that run's (n = 1, no std); see :mod:`twostep.report.seeds`.
+* **Counts.** Failed, timed-out and still-running runs are counted in every cell, once
+  per (task, seed): SA runs repeated by a grid's N count once.
 * **Compared means.** The figures, the normalised panel and the changes average each cell
   over the tasks every series of its domain solved, so that a run lost to a timeout
   never improves a mean; what each series lost is counted and drawn
@@ -58,6 +61,7 @@ from twostep.report.model import (
 )
 from twostep.report.notes import coverage_notes, report_notes
 from twostep.report.runs import ReportInputError, normalise_runs
+from twostep.report.seeds import grid_duplicates, measured_runs
 from twostep.report.series import (
     assign_series,
     detect_variant_params,
@@ -111,6 +115,13 @@ def superseded_runs(table: pd.DataFrame) -> pd.Series:
     return flags
 
 
+def with_seeded(cells: pd.DataFrame, measured: pd.DataFrame) -> pd.DataFrame:
+    """``cells`` with ``seeded``: whether its series' runs differ by seed (else each mean
+    is one distinct run: :mod:`twostep.report.seeds`)."""
+    seeded = measured.groupby("series")["seeded"].any().to_dict()
+    return cells.assign(seeded=[bool(seeded.get(s, False)) for s in cells["series"]])
+
+
 def build_report(runs: pd.DataFrame, task_titles: Mapping[int, str] | None = None) -> Report:
     """All of a report's tables from a run table (see :mod:`twostep.report.runs`).
 
@@ -127,11 +138,14 @@ def build_report(runs: pd.DataFrame, task_titles: Mapping[int, str] | None = Non
     table["counted"] = table["placed"] & ~table["superseded"]
     variant_params, between = detect_variant_params(table)
     table, values_of = assign_series(table, variant_params)
+    table["duplicate"] = grid_duplicates(table)
+    table["counted"] &= ~table["duplicate"]
     identified = table[table["counted"]]
-    ok = identified[identified["status"] == "success"]
+    measured = measured_runs(identified)  # what means are made of (one distinct run ...)
+    ok = measured[measured["status"] == "success"]
 
     per_seed = per_seed_means(ok)
-    summary = cell_summary(identified, per_seed)
+    summary = with_seeded(cell_summary(identified, per_seed), measured)
     order = series_order(table)
     rank = {name: i for i, name in enumerate(order)}
     summary = _in_order(summary, rank)
@@ -145,8 +159,8 @@ def build_report(runs: pd.DataFrame, task_titles: Mapping[int, str] | None = Non
         if keep
     }
     coverage = common_tasks(identified, full)
-    compared, compared_per_seed = compared_tables(identified, coverage)
-    compared = _in_order(compared, rank)
+    compared, compared_per_seed = compared_tables(identified, coverage, measured)
+    compared = _in_order(with_seeded(compared, measured), rank)
     compared_eligible = eligible_cells(identified, compared)
     length_of = dict(zip(coverage["domain"], coverage["length_metric"], strict=True))
     normalised, seed_norm = normalise(compared, compared_per_seed, compared_eligible, length_of)
@@ -154,14 +168,14 @@ def build_report(runs: pd.DataFrame, task_titles: Mapping[int, str] | None = Non
     series_frame = identified[list(SERIES_COLUMNS)].drop_duplicates()
     series_frame = series_frame.assign(_rank=series_frame["series"].map(rank)).sort_values("_rank")
     changes = changes_against_baselines(normalised, series_frame, values_of)
-    table1 = table_one(identified, series_frame)
+    table1 = table_one(measured, series_frame)
     table2 = table_two(
-        identified,
+        measured,
         [(str(s), str(m)) for s, m in series_frame[["series", "method"]].values],
         titles=task_titles,
     )
 
-    current = table[~table["superseded"]]
+    current = table[~table["superseded"] & ~table["duplicate"]]
     status = current["status"]
     counts = {
         "runs": len(current),
@@ -172,6 +186,7 @@ def build_report(runs: pd.DataFrame, task_titles: Mapping[int, str] | None = Non
         "unidentified": int((~current["placed"]).sum()),
         "missing_metrics": int(summary["n_missing_metrics"].sum()),
         "superseded": int(table["superseded"].sum()),
+        "grid_duplicates": int(table["duplicate"].sum()),
     }
     notes = report_notes(table, summary, per_seed, eligible, cross, variant_params, between)
     notes += coverage_notes(coverage)

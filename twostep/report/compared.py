@@ -111,9 +111,12 @@ def common_tasks(identified: pd.DataFrame, full_cells: set[tuple[Any, ...]]) -> 
 
 
 def compared_tables(
-    identified: pd.DataFrame, coverage: pd.DataFrame
+    identified: pd.DataFrame, coverage: pd.DataFrame, measured: pd.DataFrame | None = None
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """(per-cell summary over each domain's common tasks, its per-seed averages)."""
+    """(per-cell summary over each domain's common tasks, its per-seed averages); counts
+    from ``identified``, means from ``measured`` (:func:`twostep.report.seeds.measured_runs`;
+    default: every identified run)."""
+    measured = identified if measured is None else measured
     compared_tasks = {
         str(row.domain): {int(t) for t in str(row.compared_tasks).split(",") if t}
         for row in coverage.itertuples(index=False)
@@ -121,11 +124,9 @@ def compared_tables(
     length_of = dict(zip(coverage["domain"], coverage["length_metric"], strict=True))
     in_common = [
         int(task) in compared_tasks.get(str(domain), set()) if not pd.isna(task) else False
-        for domain, task in zip(identified["domain"], identified["task"], strict=True)
+        for domain, task in zip(measured["domain"], measured["task"], strict=True)
     ]
-    ok = identified[
-        (identified["status"] == "success") & pd.Series(in_common, index=identified.index)
-    ]
+    ok = measured[(measured["status"] == "success") & pd.Series(in_common, index=measured.index)]
     per_seed = per_seed_means(ok)
     summary = cell_summary(identified, per_seed)
     solved = pd.Series(False, index=identified.index)

@@ -59,11 +59,34 @@ def report_notes(
             f"{missing} successful run(s) lack exec_length or planning_time_s; "
             "they are counted but left out of the means of the missing metric."
         )
+    duplicates = int(runs["duplicate"].sum()) if "duplicate" in runs else 0
     sa_moved = identified[(identified["method"] == "sa") & (identified["agents_param"] > 1)]
-    if len(sa_moved):
+    if len(sa_moved) or duplicates:
         notes.append(
-            f"{len(sa_moved)} SA run(s) were launched with N > 1; SA ignores N, so they "
-            "count as N = 1 (repeated runs of one task and seed are averaged)."
+            "SA plans one agent whatever N says: its runs count as N = 1"
+            + (
+                f", and the {duplicates} SA run(s) a grid's N repeated (same task and seed) "
+                "are counted once (runs.csv, column 'duplicate')."
+                if duplicates
+                else "."
+            )
+        )
+    fixed = summary[~summary["seeded"]] if "seeded" in summary else summary.iloc[0:0]
+    seeds = identified.groupby(list(CELL_COLUMNS), dropna=False)["seed"].nunique()
+    repeated = [
+        str(series)
+        for series in dict.fromkeys(fixed["series"])
+        if any(
+            seeds.get(tuple(row[c] for c in CELL_COLUMNS), 0) > 1
+            for row in fixed[fixed["series"] == series].to_dict("records")
+        )
+    ]
+    if repeated:
+        notes.append(
+            f"{', '.join(repeated)}: deterministic, so every seed repeats one distinct run "
+            "(the same plans; a later seed's planner times are the first seed's, from the "
+            "planner cache). Their means are that run's, n = 1, with no ±; their runs are "
+            "still counted per seed."
         )
     ok = identified[identified["status"] == "success"]
     repeats = ok.groupby([*CELL_COLUMNS, "task", "seed"], dropna=False).size()
@@ -74,11 +97,12 @@ def report_notes(
             "run; their values are averaged before averaging over tasks."
         )
     has_mean = summary[f"{REPORT_METRICS[0]}_mean"].notna()
-    single = summary[has_mean & (summary[f"{REPORT_METRICS[0]}_n_seeds"] == 1)]
+    seeded = summary["seeded"] if "seeded" in summary else pd.Series(True, index=summary.index)
+    single = summary[has_mean & seeded & (summary[f"{REPORT_METRICS[0]}_n_seeds"] == 1)]
     if len(single):
         notes.append(
-            f"{len(single)} of {int(has_mean.sum())} cells have results from 1 seed only: "
-            "no std, shown as 'mean (1 seed)'."
+            f"{len(single)} of {int((has_mean & seeded).sum())} cells whose runs differ by "
+            "seed have results from 1 seed only: no std (n = 1)."
         )
     uneven = summary[summary["tasks_per_seed"].str.contains("-", regex=False)]
     if len(uneven):

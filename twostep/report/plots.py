@@ -8,12 +8,18 @@ wide): every domain and the normalised panel, as the paper's Fig. 3. Each is wri
 
 What the marks mean:
 
-* Points are the *compared* means (:mod:`twostep.report.compared`): mean over seeds of each
-  seed's average over the tasks every series of the domain solved; band (lines) or error
-  bar (bars) = ±1 sample std over seeds. Kitchen domains draw their embodied length.
+* Points are the *compared* means (:mod:`twostep.report.compared`): the average over the
+  tasks every series of the domain solved, of one distinct run for a deterministic series
+  (n = 1, no band), else the mean over seeds with a band (lines) or error bar (bars) of
+  ±1 sample std over seeds; the legend gives each series' n
+  (:mod:`twostep.report.seeds`). Kitchen domains draw their embodied length.
 * A hollow marker or hollow bar: the series lost runs in that cell (failed, timed out,
-  unfinished or without a length); the legend counts them per series, e.g.
-  ``MA (1 timeout)``. An ``x`` on the axis: the cell solved no task.
+  unfinished or without a length); the legend counts them per series, per task and seed,
+  e.g. ``MA (n = 1; 3 timeouts)``. An ``x`` on the axis: the cell solved no task.
+* Normalised panels say so on their y axis (``Length, normalised 0-1``); a point that
+  averages fewer domains than the others is half-filled, ``k/n`` beside it (on a bar).
+* The series of a panel are set a little apart at each N (:data:`DODGE`), so that no
+  marker hides another.
 * Lines when some series has results at two or more N; otherwise (one N per series, such
   as Table II's runs) grouped bars per N. SA, run at N = 1 only, is a single marker with a
   dashed reference line across.
@@ -68,12 +74,14 @@ HOLLOW = "white"
 
 @dataclass(frozen=True)
 class Cell:
-    """One point (or bar) of a series: its N, mean, std and what it lost."""
+    """One point (or bar) of a series: its N, mean, std and what it lost; ``fewer``: a
+    normalised point over fewer domains than the figure's (``"4/5"``), else ``""``."""
 
     agents: int
     mean: float
     std: float
     lost: bool = False
+    fewer: str = ""
 
     @property
     def solved_none(self) -> bool:
@@ -126,11 +134,13 @@ def _domain_cells(report: Report, domain: str, series: str, metric: str) -> list
 def _normalised_cells(report: Report, series: str, metric: str) -> list[Cell]:
     cross = report.cross_domain
     rows = cross[(cross["series"] == series) & (cross["metric"] == metric)].sort_values("agents")
+    most = int(cross["n_domains"].max()) if len(cross) else 0
     return [
         Cell(
             int(row["agents"]),
             float(row["normalised_mean"]),
             0.0 if pd.isna(row["normalised_std"]) else float(row["normalised_std"]),
+            fewer=f"{int(row['n_domains'])}/{most}" if int(row["n_domains"]) < most else "",
         )
         for row in rows.to_dict("records")
     ]
@@ -160,15 +170,30 @@ def lost_counts(report: Report, series: str, domains: Sequence[str]) -> str:
     return ", ".join(parts)
 
 
+def series_n(report: Report, series: str, domains: Sequence[str]) -> str:
+    """``n = 1`` for a deterministic series (one distinct run per point), else the seeds
+    its points average, ``n = 3`` (``n = 2-3`` when they differ)."""
+    rows = report.compared[
+        (report.compared["series"] == series) & report.compared["domain"].isin(domains)
+    ]
+    if "seeded" in rows and not bool(rows["seeded"].any()):
+        return "n = 1"
+    counts = sorted({int(n) for n in rows[f"{TIME}_n_seeds"] if int(n) > 0})
+    if not counts:
+        return "n = 0"
+    return f"n = {counts[0]}" if len(counts) == 1 else f"n = {counts[0]}-{counts[-1]}"
+
+
 def legend_label(report: Report, series: str, domains: Sequence[str] | None = None) -> str:
-    """The series' legend label: its name, ``subset of tasks`` when it ran fewer tasks than
-    its domains, and the runs it lost, e.g. ``MA (1 timeout)``."""
+    """The series' legend label: its name, n (runs per point: :func:`series_n`),
+    ``subset of tasks`` when it ran fewer tasks than its domains, and the runs it lost
+    (per task and seed), e.g. ``MA (n = 1; 3 timeouts)``."""
     chosen = list(report.domains if domains is None else domains)
     rows = report.compared[
         (report.compared["series"] == series) & report.compared["domain"].isin(chosen)
     ]
     domain_tasks = dict(zip(report.coverage["domain"], report.coverage["n_tasks"], strict=True))
-    notes = []
+    notes = [series_n(report, series, chosen)]
     if any(int(r.n_tasks) < int(domain_tasks.get(r.domain, 0)) for r in rows.itertuples()):
         notes.append("subset of tasks")
     lost = lost_counts(report, series, chosen)
@@ -180,11 +205,21 @@ def legend_label(report: Report, series: str, domains: Sequence[str] | None = No
 # ------------------------------------------------------------------ drawing
 
 
-def _draw_lines(ax: Axes, cells: Sequence[Cell], style: SeriesStyle) -> None:
+#: How far apart (in N) the markers of the series of one panel are set, so that none
+#: hides another at the same N.
+DODGE = 0.2
+
+
+def dodges(names: Sequence[str]) -> dict[str, float]:
+    """Each series' x offset in a panel: centred around N, :data:`DODGE` apart."""
+    return {name: (i - (len(names) - 1) / 2) * DODGE for i, name in enumerate(names)}
+
+
+def _draw_lines(ax: Axes, cells: Sequence[Cell], style: SeriesStyle, dodge: float = 0.0) -> None:
     have = [c for c in cells if not c.solved_none]
     sa = style.method == "sa"
     if have:
-        xs = [c.agents for c in have]
+        xs = [c.agents + dodge for c in have]
         means = [c.mean for c in have]
         stds = [c.std for c in have]
         if sa:
@@ -199,16 +234,29 @@ def _draw_lines(ax: Axes, cells: Sequence[Cell], style: SeriesStyle) -> None:
             ax.errorbar(xs, means, yerr=stds, color=style.color, capsize=2, linestyle="none")
         for cell in have:
             ax.plot(
-                [cell.agents],
+                [cell.agents + dodge],
                 [cell.mean],
                 linestyle="none",
                 marker=style.marker,
                 color=style.color,
                 markerfacecolor=HOLLOW if cell.lost else style.color,
+                markerfacecoloralt=HOLLOW,
+                fillstyle="left" if cell.fewer else "full",
                 markeredgewidth=1.0,
                 zorder=4 if sa else 3,
             )
-    _draw_solved_none(ax, [c.agents for c in cells if c.solved_none], style)
+            if cell.fewer:  # a mean over fewer domains: half-filled, with k/n beside it
+                ax.annotate(
+                    cell.fewer,
+                    (cell.agents + dodge, cell.mean),
+                    xytext=(0, 4),
+                    textcoords="offset points",
+                    ha="center",
+                    va="bottom",
+                    fontsize=MIN_FONT_PT,
+                    color=style.color,
+                )
+    _draw_solved_none(ax, [c.agents + dodge for c in cells if c.solved_none], style)
 
 
 def _draw_solved_none(ax: Axes, agents: Sequence[float], style: SeriesStyle) -> None:
@@ -261,6 +309,17 @@ def _draw_bars(ax: Axes, cells_of: dict[str, list[Cell]], styles: dict[str, Seri
                     x, cell.mean, yerr=cell.std, color="black", capsize=2, linewidth=0.8,
                     linestyle="none", zorder=3,
                 )  # fmt: skip
+            if cell.fewer:  # a normalised mean over fewer domains: k/n above its bar
+                ax.annotate(
+                    cell.fewer, (x, cell.mean), xytext=(0, 2), textcoords="offset points",
+                    ha="center", fontsize=MIN_FONT_PT, color=style.color,
+                )  # fmt: skip
+
+
+def normalised_label(metric: str) -> str:
+    """``Length, normalised 0-1``: what a normalised panel's values are (no unit)."""
+    name = METRIC_LABELS[metric].split(" (")[0].replace("Execution length", "Length")
+    return f"{name}, normalised 0-1"
 
 
 def _use_log(values: Sequence[float]) -> bool:
@@ -308,11 +367,13 @@ def _metric_axis(
     if bars:
         _draw_bars(ax, cells_of, styles)
     else:
+        offsets = dodges(list(cells_of))
         for name, cells in cells_of.items():
-            _draw_lines(ax, cells, styles[name])
+            _draw_lines(ax, cells, styles[name], offsets[name])
     if domain is None:
-        label = METRIC_LABELS[metric].split(" (")[0] + " (normalised)"
-        _finish_axis(ax, report.agent_counts, label if ylabel else "", log=False, top=1.05)
+        _finish_axis(ax, report.agent_counts, normalised_label(metric), log=False, top=1.05)
+        if not ylabel:  # beside another column's row label: say what this one is, right
+            ax.yaxis.set_label_position("right")
         return
     log = metric == TIME and _use_log([c.mean for cells in cells_of.values() for c in cells])
     _finish_axis(ax, report.agent_counts, METRIC_LABELS[metric] if ylabel else "", log)
@@ -324,6 +385,7 @@ def _legend_entries(
     styles: dict[str, SeriesStyle],
     domains: Sequence[str],
     bars: bool,
+    normalised: bool = False,
 ) -> tuple[list[Artist], list[str]]:
     handles: list[Artist] = []
     labels: list[str] = []
@@ -356,6 +418,14 @@ def _legend_entries(
     if len(solved_none):
         handles.append(Line2D([], [], color="0.3", marker="x", linestyle="none"))
         labels.append("x: no task solved")
+    if not bars and normalised and len(report.cross_domain):
+        most = int(report.cross_domain["n_domains"].max())
+        if int(report.cross_domain["n_domains"].min()) < most:
+            handles.append(
+                Line2D([], [], color="0.3", marker="o", fillstyle="left", linestyle="none",
+                       markerfacecoloralt=HOLLOW)
+            )  # fmt: skip
+            labels.append(f"half-filled, k/{most}: normalised over fewer domains")
     return handles, labels
 
 
@@ -408,10 +478,11 @@ def _figure_legend(
     styles: dict[str, SeriesStyle],
     bars: bool,
     width_in: float,
+    normalised: bool = False,
 ) -> Legend:
     present = set(report.compared[report.compared["domain"].isin(domains)]["series"])
     series = [name for name in report.series if name in present]
-    handles, labels = _legend_entries(report, series, styles, domains, bars)
+    handles, labels = _legend_entries(report, series, styles, domains, bars, normalised)
     return Legend(handles, labels, _legend_columns(labels, width_in))
 
 
@@ -458,7 +529,9 @@ def normalised_figure(report: Report) -> Figure:
     with paper_style():
         styles = report_styles(report)
         bars = draws_bars(report)
-        legend = _figure_legend(report, report.domains, styles, bars, COLUMN_WIDTH_IN)
+        legend = _figure_legend(
+            report, report.domains, styles, bars, COLUMN_WIDTH_IN, normalised=True
+        )
         figure = _new_figure(COLUMN_WIDTH_IN, PANEL_HEIGHT_IN + legend.height_in)
         axes = figure.subplots(1, 2)
         for ax, metric in zip(axes, REPORT_METRICS, strict=True):
@@ -480,7 +553,7 @@ def overview_figure(report: Report) -> Figure:
         domains = report.domains
         normalised = len(domains) >= 2 and len(report.cross_domain) > 0
         columns = len(domains) + int(normalised)
-        legend = _figure_legend(report, domains, styles, bars, TEXT_WIDTH_IN)
+        legend = _figure_legend(report, domains, styles, bars, TEXT_WIDTH_IN, normalised)
         figure = _new_figure(TEXT_WIDTH_IN, 2 * PANEL_HEIGHT_IN + legend.height_in)
         axes = figure.subplots(2, columns, squeeze=False)
         first_length = report.length_metric(domains[0])

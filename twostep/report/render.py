@@ -28,6 +28,7 @@ from twostep.report.model import METRIC_LABELS, METRIC_NAMES, Report
 from twostep.report.paper import ANNOTATED_TASKS, TABLE1_AGENTS, TABLE1_DOMAINS
 from twostep.report.planning_time import planning_time_view, view_rows
 from twostep.report.plots import plot_report
+from twostep.report.seeds import distinct_label
 from twostep.report.table2 import (
     PAPER_TIME_LIMIT_S,
     TABLE2_AGENTS,
@@ -51,17 +52,26 @@ def _digits(metric: str, value: float) -> int:
     return 2 if abs(value) < 100 else 1
 
 
-def format_mean_std(mean: object, std: object, n_seeds: object, metric: str) -> str:
-    """``12.3 ± 0.4``; ``12.3 (1 seed)`` with one seed; ``n/a`` without a value."""
+def format_mean_std(
+    mean: object, std: object, n_seeds: object, metric: str, seeded: object = True
+) -> str:
+    """``12.3 ± 0.4`` over seeds that differ; ``12.3`` for one value (one seed, or one
+    distinct run of a deterministic series: the table's n says which); ``n/a``."""
     if _is_nan(mean):
         return "n/a"
     value = float(str(mean))
     digits = _digits(metric, value)
-    if not _is_nan(n_seeds) and int(float(str(n_seeds))) == 1:
-        return f"{value:.{digits}f} (1 seed)"
-    if _is_nan(std):
+    single = not _is_nan(n_seeds) and int(float(str(n_seeds))) == 1
+    if single or not bool(seeded) or _is_nan(std):
         return f"{value:.{digits}f}"
     return f"{value:.{digits}f} ± {float(str(std)):.{digits}f}"
+
+
+def n_label(n_seeds: object, seeded: object) -> str:
+    """The n of a table row: ``1 distinct run`` (deterministic), ``3 seeds``, ``-``."""
+    if _is_nan(n_seeds) or int(float(str(n_seeds))) == 0:
+        return "-"
+    return distinct_label(n_seeds, seeded)
 
 
 def format_pct(value: object) -> str:
@@ -87,11 +97,14 @@ def markdown_table(headers: Sequence[str], rows: Sequence[Sequence[object]]) -> 
 # ------------------------------------------------------------------ sections
 
 FIGURE_CAPTION = (
-    "Each point: mean over seeds of each seed's average over the tasks every series of "
-    "the domain solved (a run lost to a failure or timeout leaves its task out for every "
-    "series, so it never improves a mean); shaded band / error bar = ±1 sample std over "
-    "seeds. Hollow markers or bars: the series lost runs there (counted in the legend); "
-    "x on the axis: it solved no task. SA runs at N = 1 only: its dashed line is a "
+    "Each point: the average over the tasks every series of the domain solved (a run lost "
+    "to a failure or timeout leaves its task out for every series, so it never improves a "
+    "mean), for a deterministic series of its one distinct run (n = 1), else the mean over "
+    "its n seeds with a shaded band / error bar of ±1 sample std; the legend gives n. "
+    "Hollow markers or bars: the series lost runs there (counted in the legend, per task "
+    "and seed); x on the axis: it solved no task. Normalised panels: half-filled markers "
+    "(with k/n beside them) average fewer domains than the others. Markers of different "
+    "series at one N are set a little apart. SA runs at N = 1 only: its dashed line is a "
     "reference. Kitchen domains are measured by their embodied length. Every figure is "
     "also written as PDF and SVG (fonts of 8 pt and more at 3.5 in, the overview at 7.16 in)."
 )
@@ -157,7 +170,7 @@ def _summary_section(report: Report) -> str:
             "ok / failed / timeout",
             "tasks",
             "tasks/seed",
-            "seeds",
+            "n",
         ]
         rows = []
         for row in cells.to_dict("records"):
@@ -167,14 +180,16 @@ def _summary_section(report: Report) -> str:
                     row["series"],
                     row["agents"],
                     *(
-                        format_mean_std(row[f"{m}_mean"], row[f"{m}_std"], row[f"{m}_n_seeds"], m)
+                        format_mean_std(
+                            row[f"{m}_mean"], row[f"{m}_std"], row[f"{m}_n_seeds"], m, row["seeded"]
+                        )
                         for m in metrics
                     ),
                     "n/a" if _is_nan(rate) else f"{float(rate) * 100:.0f} %",
                     f"{row['n_success']} / {row['n_failed']} / {row['n_timeout']}",
                     row["n_tasks"],
                     row["tasks_per_seed"] or "-",
-                    row["exec_length_n_seeds"],
+                    n_label(row["exec_length_n_seeds"], row["seeded"]),
                 ]
             )
         parts.append(f"### {domain}\n\n" + markdown_table(headers, rows))
@@ -243,12 +258,13 @@ def _planning_time_section(report: Report) -> list[str]:
     return ["## TwoStep against MA: planning time per domain", intro, markdown_table(headers, rows)]
 
 
-def _table1_cell(row: dict[str, object], domain: str) -> str:
+def _table1_cell(row: dict[str, object], domain: str, seeded: object = True) -> str:
     text = format_mean_std(
         row.get(f"{domain}_mean"),
         row.get(f"{domain}_std"),
         row.get(f"{domain}_n_seeds"),
         "exec_length",
+        seeded,
     )
     tasks = row.get(f"{domain}_n_tasks")
     if (
@@ -265,8 +281,9 @@ def _table1_section(report: Report) -> str:
     intro = (
         f"Execution length (steps) on the annotated tasks {', '.join(map(str, ANNOTATED_TASKS))} "
         f"of each domain, N = {TABLE1_AGENTS}, averaged over those tasks; mean ± std over "
-        "seeds. Macro = mean over the domains. The paper's rows are its reported figures "
-        "(GPT-4o, 3 runs; the expert is a single run)."
+        "the n seeds of a series whose runs differ by seed, one distinct run (no ±) of a "
+        "deterministic one. Macro = mean over the domains. The paper's rows are its reported "
+        "figures (GPT-4o, 3 runs; the expert is a single run)."
     )
     if ours.empty:
         intro += (
@@ -276,23 +293,30 @@ def _table1_section(report: Report) -> str:
         )
     rows = []
     for row in report.table1.to_dict("records"):
+        paper = row["source"] == "paper"
+        seeded = True if paper else row.get("seeded", True)
         macro = format_mean_std(
-            row["macro_mean"], row["macro_std"], row["macro_n_seeds"], "exec_length"
+            row["macro_mean"], row["macro_std"], row["macro_n_seeds"], "exec_length", seeded
         )
         n_domains = row["macro_n_domains"]
         partial = not _is_nan(n_domains) and int(n_domains) < len(TABLE1_DOMAINS)
         if row["source"] != "paper" and partial:
             macro += f" ({int(n_domains)}/{len(TABLE1_DOMAINS)} domains)"
         failed = "" if _is_nan(row["n_failed"]) else str(int(row["n_failed"]))
+        if paper:
+            n = "3 runs" if not _is_nan(row["macro_std"]) else "1 run"
+        else:
+            n = n_label(row["macro_n_seeds"], seeded)
         rows.append(
             [
                 row["series"],
-                *(_table1_cell(row, d) for d in TABLE1_DOMAINS),
+                *(_table1_cell(row, d, seeded) for d in TABLE1_DOMAINS),
                 macro,
-                failed if row["source"] != "paper" else "",
+                n,
+                failed if not paper else "",
             ]
         )
-    headers = ["series", *TABLE1_DOMAINS, "macro avg", "failed / timeout"]
+    headers = ["series", *TABLE1_DOMAINS, "macro avg", "n", "failed / timeout"]
     return intro + "\n\n" + markdown_table(headers, rows)
 
 
@@ -360,8 +384,12 @@ def render_markdown(report: Report, title: str, source: str, figures: Sequence[P
         sections += [f"![{path.stem}]({path.name})" for path in figures]
     sections += [
         "## Results per domain",
-        "Mean ± sample std (ddof = 1) over seeds of each seed's average over tasks; "
-        "successful runs only. 'tasks/seed': tasks in each seed's average.",
+        "Successful runs only. A deterministic series (SA, MA, TwoStep with an offline "
+        "decomposer) repeats one distinct run in every seed: its value is that run's average "
+        "over tasks, n = 1 distinct run, no ±. A series whose runs differ by seed (the LLM "
+        "decomposer, the embodied executor): mean ± sample std (ddof = 1) over its n seeds of "
+        "each seed's average over tasks. 'tasks/seed': tasks in each seed's average; the "
+        "counts are per task and seed.",
         _summary_section(report) if len(report.summary) else "No run could be placed.",
         "## Change against SA and MA",
         _changes_section(report),

@@ -29,6 +29,7 @@ import pandas as pd
 from twostep.benchmark import TITLES_FILE, BenchmarkError, parse_task_titles
 from twostep.files import FileFormatError, NotTextError, read_yaml_file
 from twostep.report.aggregation import sample_std
+from twostep.report.seeds import distinct_label
 
 TABLE2_DOMAIN = "alfworld"
 TABLE2_TASKS: tuple[int, ...] = (1, 2, 3, 4)
@@ -79,7 +80,10 @@ def table_two(
     (series label, method) pairs in display order. Empty without runs of ``domain``.
     ``titles`` (task number -> short description) fills the ``title`` column."""
     runs = identified[identified["domain"] == domain]
-    columns = ["series", "source", "task", "title", "length", *_cell(runs.head(0), "exec_length")]
+    columns = [
+        "series", "source", "task", "title", "length", "seeded",
+        *_cell(runs.head(0), "exec_length"),
+    ]  # fmt: skip
     if runs.empty:
         return pd.DataFrame(columns=columns)
     for metric in ("planner_timeouts", "planner_guard_stops"):
@@ -93,14 +97,17 @@ def table_two(
         mine = runs[(runs["series"] == label) & (runs["agents"] == agents)]
         if mine.empty:
             continue
+        seeded = bool(mine["seeded"].any()) if "seeded" in mine else True
         cells = []
         for task in TABLE2_TASKS:
             cell = _cell(mine[mine["task"] == task], length)
             cells.append(cell)
             rows.append(
-                {"series": label, "source": "ours", "task": str(task), "length": length, **cell}
-            )
+                {"series": label, "source": "ours", "task": str(task), "length": length,
+                 "seeded": seeded, **cell}
+            )  # fmt: skip
         means = [c["length_mean"] for c in cells]
+        spread = any(not math.isnan(c["length_std"]) for c in cells)  # else one run each
         stds = [0.0 if math.isnan(c["length_std"]) else c["length_std"] for c in cells]
         complete = not any(math.isnan(m) for m in means)
         timeouts = sum(1 for c in cells if c["n_runs"] and c["n_timeouts"] == c["n_runs"])
@@ -111,8 +118,9 @@ def table_two(
                 "source": "ours",
                 "task": "macro",
                 "length": length,
+                "seeded": seeded,
                 "length_mean": sum(means) / len(means) if complete else math.nan,
-                "length_std": sum(stds) / len(stds) if complete else math.nan,
+                "length_std": sum(stds) / len(stds) if complete and spread else math.nan,
                 "n_seeds": min(c["n_seeds"] for c in cells),
                 "time_mean": sum(times) / len(times) if times else math.nan,
                 "time_std": math.nan,
@@ -209,6 +217,15 @@ def time_cell(row: Mapping[str, Any]) -> str:
     return text + guard_note
 
 
+def n_of(row: Mapping[str, Any]) -> str:
+    """``n = 3 seeds`` or ``1 distinct run``: what a series' length cells average."""
+    n = row.get("n_seeds")
+    if n is None or pd.isna(n) or not int(n):
+        return "n = 0"
+    label = distinct_label(n, row.get("seeded", True))
+    return label if label.startswith("1 distinct") else f"n = {label}"
+
+
 def table_two_rows(frame: pd.DataFrame) -> tuple[list[str], list[list[str]]]:
     """Headers and rows of the printed table: the task descriptions when known, then a
     length row and a time row per series."""
@@ -223,8 +240,10 @@ def table_two_rows(frame: pd.DataFrame) -> tuple[list[str], list[list[str]]]:
             rows.append(["tasks", "", *(titles.get(t, "") for t in tasks)])
     for label in dict.fromkeys(frame["series"]):
         cells = {str(r["task"]): r for r in frame[frame["series"] == label].to_dict("records")}
+        macro = cells.get("macro", {})
+        n = "paper" if macro.get("source") == "paper" else n_of(macro)
         rows.append(
-            [label, "length", *(length_cell(cells[t]) if t in cells else "" for t in tasks)]
+            [label, f"length ({n})", *(length_cell(cells[t]) if t in cells else "" for t in tasks)]
         )
         rows.append(
             ["", "planning (s)", *(time_cell(cells[t]) if t in cells else "" for t in tasks)]

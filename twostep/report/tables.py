@@ -122,6 +122,7 @@ def table_one(identified: pd.DataFrame, series_frame: pd.DataFrame) -> pd.DataFr
         if series["method"] != "twostep":
             label = f"{label} (N={agents}, reference)"
         row: dict[str, Any] = {"series": label, "source": "this report"}
+        row["seeded"] = bool(ok["seeded"].any()) if "seeded" in ok else True
         per_domain_seed: dict[str, pd.Series] = {}
         for domain in TABLE1_DOMAINS:
             sub = ok[ok["domain"] == domain]
@@ -156,5 +157,6 @@ def table_one(identified: pd.DataFrame, series_frame: pd.DataFrame) -> pd.DataFr
         "macro_n_seeds",
         "macro_n_domains",
         "n_failed",
+        "seeded",
     ]
     return pd.DataFrame.from_records(rows, columns=columns)
