@@ -28,10 +28,19 @@ already in the store: a re-run computes the job again but logs nothing).
 not exist yet (it is copied from the environment's template store, made by MLflow at
 ``make setup``, or, without one, created and migrated by MLflow).
 
+(e) ``refusals``: a command the tool must refuse (a value out of range, an unknown task, a
+typo'd key with and without ``+``, an unknown option), each on a fresh ``output.root``:
+its wall time, exit code, whether anything was written (a folder under ``output.root``)
+and its stderr line count. Goal: exit 2 in under 1 s, one line, nothing written.
+``--source DIR`` runs another checkout's code (the console script's entry point
+imported from DIR, this environment), e.g. the main branch's for a before/after.
+
     .venv/bin/python bench/bench_startup.py                 # default and services, 3 runs each
     .venv/bin/python bench/bench_startup.py --repeat 5 --scenarios default,logged,cold
     .venv/bin/python bench/bench_startup.py --repeat 3 --scenarios default,logged,cold,services \
         --json docs/bench/startup.json            # the results page's rows
+
+    .venv/bin/python bench/bench_startup.py --repeat 5 --scenarios refusals [--source DIR]
 
 ``--json FILE`` also writes the scenarios' rows as a bench record (:mod:`bench.record`);
 :func:`page` turns it into the results page (``make results``).
@@ -252,7 +261,9 @@ def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
     from matplotlib.figure import Figure
 
     (data,) = records
-    rows, goals = data["rows"], data.get("goals", GOALS)
+    every, goals = data["rows"], data.get("goals", GOALS)
+    rows = [r for r in every if r["scenario"] != "refusals"]
+    refused = [r for r in every if r["scenario"] == "refusals"]
     job = " ".join(data.get("job", JOB))
     lines = [
         "## Summary",
@@ -290,6 +301,17 @@ def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
             ["phase", *(f"{r['scenario']} CPU s" for r in detailed)],
             [[p, *(f"{r['cpu_breakdown'].get(p, 0.0):.2f}" for r in detailed)] for p in cpu_parts],
         )
+    for row in refused:
+        lines += ["", "## Refusals", "",
+                  f"Commands refused before any work (goal: exit 2 in under {REFUSAL_GOAL_S:g} "
+                  "s, one line, nothing written); medians.", ""]  # fmt: skip
+        lines += record.table(
+            ["command", "exit", "stderr lines", "written", "wall s", "CPU s"],
+            [[f"`twostep {' '.join(r['command'])}`", ", ".join(map(str, r["codes"])),
+              str(r["lines"]), "yes" if r["written"] else "no",
+              f"{statistics.median(r['walls']):.2f}", f"{statistics.median(r['cpus']):.2f}"]
+             for r in row["rows"]],
+        )  # fmt: skip
     fig = Figure(figsize=(7.0, 2.8), layout="constrained")
     axes = fig.subplots()
     names = [r["scenario"] for r in rows]
@@ -312,15 +334,66 @@ def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
     return lines
 
 
+# Commands the tool must refuse before any work (issue 37), with what the refusal names.
+REFUSALS: tuple[tuple[str, ...], ...] = (
+    ("task=99",),
+    ("agents=0",),
+    ("score_mode=bogus",),
+    ("agnets=2",),
+    ("+agnets=3", "method=twostep", "decomposer=goal-split"),
+    ("domain=nosuch",),
+)
+REFUSAL_GOAL_S = 1.0
+# The `twostep` console script's entry point, imported from the current directory (the
+# checkout the refusals scenario runs).
+RUN_COMMAND = "import sys; sys.argv[0] = 'twostep'; from flows.command import main; main()"
+
+
+def refusals(root: Path, repeat: int, source: Path) -> dict[str, Any]:
+    """Wall time, exit code, stderr lines and what was written, per refused command."""
+    rows = []
+    for arguments in REFUSALS:
+        walls, cpus, codes, lines, written = [], [], set(), set(), False
+        for attempt in range(repeat):
+            out = root / f"refused-{len(rows)}-{attempt}"
+            command = [sys.executable, "-c", RUN_COMMAND, *arguments]
+            command += [f"output.root={out}", f"data.root={REPO / 'data'}"]
+            start, start_cpu = time.perf_counter(), children_cpu()
+            done = subprocess.run(
+                command, capture_output=True, text=True, env=environment(), cwd=source
+            )
+            walls.append(time.perf_counter() - start)
+            cpus.append(children_cpu() - start_cpu)  # with the MLflow helper it stopped
+            codes.add(done.returncode)
+            lines.add(len([line for line in done.stderr.splitlines() if line.strip()]))
+            written |= out.exists()
+        median = statistics.median(walls)
+        met = "met" if median < REFUSAL_GOAL_S and codes == {2} and not written else "MISSED"
+        print(
+            f"   {' '.join(arguments):<50} exit {sorted(codes)}, {max(lines)} stderr line(s), "
+            f"{'WROTE under output.root' if written else 'nothing written'}, median "
+            f"{median:.2f} s ({', '.join(f'{w:.2f}' for w in walls)}), CPU "
+            f"{statistics.median(cpus):.2f} s: {met}",
+            flush=True,
+        )
+        rows.append({"command": list(arguments), "walls": walls, "cpus": cpus,
+                     "codes": sorted(codes), "lines": max(lines), "written": written})  # fmt: skip
+    return {"scenario": "refusals", "source": str(source), "rows": rows}
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--scenarios", default="default,services")
     parser.add_argument("--root", type=Path, default=None, help="output root (default: temp)")
     parser.add_argument("--json", type=Path, help="also write the rows here (a bench record)")
+    parser.add_argument(
+        "--source", type=Path, default=REPO, help="refusals: the checkout whose code runs"
+    )
     args = parser.parse_args()
     run = record.started()
     root = args.root or Path(tempfile.mkdtemp(prefix="bench-startup-"))
+    root.mkdir(parents=True, exist_ok=True)
     wanted = args.scenarios.split(",")
     print(
         f"output root: {root} | PYTHONDONTWRITEBYTECODE={os.environ.get('PYTHONDONTWRITEBYTECODE')}"
@@ -339,6 +412,13 @@ def main() -> int:
         runs = [run_command(root / f"cold-{i}", []) for i in range(args.repeat)]
         title = "the first run on a fresh output.root (the MLflow store is new)"
         results.append(runs_against_goal("cold", title, runs))
+    if "refusals" in wanted:
+        print(
+            f"== refusals: exit 2 in under {REFUSAL_GOAL_S:.0f} s, one line, nothing written "
+            f"(code of {args.source}; load average {os.getloadavg()[0]:.1f})",
+            flush=True,
+        )
+        results.append(refusals(root, args.repeat, args.source))
     if "services" in wanted:
         services_root = root / "services"
         start = time.perf_counter()
