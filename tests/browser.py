@@ -207,8 +207,8 @@ class Browser:
 
     def press(self, key: str, times: int = 1) -> None:
         """A special key on the focused element, ``times`` times: Enter, Escape, Tab,
-        Backspace."""
-        code = {"Enter": 13, "Escape": 27, "Tab": 9, "Backspace": 8}[key]
+        Backspace, End (to the end of a text box's text)."""
+        code = {"Enter": 13, "Escape": 27, "Tab": 9, "Backspace": 8, "End": 35}[key]
         params: dict[str, Any] = {"key": key, "code": key, "windowsVirtualKeyCode": code}
         for _ in range(times):
             text = {"text": "\r"} if key == "Enter" else {}

@@ -29,6 +29,7 @@ class UiSweep:
     running: dict[str, services.Service]  # services.up's answer: Prefect and MLflow
     output: str  # the sweep's stdout
     sweep_dir: Path
+    experiment_id: str  # the sweep's experiment in MLflow
     parent_run_id: str  # the sweep's parent run in MLflow
 
 
@@ -52,6 +53,6 @@ def ui_sweep(tmp_path: Path, overrides: Sequence[str], timeout_s: float) -> Iter
         assert state is not None
         ids = sweep_run_ids(state)
         assert ids is not None
-        yield UiSweep(binary, shots, running, done.stdout, sweep_dir, ids[0])
+        yield UiSweep(binary, shots, running, done.stdout, sweep_dir, ids[0], ids[1])
     finally:
         services.down(root)
