@@ -406,8 +406,8 @@ def prefect_steps(stats: StepStats, submit: bool = False) -> Steps:
             mode,
             budget,
         )
-        exact = "exact" if execution.exact else f"best found, lower bound {execution.lower_bound}"
-        flow_log(f"score: execution length {execution.length} ({mode}, {exact})")
+        found = "the shortest" if execution.exact else f"lower bound {execution.lower_bound}"
+        flow_log(f"score: execution length {execution.length} ({mode} mode, {found})")
         return execution
 
     return Steps(
