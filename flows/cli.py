@@ -1,5 +1,10 @@
 """The ``twostep`` command: a Hydra app that runs one job, or a sweep with ``-m``.
 
+Before Hydra runs, the command line's keys and options are checked against the schema and
+the configs (:func:`flows.config.override_problem`): a typo'd key, with or without ``+``,
+or an unknown option is one line (``unknown key 'agnets': did you mean 'agents'?``) and
+exit 2. Values are checked by the Hydra callback before any folder exists
+(:mod:`flows.checks`).
 Single run: prints a one-line summary (and the joint schedule), writes result.json in
 the Hydra run directory; bad input (a command line Hydra cannot compose, a value out of
 range, an unknown task, malformed PDDL) or an unusable MLflow store prints one line and

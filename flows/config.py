@@ -1,9 +1,12 @@
 """The structured config schema: every key the Hydra app accepts, with its type.
 
 Registered with Hydra's ConfigStore as ``twostep_schema`` and used as the first entry
-of ``conf/config.yaml``'s defaults list, so a typo in an override (``tsak=3``,
-``orchestration.task_runer=dask``) or a value of the wrong type (``agents=two``,
-``orchestration.task_runner=spark``) fails at once with Hydra's message naming the key.
+of ``conf/config.yaml``'s defaults list, so a value of the wrong type (``agents=two``,
+``orchestration.task_runner=spark``) fails at once with Hydra's message naming the key. A
+typo in a key (``tsak=3``, ``+agnets=3``, ``orchestration.task_runer=dask``) or an option
+(``domain=nosuch``) is refused before Hydra runs, in one line naming the closest key or
+the choices (:func:`override_problem`): Hydra would suggest ``+tsak=3``, which then runs
+with the key ignored.
 
 Values live in ``conf/``; the defaults here only give each key its type. Where a key
 is a library setting, its default is the library dataclass's default (one default per

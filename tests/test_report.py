@@ -351,6 +351,26 @@ def test_unknown_experiment(store: str, tmp_path: Path, capsys: pytest.CaptureFi
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
+def test_experiment_by_id(
+    store: str, mlflow_report: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 37: a sweep's experiment name was ~140 characters; its id does as well."""
+    from mlflow.tracking import MlflowClient
+
+    found = MlflowClient(tracking_uri=store).get_experiment_by_name(EXPERIMENT)
+    assert found is not None
+    out = tmp_path / "by-id"
+    code = main(["--experiment", found.experiment_id, "--tracking-uri", store, "--out", str(out),
+                 "--no-log"])  # fmt: skip
+    assert code == 0
+    said = capsys.readouterr().out
+    assert f"from MLflow experiment '{EXPERIMENT}'" in said  # the id names the experiment
+    # the same report as by its name
+    pd.testing.assert_frame_equal(read_summary(mlflow_report), read_summary(out))
+    assert main(["--experiment", "999", "--tracking-uri", store, "--no-log"]) == 1
+    assert "unknown experiment '999'" in capsys.readouterr().err
+
+
 def test_empty_experiment(store: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     code = main(["--experiment", "empty-experiment", "--tracking-uri", store])
     err = capsys.readouterr().err

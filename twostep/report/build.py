@@ -32,8 +32,9 @@
 
 One job per module: :mod:`twostep.report.model` (the :class:`Report`),
 :mod:`twostep.report.series`, :mod:`twostep.report.aggregation` (means and normalisation),
-:mod:`twostep.report.compared` (the tasks compared), :mod:`twostep.report.tables` (changes
-and Table I), :mod:`twostep.report.table2`, :mod:`twostep.report.notes`.
+:mod:`twostep.report.compared` (the tasks compared), :mod:`twostep.report.seeds` (which
+runs a mean is over), :mod:`twostep.report.tables` (changes and Table I),
+:mod:`twostep.report.table2`, :mod:`twostep.report.notes`.
 """
 
 from __future__ import annotations
