@@ -181,6 +181,7 @@ BENCH_FILES: tuple[BenchFile, ...] = (
     BenchFile("methods_portfolio.txt", "python bench/bench_methods.py --report docs/bench/methods_portfolio.json", "the printed report of the portfolio's rows (cited by the README)"),
     BenchFile("planner.txt", "python bench/bench_planner.py", "printed output of an earlier run (cited by the README; the page: planner.json)"),
     BenchFile("planner_stress.txt", "python bench/bench_planner.py --data data/stress; --data data/large --domains tyreworld", "the planner on the stress set and the larger tyreworld task (cited by the README)"),
+    BenchFile("refusals.txt", "python bench/bench_startup.py --repeat 5 --scenarios refusals [--source DIR]", "commands refused before any work: exit code, lines, what was written, wall and CPU time, before and after issue 37 (cited by the README)"),
     BenchFile("resume.txt", "python bench/bench_resume.py", "a sweep, then the same command again reusing every job (cited by the README)"),
     BenchFile("score_cli.txt", "python bench/bench_score_cli.py --repeats 5", "twostep-score's wall and CPU time on four 60-step plans (cited by the README)"),
     BenchFile("startup.txt", "python bench/bench_startup.py --repeat 3 --scenarios default,logged,cold", "printed output of earlier runs, appended (cited by the README; the page: startup.json)"),
