@@ -26,11 +26,15 @@ $(BOOTSTRAP)/bin/uv:
 	$(PYTHON) -m venv $(BOOTSTRAP)
 	$(BOOTSTRAP)/bin/python -m pip install --quiet --disable-pip-version-check "uv==$(UV_VERSION)"
 
-# template.py: a change of its key (MLflow's version) makes the template again.
-$(VENV)/.synced: pyproject.toml uv.lock flows/tracking/template.py | $(UV)
+# template.py, prefect_template.py: a change of their key (MLflow's, Prefect's version)
+# makes the templates again.
+$(VENV)/.synced: pyproject.toml uv.lock flows/tracking/template.py flows/prefect_template.py | $(UV)
 	$(UV) $(SYNC)
 	# An empty MLflow store made once by MLflow: a new store is a copy (ms), not a migration (s).
 	$(VENV)/bin/python -m flows.tracking.template
+	# An empty Prefect database made once by a Prefect server: a sweep's server on a new
+	# output root starts as on a warm database (seconds), not after its migrations.
+	$(VENV)/bin/python -m flows.prefect_template
 	touch $@
 
 setup: $(VENV)/.synced

@@ -31,6 +31,7 @@ from flows.artifacts import picture_paths
 from flows.config import agents_run, override_problem, register
 from flows.console import format_schedule, format_summary
 from flows.environment import quiet_defaults
+from flows.launcher import launch_fields, register_plugins
 from flows.sweep_callback import SweepCallback
 from twostep.cli import console_main
 
@@ -44,6 +45,7 @@ JOB_LOG = "twostep.run"  # the job log's own logger (the summary, not the consol
 
 quiet_defaults()
 register()
+register_plugins()  # the default launcher and sweeper of a sweep (flows/launcher.py)
 
 # Set by a single run once its job is recorded: the process may then end without
 # tearing down every imported module (about a second for MLflow + unified-planning).
@@ -143,6 +145,8 @@ def _sweep_record(outcome: JobOutcome) -> dict[str, Any]:
         "tracking_error": outcome.tracking_error,
         **outcome.stats.to_dict(),
         **outcome.timings,
+        "phases": outcome.phases,  # where the job's time went (bench/bench_sweep.py)
+        "launch": launch_fields(),
     }
 
 

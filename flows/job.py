@@ -77,6 +77,10 @@ class JobOutcome:
     stats: StepStats = field(default_factory=StepStats)
     timings: dict[str, float] = field(default_factory=dict)
     input_error: bool = False  # the job's input was bad (unknown task, malformed PDDL)
+    # Where the job's wall time went (the sweep's job record and bench/bench_sweep.py only:
+    # neither result.json nor MLflow): setup (config, key, checks, job store lookup),
+    # compute (task, method, flow), store (saving the result), files, mlflow.
+    phases: dict[str, float] = field(default_factory=dict)
     mlflow_run_id: str | None = None
     tracking_error: str | None = None  # logging failed; the result itself is safe
 
@@ -255,16 +259,20 @@ def execute_job(
         run_log = JobRunLog.open(
             destination.uri, location, destination.experiment, sweep, single_run=tracking_worker
         )
+    setup_s = time.perf_counter() - start
     try:
         outcome, details = _run_or_reuse(
             cfg, config, (key, name), sweep, stored, refused, store, start
         )
+        outcome.phases["setup_s"] = setup_s
         outcome.mlflow_run_id = held
+        files_start = time.perf_counter()
         pictures = draws_pictures(cfg.executor.render, int(cfg.seed), in_sweep=sweep is not None)
         files = write_job_files(job_dir, outcome.result, pictures)
         if details:
             (job_dir / "error.txt").write_text(details)
         tracking_start = time.perf_counter()
+        outcome.phases["files_s"] = tracking_start - files_start
         if run_log is not None:
             # Under the job's lock: two processes that both hold this job (two sweeps at
             # once) never both create its run.
@@ -276,10 +284,27 @@ def execute_job(
         if run_log is not None:
             run_log.close()
     # With MLflow logging: what the job cost end to end (the progress record, the bench).
-    outcome.timings["tracking_s"] = time.perf_counter() - tracking_start
+    outcome.timings["tracking_s"] = outcome.phases["mlflow_s"] = (
+        time.perf_counter() - tracking_start
+    )
     outcome.timings["job_wall_time_s"] = job_wall = time.perf_counter() - start
     outcome.timings["orchestration_overhead_s"] = max(0.0, job_wall - _work(outcome))
     return outcome
+
+
+def needs_computing(cfg: object) -> bool:
+    """Whether the job of ``cfg`` would be computed, not read back from the job store
+    (the twostep launcher starts the sweep's Prefect server early for such a job). Reads
+    the store only: no lock taken, nothing imported."""
+    config = job_config(cfg)
+    typed_cfg = typed(cfg)
+    if _input_problem(typed_cfg) is not None:
+        return False  # a job with bad input fails before any work
+    if not typed_cfg.orchestration.reuse_results:
+        return True
+    key = job_key(config, job_inputs(config))
+    stored = JobStore(str(typed_cfg.orchestration.job_store)).load(key)
+    return stored is None or not is_complete_result(stored)
 
 
 def _input_problem(cfg: TwostepConfig) -> str | None:
@@ -308,9 +333,11 @@ def _run_or_reuse(
     stats, error, details, status = StepStats(), refused, None, JobStatus.FAILED.value
     input_error = refused is not None
     compute_timings: dict[str, float] = {"server_wait_s": 0.0}
+    phases: dict[str, float] = {}
     if stored is not None:
         result = stored
     elif error is None:
+        compute_start = time.perf_counter()
         try:
             result, compute_timings = compute_job(cfg, config, name, sweep, stats)
         except INPUT_ERRORS as exc:
@@ -319,12 +346,16 @@ def _run_or_reuse(
             error, status = one_line(exc, name_type=False), RESOURCE_LIMIT
         except Exception as exc:
             error, details = one_line(exc), traceback.format_exc()
+        store_start = time.perf_counter()
+        phases["compute_s"] = store_start - compute_start
         if error is None:
             store.save(key, config, result)  # unless it did not finish (llm_error, error)
+        phases["store_s"] = time.perf_counter() - store_start
     if error is not None:
         result = failed_result(config, error, status)
     outcome = _outcome(name, key, result, stored is not None, stats, compute_timings, start)
     outcome.input_error = input_error
+    outcome.phases.update(phases)
     return outcome, details
 
 

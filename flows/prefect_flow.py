@@ -61,9 +61,10 @@ from typing import TYPE_CHECKING, Any
 
 from prefect import State, flow, tags, task
 from prefect.cache_policies import NO_CACHE
-from prefect.context import SettingsContext, TaskRunContext
+from prefect.context import SettingsContext, TagsContext, TaskRunContext
 from prefect.settings import (
     PREFECT_API_URL,
+    PREFECT_CLIENT_CSRF_SUPPORT_ENABLED,
     PREFECT_FLOWS_HEARTBEAT_FREQUENCY,
     PREFECT_LOCAL_STORAGE_PATH,
     PREFECT_SERVER_ALLOW_EPHEMERAL_MODE,
@@ -464,6 +465,8 @@ def job_settings(api_url: str, storage: Path) -> SettingsContext:
     """Prefect settings of a job, built once per process (validating them takes 0.1 s)."""
     key = (api_url, str(storage))
     if key not in _SETTINGS:
+        from flows.servers import csrf_enforced
+
         _SETTINGS[key] = get_current_settings().copy_with_update(
             updates={
                 PREFECT_API_URL: api_url,
@@ -473,6 +476,8 @@ def job_settings(api_url: str, storage: Path) -> SettingsContext:
                 # Heartbeats detect crashed flow runs in deployments; here they only
                 # cost a thread whose join adds up to a second to every job.
                 PREFECT_FLOWS_HEARTBEAT_FREQUENCY: None,
+                # A server without CSRF protection (ours): no token request per flow run.
+                PREFECT_CLIENT_CSRF_SUPPORT_ENABLED: csrf_enforced(api_url),
             }
         )
     current = SettingsContext.get()
@@ -539,7 +544,10 @@ def job_flow(job: dict[str, Any]) -> dict[str, Any] | State[Any]:
     (:func:`final_state`)."""
     built, stats, submit = running_job()
     flow_log(start_line(job))
-    result = built.run(prefect_steps(stats, submit=submit)).to_dict()
+    # The job's tags are its flow run's (to find it); its task runs carry none: a tagged
+    # task run asks the server for tag concurrency limits (an API call and a client each).
+    with TagsContext(current_tags=set()):
+        result = built.run(prefect_steps(stats, submit=submit)).to_dict()
     flow_log(f"result: {format_summary(result, job_name(job))}", not result.get("success"))
     return final_state(result)
 
@@ -574,7 +582,11 @@ def run_flow(
     storage = Path(config["orchestration"]["result_storage"])
     storage.mkdir(parents=True, exist_ok=True)
     submit = config["orchestration"]["task_runner"] == "dask"
-    options: dict[str, Any] = {"flow_run_name": name}
+    # The results' folder named here: Prefect does not ask the server for a default one.
+    options: dict[str, Any] = {
+        "flow_run_name": name,
+        "result_storage": storage,
+    }
     runner = _task_runner(config, dask_address)
     if runner is not None:
         options["task_runner"] = runner

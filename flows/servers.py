@@ -25,6 +25,7 @@ import argparse
 import contextlib
 import ctypes
 import fcntl
+import functools
 import json
 import os
 import signal
@@ -129,6 +130,9 @@ def server_environment(
         # The UI copies its files at start-up; a sweep's server is for its jobs. To watch
         # runs in the UI, start the long-lived services (``twostep-services up``).
         PREFECT_SERVER_UI_ENABLED="true" if ui else "false",
+        # Block types are for the UI's catalog (a server with the UI registers them; the
+        # database template has them); a sweep's server skips the work at its start.
+        PREFECT_API_BLOCKS_REGISTER_ON_START="true" if ui else "false",
         PREFECT_LOGGING_LEVEL="WARNING",
         DO_NOT_TRACK="1",
     )
@@ -179,8 +183,11 @@ def spawn_server(settings: ServerSettings, owner_pid: int | None, ui: bool = Fal
     ``owner_pid``: the process whose exit stops the server (a sweep's launcher, a single
     run); ``None`` for a long-lived server (``twostep-services``).
     """
+    from flows.prefect_template import seed_home
+
     home = Path(settings.home)
     home.mkdir(parents=True, exist_ok=True)
+    seed_home(home)  # a new home starts from the environment's migrated database
     port = free_port(settings.host)
     log_path = home / f"server-{port}.log"
     command = [sys.executable, "-m", "prefect", "server", "start"]
@@ -200,14 +207,27 @@ def is_healthy(api_url: str, timeout_s: float = 2.0) -> bool:
     """Whether ``GET <api_url>/health`` answers 200 (Prefect's API and MLflow's server).
 
     A plain HTTP probe on purpose: it runs before Prefect is imported (2 s), e.g. in
-    every single run looking for the services. Everything else goes through Prefect's
-    client (:func:`count_flow_runs`).
+    every single run looking for the services (as :func:`count_flow_runs` at a sweep's end).
     """
     try:
         with urllib.request.urlopen(f"{api_url}/health", timeout=timeout_s) as response:
             return bool(response.status == 200)
     except (urllib.error.URLError, OSError, ValueError):
         return False
+
+
+@functools.cache
+def csrf_enforced(api_url: str, timeout_s: float = 5.0) -> bool:
+    """Whether the server at ``api_url`` wants CSRF tokens (ours never do). Asked once per
+    process: Prefect's client asks again in every flow run (one request each) unless told
+    the server does not. In doubt (no answer), True: the client then asks itself."""
+    try:
+        with urllib.request.urlopen(f"{api_url}/csrf-token?client=twostep", timeout=timeout_s):
+            return True
+    except urllib.error.HTTPError as error:
+        return not (error.code == 422 and b"CSRF protection is disabled" in error.read())
+    except (urllib.error.URLError, OSError, ValueError):
+        return True
 
 
 def pid_alive(pid: int) -> bool:
@@ -307,14 +327,17 @@ def read_info(path: Path) -> ServerInfo | None:
 
 def shared_server(info_path: Path, settings: ServerSettings, owner_pid: int) -> ServerInfo:
     """The server recorded at ``info_path``, started now if there is none (or it died)."""
+    from flows.prefect_template import template_path
+
     with file_lock(info_path.with_suffix(".lock")):
         info = read_info(info_path)
         if info is not None and info.pid is not None and pid_alive(info.pid):
             return info
-        info = spawn_server(settings, owner_pid)
-        write_json_atomic(info_path, info.to_dict())
         fresh = not any(Path(settings.home).glob("*.db"))
-        wait = " (a fresh database: its first start takes up to a minute)" if fresh else ""
+        info = spawn_server(settings, owner_pid)  # seeds a new home from the template
+        write_json_atomic(info_path, info.to_dict())
+        migrating = fresh and not template_path().is_file()
+        wait = " (a new database: its first start migrates it, up to a minute)" if migrating else ""
         print(f"starting Prefect server at {info.api_url}{wait} ...", flush=True)
         return info
 
@@ -346,31 +369,34 @@ def stop_sweep_server(state: SweepState) -> bool:
     return True
 
 
-def count_flow_runs(api_url: str, tag: str) -> dict[str, int] | None:
-    """Flow runs with ``tag`` on the server, by state type (the server's own record)."""
-    from prefect.client.orchestration import get_client
-    from prefect.client.schemas.filters import FlowRunFilter, FlowRunFilterTags
-    from prefect.settings import PREFECT_API_URL, temporary_settings
-
+def count_flow_runs(api_url: str, tag: str, timeout_s: float = 30.0) -> dict[str, int] | None:
+    """Flow runs with ``tag`` on the server, by state type (the server's own record),
+    asked over HTTP (``POST /flow_runs/filter``): the sweep's end does not import Prefect's
+    client (seconds) for it."""
     counts: dict[str, int] = {}
-    flow_run_filter = FlowRunFilter(tags=FlowRunFilterTags(all_=[tag]))
-    page = 200
+    page, offset = 200, 0
     try:
-        with (
-            temporary_settings(updates={PREFECT_API_URL: api_url}),
-            get_client(sync_client=True) as client,
-        ):
-            offset = 0
-            while True:
-                runs = client.read_flow_runs(
-                    flow_run_filter=flow_run_filter, limit=page, offset=offset
-                )
-                for run in runs:
-                    state_type = run.state.type.value if run.state is not None else "UNKNOWN"
-                    counts[state_type] = counts.get(state_type, 0) + 1
-                if len(runs) < page:
-                    return counts
-                offset += len(runs)
+        while True:
+            body = {
+                "flow_runs": {"tags": {"all_": [tag]}},
+                "limit": page,
+                "offset": offset,
+            }
+            request = urllib.request.Request(
+                f"{api_url}/flow_runs/filter",
+                data=json.dumps(body).encode(),
+                headers={"Content-Type": "application/json"},
+                method="POST",
+            )
+            with urllib.request.urlopen(request, timeout=timeout_s) as response:
+                runs = json.load(response)
+            for run in runs:
+                state = run.get("state") or {}
+                state_type = str(state.get("type") or run.get("state_type") or "UNKNOWN")
+                counts[state_type] = counts.get(state_type, 0) + 1
+            if len(runs) < page:
+                return counts
+            offset += len(runs)
     except Exception:  # the count is part of the summary, never a reason to fail
         return None
 

@@ -48,6 +48,7 @@ from flows.servers import (
     read_info,
     stop_sweep_server,
 )
+from flows.sweep_report import Drawing
 from flows.sweep_results import RESULTS_CSV, format_results, result_rows, write_results_csv
 from flows.sweep_state import (
     SweepState,
@@ -57,6 +58,7 @@ from flows.sweep_state import (
     sweep_key,
     sweep_overrides,
 )
+from flows.sweep_timing import sweep_timing, timing_line
 from twostep.files import write_json_atomic, write_text_atomic
 from twostep.redaction import redact_text
 
@@ -144,29 +146,6 @@ def mask_credentials(files: list[Path]) -> None:
             write_text_atomic(path, masked)
 
 
-def _sweep_report(sweep_dir: Path) -> list[tuple[Path, str | None]]:
-    """The sweep's Fig. 3-style charts and summary tables (``twostep-report`` of its
-    result files, in ``<sweep dir>/report``) as (file, artifact folder) pairs for its
-    parent run; none (and a warning) when there is nothing to report."""
-    from twostep.report import (
-        ReportInputError,
-        build_report,
-        load_runs_from_sweep_dir,
-        write_report,
-    )
-
-    out = sweep_dir / "report"
-    try:
-        report = build_report(load_runs_from_sweep_dir(sweep_dir))
-        paths = write_report(report, out, f"TwoStep sweep {sweep_dir.name}", f"`{sweep_dir}`")
-    except ReportInputError:
-        return []
-    except Exception as error:  # the jobs are recorded; the report is extra
-        print(f"warning: no sweep report: {error}", file=sys.stderr)
-        return []
-    return [(path, "report") for path in paths if path.is_file()]
-
-
 def _ui_links(state: SweepState, output_root: str) -> list[str]:
     """The sweep's last lines: the Prefect UI's flow runs of this sweep (its tag) when
     ``twostep-services`` serves them (a sweep's own server is stopped by now), the MLflow
@@ -225,9 +204,12 @@ class SweepCallback(Callback):
     def on_job_start(self, config: DictConfig, **kwargs: Any) -> None:
         # Hydra has just saved the job's config and overrides (and a sweep's multirun.yaml):
         # credentials inside URLs are masked in those copies (the job keeps its values).
+        from flows.launcher import current_launch
+
         runtime = config.hydra.runtime.output_dir
         files = []
-        if config.hydra.output_subdir is not None:
+        # The twostep launcher writes them masked already (flows/run_job.py).
+        if config.hydra.output_subdir is not None and current_launch() is None:
             folder = Path(str(runtime)) / str(config.hydra.output_subdir)
             files += [folder / "config.yaml", folder / "hydra.yaml", folder / "overrides.yaml"]
         if config.hydra.mode == RunMode.MULTIRUN:
@@ -315,7 +297,10 @@ class SweepCallback(Callback):
             "plan_cache_hits": sum(int(r.get("plan_cache_hits") or 0) for r in records),
             "planner_calls_run": sum(int(r.get("plan_calls") or 0) for r in records),
             "sweep_wall_time_s": round(time.time() - state.started_at, 3),
+            **sweep_timing(records, time.time() - state.started_at),
         }
+        # The report draws in a process of its own meanwhile (flows/sweep_report.py).
+        drawing = Drawing(Path(state.sweep_dir)) if records else None
         info = read_info(state.folder / "server.json")
         api_url = state.prefect_api_url or (info.api_url if info else None)
         if api_url and is_healthy(api_url):
@@ -331,13 +316,17 @@ class SweepCallback(Callback):
                 self._cluster.close()
         rows = result_rows(records)
         results = write_results_csv(rows, Path(state.sweep_dir) / RESULTS_CSV)
-        files = [(results, None), *_sweep_report(Path(state.sweep_dir))]
-        self._end_parent_run(state, summary, bool(failed), files)
         write_json_atomic(state.folder / "summary.json", summary)
         print(footer(state, summary, failed), flush=True)
+        print(timing_line(summary), flush=True)
         table = format_results(rows)
         if table:
             print(f"{table}\nresults: {results}", flush=True)
+        if state.tracking_uri is not None:  # MLflow's client, while the report draws
+            with contextlib.suppress(Exception):
+                import mlflow.tracking  # noqa: F401
+        report = drawing.files() if drawing is not None else []
+        self._end_parent_run(state, summary, bool(failed), [(results, None), *report])
         for line in _ui_links(state, str(config.output.root)):
             print(line, flush=True)
         if failed:

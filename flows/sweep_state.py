@@ -142,9 +142,37 @@ def record_job(sweep_dir: Path, num: int, record: Mapping[str, Any]) -> None:
     write_json_atomic(Path(sweep_dir) / STATE_DIR / "jobs" / f"{num}.json", dict(record))
 
 
+# Records read by this process, by file: (modification time and size, the record). A
+# record is written once per job (atomically, a new file each time), so a job's progress
+# line reads only the records that are new since this process's last line, not all of
+# them: with thousands of jobs, reading every record for every line would cost more per
+# job the bigger the sweep.
+_READ: dict[Path, tuple[tuple[int, int], dict[str, Any]]] = {}
+
+
 def job_records(sweep_dir: Path) -> list[dict[str, Any]]:
+    """The sweep's job records, in file name order."""
     records = []
-    for path in sorted((Path(sweep_dir) / STATE_DIR / "jobs").glob("*.json")):
+    folder = Path(sweep_dir) / STATE_DIR / "jobs"
+    try:
+        entries = sorted(
+            (e for e in os.scandir(folder) if e.name.endswith(".json")), key=lambda e: e.name
+        )
+    except OSError:
+        return []
+    for entry in entries:
+        path = Path(entry.path)
+        try:
+            stat = entry.stat()
+        except OSError:
+            continue
+        version = (stat.st_mtime_ns, stat.st_size)
+        known = _READ.get(path)
+        if known is not None and known[0] == version:
+            records.append(known[1])
+            continue
         with contextlib.suppress(OSError, ValueError):
-            records.append(json.loads(path.read_text()))
+            record = json.loads(path.read_text())
+            _READ[path] = (version, record)
+            records.append(record)
     return records

@@ -103,6 +103,11 @@ class JobRunLog:
             self.worker.close()
 
 
+# A process's client of each store (creating MLflow's client and store costs a tenth of a
+# second; a worker process of a sweep logs many jobs).
+_TRACKERS: dict[tuple[str, str | None], Tracker] = {}
+
+
 def sweep_parent(state: SweepState) -> tuple[Tracker, str, str]:
     """(Tracker, experiment id, parent run id) of the sweep, made by the first job that logs.
 
@@ -111,11 +116,17 @@ def sweep_parent(state: SweepState) -> tuple[Tracker, str, str]:
     that two sweeps sharing one store take turns too (else the sweep's own).
     """
     assert state.tracking_uri is not None and state.experiment is not None
+    key = (state.tracking_uri, state.artifact_location)
+    ids = sweep_run_ids(state)
+    if key in _TRACKERS and ids is not None:  # every job of this process after the first
+        return _TRACKERS[key], ids[0], ids[1]
     record = state.folder / "mlflow.json"
     database = sqlite_path(state.tracking_uri)
     lock = state.folder / "mlflow.lock" if database is None else Path(f"{database}.lock")
     with file_lock(lock):
-        tracker = Tracker(state.tracking_uri, state.artifact_location)
+        if key not in _TRACKERS:
+            _TRACKERS[key] = Tracker(state.tracking_uri, state.artifact_location)
+        tracker = _TRACKERS[key]
         ids = sweep_run_ids(state)
         if ids is not None:
             return tracker, ids[0], ids[1]
