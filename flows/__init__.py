@@ -16,7 +16,13 @@ module              what it is for
 ``console``         what the commands print: summary, schedule, progress, one-line errors
 ``sweep_callback``  the Hydra callback of a sweep (start, summary, exit code)
 ``sweep_state``     what a sweep's jobs share on disk: state, identity, job records
+``sweep_report``    the sweep's report, drawn in a process of its own at its end
+``sweep_timing``    the sweep's timing line (wall, planner, the rest's share)
+``launcher``        the default launcher of a sweep: every core, or a Dask cluster
+``compose``         a sweep's job configs, composed once per set of group choices
+``run_job``         one job the way Hydra's ``run_job`` runs it, with fewer copies
 ``servers``         Prefect servers we start: spawned, watched, shared by a sweep, stopped
+``prefect_template`` the empty Prefect database every new Prefect home copies
 ``services``        ``twostep-services``: long-lived Prefect server and MLflow UI
 ``tracking``        MLflow: one interface (:mod:`flows.tracking.runs`), its writers
 ``locations``       the local files and folders behind URIs; whether they can be written

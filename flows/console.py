@@ -145,10 +145,13 @@ def eta_seconds(state: SweepState, records: list[dict[str, Any]], elapsed: float
     total, done = state.total_jobs, len(records)
     if total is None or not 0 < done < total:
         return None
+    timed = [r for r in records if isinstance(r.get("job_wall_time_s"), int | float)]
+    # A worker's first job also paid its process's one-time start (the first flow run's
+    # client set-up, the first MLflow client): left out once a later job has finished.
+    later = [r for r in timed if (r.get("launch") or {}).get("worker_job") != 0]
     times = [
         float(r["job_wall_time_s"]) - float(r.get("server_wait_s") or 0.0)
-        for r in records
-        if isinstance(r.get("job_wall_time_s"), int | float)
+        for r in later or timed
     ]
     left = total - done
     if not times or not state.parallel:

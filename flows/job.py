@@ -292,21 +292,6 @@ def execute_job(
     return outcome
 
 
-def needs_computing(cfg: object) -> bool:
-    """Whether the job of ``cfg`` would be computed, not read back from the job store
-    (the twostep launcher starts the sweep's Prefect server early for such a job). Reads
-    the store only: no lock taken, nothing imported."""
-    config = job_config(cfg)
-    typed_cfg = typed(cfg)
-    if _input_problem(typed_cfg) is not None:
-        return False  # a job with bad input fails before any work
-    if not typed_cfg.orchestration.reuse_results:
-        return True
-    key = job_key(config, job_inputs(config))
-    stored = JobStore(str(typed_cfg.orchestration.job_store)).load(key)
-    return stored is None or not is_complete_result(stored)
-
-
 def _input_problem(cfg: TwostepConfig) -> str | None:
     """What is wrong with the job's input before any work (None: nothing found): values
     out of range, a data root, domain or task that is not there (:func:`check_job`)."""

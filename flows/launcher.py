@@ -78,6 +78,9 @@ class LaunchContext:
     singleton_state: dict[str, Any]
     composer: SweepComposer
     argv: list[str]
+    # The sweep's first job will be computed: workers import what jobs use before their
+    # first job (meanwhile the server starts), so that no job's time holds the imports.
+    warm_first: bool = False
 
 
 # ----------------------------------------------------------------- what a job reports
@@ -158,11 +161,31 @@ def _die_with_parent() -> None:
                 os._exit(1)
 
 
+def _at_exit() -> None:
+    """A worker's end: what its jobs queued for the Prefect server (logs, events) is sent
+    before the server stops (a forked worker ends without running ``atexit``)."""
+    if "flows.prefect_flow" in sys.modules:
+        from flows.prefect_flow import flush_to_server
+
+        flush_to_server()
+
+
+def init_forked_worker() -> None:
+    """A forked worker's start: it holds the launching process's state already."""
+    import multiprocessing.util
+
+    _die_with_parent()
+    multiprocessing.util.Finalize(None, _at_exit, exitpriority=10)
+
+
 def init_worker(payload: bytes) -> None:
     """A worker's start: the sweep's Hydra state, once; what its jobs will import is
     imported meanwhile (:func:`warm_up`)."""
     global _WORKER
+    import multiprocessing.util
+
     _die_with_parent()
+    multiprocessing.util.Finalize(None, _at_exit, exitpriority=10)
     context: LaunchContext = pickle.loads(payload)
     sys.argv = list(context.argv)  # what the runs record as their source
     setup_globals()
@@ -170,7 +193,10 @@ def init_worker(payload: bytes) -> None:
     context.task_function = _task_function(context.task_function)
     configure_log(context.config.hydra.hydra_logging, context.config.hydra.verbose)
     _WORKER = context
-    threading.Thread(target=warm_up, args=(context.config,), daemon=True).start()
+    if context.warm_first:
+        warm_up(context.config)
+    else:  # maybe nothing to compute: the first job does not wait for it
+        threading.Thread(target=warm_up, args=(context.config,), daemon=True).start()
 
 
 def warm_up(config: DictConfig) -> None:
@@ -183,7 +209,8 @@ def warm_up(config: DictConfig) -> None:
     state = SweepState.load(Path(str(config.hydra.sweep.dir)))
     modules = ["flows.job", "twostep.methods.twostep"]
     if state is not None and (state.server or state.prefect_api_url):
-        modules.append("flows.prefect_flow")
+        # with the engines a flow run imports at its first run
+        modules += ["flows.prefect_flow", "prefect.flow_engine", "prefect.task_engine"]
     if state is not None and state.tracking_uri:
         modules += ["mlflow.tracking", "mlflow.store.tracking.sqlalchemy_store"]
     for module in modules:
@@ -191,19 +218,19 @@ def warm_up(config: DictConfig) -> None:
             importlib.import_module(module)
 
 
-def start_server_early(context: LaunchContext, first: tuple[int, list[str]]) -> None:
-    """Start the sweep's Prefect server now, while the workers start, when the sweep's
-    first job will be computed (a sweep whose jobs are all in the job store still starts
-    none). Otherwise the first job that needs it starts it."""
+def start_server_early(context: LaunchContext, first: tuple[int, list[str]]) -> bool:
+    """Whether the sweep's first job will be computed; if so, start the sweep's Prefect
+    server now (when it starts one), while the workers start. A sweep whose first job is
+    in the job store starts none here: its first job that needs it does."""
     from flows.sweep_state import SweepState
 
     state = SweepState.load(Path(str(context.config.hydra.sweep.dir)))
-    if state is None or state.server is None:
-        return
+    if state is None:
+        return False
     from hydra.core.hydra_config import HydraConfig
 
-    from flows.job import needs_computing
     from flows.servers import sweep_server
+    from flows.store import stored
 
     index, overrides = first
     config = context.composer.compose(context.config, overrides)
@@ -217,14 +244,15 @@ def start_server_early(context: LaunchContext, first: tuple[int, list[str]]) -> 
         task_cfg = copy.deepcopy(config)
         with open_dict(task_cfg):
             del task_cfg["hydra"]
-        needed = needs_computing(task_cfg)
+        needed = not stored(task_cfg)
     except Exception:  # the job will say what is wrong with it
         needed = False
     finally:
         hydra.cfg = previous
-    if needed:
+    if needed and state.server is not None:
         with contextlib.suppress(Exception):  # the first job then tries and reports
             sweep_server(state)
+    return needed
 
 
 def run_in_worker(index: int, overrides: Sequence[str]) -> JobReturn:
@@ -336,14 +364,8 @@ def launch(
             configure_log(config.hydra.hydra_logging, config.hydra.verbose)
         return returns
     log.info(f"Launching {len(jobs)} jobs on {workers} worker processes")
-    start_server_early(context, jobs[0])
-    context.task_function = _task_reference(task_function)
-    pool = ProcessPoolExecutor(
-        max_workers=workers,
-        mp_context=get_context("spawn"),
-        initializer=init_worker,
-        initargs=(_payload(context),),
-    )
+    context.warm_first = start_server_early(context, jobs[0])
+    pool = _pool(context, workers)
     futures: list[Future[JobReturn]] = []
     try:
         futures = [pool.submit(run_in_worker, index, overrides) for index, overrides in jobs]
@@ -358,6 +380,29 @@ def launch(
         raise
     finally:
         pool.shutdown(wait=True)
+
+
+def _pool(context: LaunchContext, workers: int) -> ProcessPoolExecutor:
+    """The worker processes: forked from this one where that is safe (Linux, no other
+    thread here), so that they start with what this process imported and composed (with
+    the sweep's first job to compute, it imports what the jobs use first: once for all
+    workers, while the server starts); otherwise started fresh (``spawn``), each given the
+    sweep's Hydra state and importing what it needs."""
+    global _WORKER
+    if context.warm_first:
+        warm_up(context.config)
+    if sys.platform.startswith("linux") and threading.active_count() == 1:
+        _WORKER = context  # the forked workers' copy of this process holds it
+        return ProcessPoolExecutor(
+            max_workers=workers, mp_context=get_context("fork"), initializer=init_forked_worker
+        )
+    context.task_function = _task_reference(context.task_function)
+    return ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=get_context("spawn"),
+        initializer=init_worker,
+        initargs=(_payload(context),),
+    )
 
 
 def _result(future: Future[JobReturn], overrides: Sequence[str]) -> JobReturn:

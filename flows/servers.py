@@ -46,7 +46,10 @@ if TYPE_CHECKING:
     from flows.sweep_state import SweepState
 
 # Server-side services a sweep does not use: schedules, deployments, work pools, pauses.
-# The task run recorder and event persister stay on: they make task runs visible.
+# The task run recorder stays on: it records the task runs (from their events). A server
+# without the UI (a sweep's own) does not keep the events themselves either (the event
+# persister: a third of the server's work per job); one with the UI
+# (``twostep-services``) does, for its events pages.
 _IDLE_SERVICES = (
     "SCHEDULER",
     "LATE_RUNS",
@@ -138,6 +141,7 @@ def server_environment(
     )
     for service in _IDLE_SERVICES:
         env[f"PREFECT_SERVER_SERVICES_{service}_ENABLED"] = "false"
+    env["PREFECT_SERVER_SERVICES_EVENT_PERSISTER_ENABLED"] = "true" if ui else "false"
     # A server must never talk to another server.
     env.pop("PREFECT_API_URL", None)
     return env

@@ -52,6 +52,18 @@ def job_key(config: Mapping[str, Any], inputs: Mapping[str, str] | None = None) 
     return identity.job_key(config, inputs)
 
 
+def stored(cfg: Any) -> bool:
+    """Whether the job of ``cfg`` (a job's config, without ``hydra``) has a whole result
+    in its job store and reuses it: a read, no lock taken, nothing heavy imported (the
+    twostep launcher asks about a sweep's first job before its workers start)."""
+    config = job_config(cfg)
+    orchestration = config.get("orchestration") or {}
+    if not orchestration.get("reuse_results", True):
+        return False
+    found = JobStore(str(orchestration["job_store"])).load(job_key(config, job_inputs(config)))
+    return found is not None and identity.is_complete_result(found)
+
+
 class JobStore:
     """``<root>/<job key>/result.json`` (+ ``config.json``) for every finished job.
 

@@ -237,3 +237,24 @@ def test_worker_count() -> None:
     assert worker_count(1) == 1 and worker_count(3) == 3
     assert worker_count(-1) == cores and worker_count(-cores - 5) == 1
     assert worker_count(8, jobs=2) == 2 and worker_count(None, jobs=1) == 1
+
+
+def test_the_estimate_leaves_out_a_workers_first_job_once_a_later_one_finished(
+    tmp_path: Path,
+) -> None:
+    """A worker's first job also paid its process's start (25 s here): with a later job of
+    2 s finished, 4 jobs left on 2 workers are 2 x 2 s, not 2 x 13.5 s."""
+    from flows.console import progress_line
+    from flows.sweep_state import SweepState
+
+    state = SweepState(str(tmp_path), time.time() - 30, os.getpid(), total_jobs=6, parallel=2)
+    first = {"status": "success", "job_wall_time_s": 25.0, "launch": {"worker": 1, "worker_job": 0}}
+    record_job(tmp_path, 0, first)
+    assert progress_line(state, state.started_at + 30).endswith("~1:15 left]")  # 3 x 25 s
+    record_job(tmp_path, 1, {**first, "launch": {"worker": 2, "worker_job": 0}})
+    later = {"status": "success", "job_wall_time_s": 2.0, "launch": {"worker": 1, "worker_job": 1}}
+    record_job(tmp_path, 2, later)
+    assert (
+        progress_line(state, state.started_at + 30)
+        == "[3/6 done | 0 failed | 0:30 elapsed, ~0:04 left]"
+    )

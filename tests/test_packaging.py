@@ -39,7 +39,7 @@ def test_every_package_of_the_source_tree_is_in_the_wheel() -> None:
     setuptools = tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]
     in_tree = {
         ".".join(init.parent.relative_to(REPO).parts)
-        for top in ("twostep", "flows")
+        for top in ("twostep", "flows", "hydra_plugins")
         for init in (REPO / top).rglob("__init__.py")
     }
     mapped = {"flows.conf": "conf", "twostep.data": "data"}
