@@ -150,8 +150,7 @@ def eta_seconds(state: SweepState, records: list[dict[str, Any]], elapsed: float
     # client set-up, the first MLflow client): left out once a later job has finished.
     later = [r for r in timed if (r.get("launch") or {}).get("worker_job") != 0]
     times = [
-        float(r["job_wall_time_s"]) - float(r.get("server_wait_s") or 0.0)
-        for r in later or timed
+        float(r["job_wall_time_s"]) - float(r.get("server_wait_s") or 0.0) for r in later or timed
     ]
     left = total - done
     if not times or not state.parallel:
