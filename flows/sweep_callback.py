@@ -186,6 +186,7 @@ class SweepCallback(Callback):
     def __init__(self) -> None:
         self._cluster: Any = None
         self._state: SweepState | None = None
+        self._drawing: Drawing | None = None
         SweepCallback.composed = True
 
     def __getstate__(self) -> dict[str, Any]:
@@ -195,6 +196,7 @@ class SweepCallback(Callback):
     def __setstate__(self, state: dict[str, Any]) -> None:
         self._cluster = None
         self._state = None
+        self._drawing = None
 
     def on_run_start(self, config: DictConfig, **kwargs: Any) -> None:
         # Before Hydra creates the run directory: a read-only output root is one line.
@@ -266,6 +268,8 @@ class SweepCallback(Callback):
             state.dask_address = self._dask_address(orchestration)
         state.save()
         self._state = state
+        # Ready to draw the sweep's report at its end (imports matplotlib meanwhile).
+        self._drawing = Drawing(sweep_dir)
         print(header(state), flush=True)
 
     def _dask_address(self, orchestration: Any) -> str:
@@ -299,8 +303,13 @@ class SweepCallback(Callback):
             "sweep_wall_time_s": round(time.time() - state.started_at, 3),
             **sweep_timing(records, time.time() - state.started_at),
         }
-        # The report draws in a process of its own meanwhile (flows/sweep_report.py).
-        drawing = Drawing(Path(state.sweep_dir)) if records else None
+        # The report draws in its own process meanwhile (flows/sweep_report.py).
+        drawing, self._drawing = self._drawing, None
+        if drawing is not None and records:
+            drawing.start()
+        elif drawing is not None:
+            drawing.cancel()
+            drawing = None
         info = read_info(state.folder / "server.json")
         api_url = state.prefect_api_url or (info.api_url if info else None)
         if api_url and is_healthy(api_url):
