@@ -93,7 +93,7 @@ def _prepare() -> None:
     import matplotlib.backends.backend_pdf
     import matplotlib.backends.backend_svg
     import matplotlib.font_manager
-    import matplotlib.pyplot  # noqa: F401
+    import matplotlib.pyplot
 
     import twostep.report  # noqa: F401
 
