@@ -417,8 +417,9 @@ def _result(future: Future[JobReturn], overrides: Sequence[str]) -> JobReturn:
 _DASK_CONTEXTS: dict[str, LaunchContext] = {}
 
 
-def run_on_dask_worker(payload: bytes, digest: str, index: int, overrides: list[str]) -> JobReturn:
-    """One job on a Dask worker: the sweep's Hydra state is set up once per worker."""
+def prepare_dask_worker(payload: bytes, digest: str) -> None:
+    """A Dask worker's start for this sweep: its Hydra state, and (the sweep's first job to
+    compute) what the jobs use imported, before any job."""
     global _WORKER
     context = _DASK_CONTEXTS.get(digest)
     if context is None:
@@ -429,8 +430,16 @@ def run_on_dask_worker(payload: bytes, digest: str, index: int, overrides: list[
         context.task_function = _task_function(context.task_function)
         configure_log(context.config.hydra.hydra_logging, context.config.hydra.verbose)
         _DASK_CONTEXTS[digest] = context
+        if context.warm_first:
+            warm_up(context.config)
     _WORKER = context
-    return _portable(_run_one(context, index, overrides))
+
+
+def run_on_dask_worker(payload: bytes, digest: str, index: int, overrides: list[str]) -> JobReturn:
+    """One job on a Dask worker (prepared once per worker: :func:`prepare_dask_worker`)."""
+    prepare_dask_worker(payload, digest)
+    assert _WORKER is not None
+    return _portable(_run_one(_WORKER, index, overrides))
 
 
 def _launch_dask(
@@ -443,6 +452,7 @@ def _launch_dask(
 
     from distributed import Client, LocalCluster
 
+    context.warm_first = start_server_early(context, jobs[0])
     context.task_function = _task_reference(context.task_function)
     payload = _payload(context)
     digest = hashlib.sha256(payload).hexdigest()
@@ -467,6 +477,8 @@ def _launch_dask(
     log.info(f"Launching {len(jobs)} jobs on {where}")
     try:
         shared = client.scatter(payload, broadcast=True)  # type: ignore[no-untyped-call]
+        # Every worker set up (and importing what jobs use) at once, while the server starts.
+        client.run(prepare_dask_worker, payload, digest)  # type: ignore[no-untyped-call]
         futures = [
             client.submit(
                 run_on_dask_worker, shared, digest, index, overrides, pure=False, key=f"job-{index}"
