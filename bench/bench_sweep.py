@@ -26,6 +26,9 @@ Variants: Prefect on/off x MLflow on/off (``on``: both, ``prefect``, ``mlflow``,
 time by package (Hydra/OmegaConf, Prefect, MLflow, the library, waits).
 
     .venv/bin/python bench/bench_sweep.py --save docs/bench/sweep.txt --json docs/bench/sweep.json
+    .venv/bin/python bench/bench_sweep.py --jobs 20 100 400 --variants on off --launchers all basic \
+        --basic-max-jobs 20 --on-max-jobs 100 --no-small-scaling \
+        --save docs/bench/sweep.txt --json docs/bench/sweep.json        # the docs' run (shared machine)
     .venv/bin/python bench/bench_sweep.py --quick                      # 20 and 100 jobs, fewer variants
     .venv/bin/python bench/bench_sweep.py --jobs 100 --variants on off --launchers all one
 
@@ -58,6 +61,10 @@ from pathlib import Path
 from typing import Any
 
 REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+
+from bench import record as bench_record  # noqa: E402
+
 TWOSTEP = Path(sys.executable).parent / "twostep"
 COMMAND = TWOSTEP  # --command: another build's twostep (e.g. to compare two versions)
 
@@ -266,6 +273,8 @@ def analyse(run: dict[str, Any]) -> dict[str, Any]:
             job_start = end - float(record["job_wall_time_s"])
             compose = float(launch.get("compose_s") or 0.0)
             launched = launch.get("launched_at")
+            hydra: float | None
+            between: float | None
             if launched is not None:
                 hydra = max(0.0, job_start - float(launched) - compose)
                 between = float(launched) - previous["finished_at"] if previous else None
@@ -419,6 +428,76 @@ def profile_table(folder: Path) -> list[tuple[str, float]]:
     return sorted(totals.items(), key=lambda item: -item[1])
 
 
+# ----------------------------------------------------------------- the targets
+
+
+def targets(rows: list[dict[str, Any]]) -> list[str]:
+    """Issue 38's targets against this run's rows, each ``met`` or ``MISSED`` (or ``not
+    run``), with the load it was measured at: on a shared machine a miss may be the load's."""
+
+    def small(variant: str, jobs: int, launcher: str = "all") -> dict[str, Any] | None:
+        return next(
+            (r for r in rows if r.get("grid") == "small" and r["variant"] == variant
+             and r["jobs"] == jobs and r["launcher"] == launcher),
+            None,
+        )  # fmt: skip
+
+    def verdict(ok: bool) -> str:
+        return "met   " if ok else "MISSED"
+
+    def at(row: dict[str, Any]) -> str:
+        return f"(load {row['load_before'][0]:.1f}/{row['load_after'][0]:.1f})"
+
+    lines = []
+    for variant, limit in (("on", 0.3), ("off", 0.1)):
+        row = small(variant, 100)
+        what = f"100 jobs, Prefect and MLflow {variant}: median overhead <= {limit} s"
+        if row is None:
+            lines.append(f"not run {what}")
+            continue
+        value = row["overhead_median_s"]
+        lines.append(
+            f"{verdict(value <= limit)} {what}: {value:.2f} s (end to end per job "
+            f"{row['end_to_end_per_job_s']:.2f} s) {at(row)}"
+        )
+    for variant in ("on", "off"):
+        a, b = small(variant, 20), small(variant, 400)
+        what = f"no growth 20 -> 400 jobs ({variant})"
+        if a is None or b is None:
+            lines.append(f"not run {what}")
+            continue
+        ratio = b["overhead_median_s"] / max(a["overhead_median_s"], 1e-9)
+        flat = ratio <= 1.25 or b["overhead_median_s"] - a["overhead_median_s"] <= 0.03
+        lines.append(
+            f"{verdict(flat)} {what}: median {a['overhead_median_s']:.2f} -> "
+            f"{b['overhead_median_s']:.2f} s, trend over the 400 {b['trend_s_per_100_jobs']:+.3f} s"
+            f" per 100 jobs {at(a)} {at(b)}"
+        )
+    servers = [r for r in rows if r.get("kind") == "prefect_server"]
+    if servers:
+        worst = max(r["fresh_s"] for r in servers)
+        lines.append(
+            f"{verdict(worst <= 10)} a fresh Prefect server ready <= 10 s: {worst:.1f} s (the "
+            f"slowest of {len(servers)}; load {servers[0]['load_before'][0]:.1f})"
+        )
+    else:
+        lines.append("not run a fresh Prefect server ready <= 10 s")
+    for grid_name, title in (("planner", "planner-dominated jobs"), ("small", "small jobs")):
+        one = next((r for r in rows if r.get("grid") == grid_name and r["launcher"] == "w1"), None)
+        two = next((r for r in rows if r.get("grid") == grid_name and r["launcher"] == "w2"), None)
+        if one is None or two is None:
+            lines.append(f"not run 1 -> 2 workers on {title}")
+            continue
+        speedup = one["wall_s"] / two["wall_s"]
+        near = speedup >= 1.7 if grid_name == "planner" else speedup > 1.0
+        goal = "near 2x" if grid_name == "planner" else "faster"
+        lines.append(
+            f"{verdict(near)} 1 -> 2 workers on {title} ({goal}): x{speedup:.2f} "
+            f"{at(one)} {at(two)}"
+        )
+    return lines
+
+
 # ----------------------------------------------------------------- printing
 
 
@@ -430,6 +509,7 @@ class Report:
     def __call__(self, line: str = "") -> None:
         print(line, flush=True)
         self.lines.append(line)
+        self.write()  # as it goes: a run cut short keeps what it measured
 
     def write(self) -> None:
         if self.save is not None:
@@ -454,6 +534,10 @@ def main() -> int:
         "--scaling", nargs="*", default=["w1", "w2", "dask2"], choices=list(LAUNCHERS),
         help="launchers for jobs/minute (Prefect and MLflow on, the middle sweep size)",
     )  # fmt: skip
+    parser.add_argument("--on-max-jobs", type=int, default=None,
+                        help="Prefect and MLflow on (and one of them) only up to this many jobs")  # fmt: skip
+    parser.add_argument("--no-small-scaling", dest="small_scaling", action="store_false",
+                        help="the workers' scaling on the planner-dominated jobs only")  # fmt: skip
     parser.add_argument("--basic-max-jobs", type=int, default=100,
                         help="Hydra's basic launcher only up to this many jobs (it is slow)")  # fmt: skip
     parser.add_argument("--quick", action="store_true", help="20 and 100 jobs, fewer variants")
@@ -478,6 +562,7 @@ def main() -> int:
         args.scaling = ["w1", "w2"]
         args.servers = 1
 
+    run_record = bench_record.started()
     out = Report(args.save)
     out(f"# {shlex.join(['python', *sys.argv])}")
     folder = Path(tempfile.mkdtemp(prefix="twostep-bench-sweep-"))
@@ -560,25 +645,40 @@ def main() -> int:
             f"  {row['load_before'][0]:.1f}/{row['load_after'][0]:.1f}"
         )
 
-    for jobs in args.jobs:
-        for variant in args.variants:
-            for launcher in args.launchers:
-                if launcher == "basic" and jobs > args.basic_max_jobs:
+    def sizes(chosen: list[int]) -> None:
+        for jobs in chosen:
+            for variant in args.variants:
+                if variant != "off" and args.on_max_jobs and jobs > args.on_max_jobs:
                     continue
-                show(sweep(jobs, variant, launcher))
-    out("   P M: Prefect, MLflow on (-: off); trend: overhead's change over the sweep, s per")
-    out("   100 jobs; 1st: the first job's end after the command started (s); end: from the")
-    out("   last job's end to the command's (s: summary, report, MLflow parent run); cpu/j: CPU")
-    out("   seconds of every process of the sweep (with its servers) beyond the planner's")
-    out("   wall time, per job")
+                for launcher in args.launchers:
+                    if launcher == "basic" and jobs > args.basic_max_jobs:
+                        continue
+                    show(sweep(jobs, variant, launcher))
 
-    middle = sorted(args.jobs)[len(args.jobs) // 2]
+    def legend() -> None:
+        out("   P M: Prefect, MLflow on (-: off); trend: overhead's change over the sweep, s per")
+        out("   100 jobs; 1st: the first job's end after the command started (s); end: from the")
+        out(
+            "   last job's end to the command's (s: summary, report, MLflow parent run); cpu/j: CPU"
+        )
+        out("   seconds of every process of the sweep (with its servers) beyond the planner's")
+        out("   wall time, per job")
+
+    # The largest sweeps (growth) last: the others' figures come first.
+    ordered = sorted(args.jobs)
+    middle = ordered[len(ordered) // 2]
+    largest = [j for j in ordered if j > 100 and len(ordered) > 1]
+    sizes([j for j in ordered if j not in largest])
+    legend()
+
     if args.scaling:
         for title, jobs in (
             (f"{middle} small jobs (orchestration dominates)", middle),
             ("15 termes jobs (the planner dominates)", PLANNER_GRID),
         ):
             if jobs is PLANNER_GRID and not args.planner_grid:
+                continue
+            if jobs is not PLANNER_GRID and not args.small_scaling:
                 continue
             out()
             out(f"## Workers: jobs per minute, {title}, Prefect and MLflow on")
@@ -594,6 +694,13 @@ def main() -> int:
                     f"{row['load_after'][0]:.1f}"
                 )
             out(f"  {row['command']}  (+ the launcher's overrides)")
+
+    if largest:
+        out()
+        out(f"## Sweeps of {', '.join(map(str, largest))} jobs (growth), as above")
+        out(header)
+        out("-" * len(header))
+        sizes(largest)
 
     out()
     out("## Commands (one per size and variant; the launchers add their overrides)")
@@ -618,11 +725,15 @@ def main() -> int:
         out(f"  (profiled wall {row['wall_s']:.1f} s; cProfile slows Python code down)")
 
     out()
+    out("## Targets (issue 38)")
+    for line in targets(rows):
+        out(f"  {line}")
+
+    out()
     out(f"# finished {time.strftime('%Y-%m-%d %H:%M:%S')}, load average {load()}")
     out.write()
     if args.json is not None:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(rows, indent=1) + "\n")
+        bench_record.write(args.json, run_record, rows)
     if not args.keep:
         shutil.rmtree(folder, ignore_errors=True)
     else:

@@ -45,7 +45,7 @@ from omegaconf import DictConfig, open_dict
 from flows.compose import SweepComposer
 from flows.run_job import run_job
 
-log = logging.getLogger("hydra")
+log = logging.getLogger(__name__)
 
 
 def available_cores() -> int:

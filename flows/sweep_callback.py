@@ -99,6 +99,7 @@ def _check_before_writing(config: DictConfig, run_dir: Path) -> None:
 # The launchers' own lines ("Launching 8 jobs locally", "#3 : domain=...") between the
 # progress lines: shown only with hydra.verbose.
 LAUNCHER_LOGGERS = (
+    "flows.launcher",
     "hydra._internal.core_plugins.basic_launcher",
     "hydra_plugins.hydra_joblib_launcher._core",
     "hydra_plugins.hydra_joblib_launcher.joblib_launcher",

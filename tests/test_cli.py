@@ -146,4 +146,4 @@ def test_a_sweep_counts_timeouts_and_hides_the_launchers_lines(
         capture_output=True, text=True, cwd=tmp_path, timeout=600,
     )  # fmt: skip
     assert verbose.returncode == 0, verbose.stderr
-    assert "Launching 2 jobs locally" in verbose.stdout + verbose.stderr
+    assert "Launching 2 jobs" in verbose.stdout + verbose.stderr

@@ -256,5 +256,5 @@ def test_the_estimate_leaves_out_a_workers_first_job_once_a_later_one_finished(
     record_job(tmp_path, 2, later)
     assert (
         progress_line(state, state.started_at + 30)
-        == "[3/6 done | 0 failed | 0:30 elapsed, ~0:04 left]"
+        == "[3/6: 3 ok, 0 failed, 0 timed out | 0:30 elapsed, ~0:04 left]"
     )

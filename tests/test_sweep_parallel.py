@@ -64,7 +64,12 @@ def job_runs(out: Path) -> list[Any]:
 def test_a_parallel_sweep_gives_what_a_one_process_sweep_gives(tmp_path: Path) -> None:
     data = make_data(tmp_path / "data")
     sweeps = {}
-    for name, extra in (("parallel", []), ("one", ["hydra.launcher.n_jobs=1"])):
+    launchers = {
+        "parallel": [],
+        "one": ["hydra.launcher.n_jobs=1"],
+        "basic": ["hydra/launcher=basic"],
+    }
+    for name, extra in launchers.items():
         out = tmp_path / name
         done = run([*GRID, f"data.root={data}", f"output.root={out}", *extra])
         assert done.returncode == 0, done.stdout + done.stderr
@@ -85,6 +90,7 @@ def test_a_parallel_sweep_gives_what_a_one_process_sweep_gives(tmp_path: Path) -
     assert len({r["launch"]["worker"] for r in records(sweeps["one"])}) == 1
     parallel, one = results(sweeps["parallel"]), results(sweeps["one"])
     assert len(parallel) == JOBS and parallel == one  # the same plans, lengths and keys
+    assert parallel == results(sweeps["basic"])  # as Hydra's own basic launcher gives
     assert all(r["success"] and r["plans"] and r["job_key"] for r in parallel.values())
 
 
