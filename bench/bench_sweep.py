@@ -64,6 +64,7 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from bench import record as bench_record  # noqa: E402
+from bench.bench_orchestration import server_startup  # noqa: E402
 
 TWOSTEP = Path(sys.executable).parent / "twostep"
 COMMAND = TWOSTEP  # --command: another build's twostep (e.g. to compare two versions)
@@ -352,23 +353,6 @@ def analyse(run: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-# ----------------------------------------------------------------- the Prefect server
-
-
-def server_start(home: Path, env: dict[str, str]) -> float:
-    """Seconds from spawning the sweep's kind of Prefect server to a healthy API."""
-    code = (
-        "import os, time; from flows.servers import ServerSettings, spawn_server, "
-        "stop_server, wait_until_healthy; t = time.perf_counter(); "
-        f"info = spawn_server(ServerSettings(home={str(home)!r}, startup_timeout_s=600), os.getpid()); "
-        "wait_until_healthy(info); print(time.perf_counter() - t); stop_server(info)"
-    )
-    done = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=REPO, check=True
-    )
-    return float(done.stdout.strip().splitlines()[-1])
-
-
 # ----------------------------------------------------------------- the profile
 
 CATEGORIES = (  # (what, path fragments), first match wins
@@ -498,6 +482,61 @@ def targets(rows: list[dict[str, Any]]) -> list[str]:
     return lines
 
 
+# ----------------------------------------------------------------- the results page
+
+
+def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
+    """The results page of a ``--json`` record (bench.results): the sweeps' figures, the
+    Prefect server's start, the workers' scaling, the targets."""
+    (data,) = records
+    rows = data["rows"]
+    sweeps = [r for r in rows if "jobs" in r and r.get("grid") == "small"]
+    lines = [
+        "## Per job beyond planning",
+        "",
+        "Each sweep through the `twostep` command in a fresh output root (small SA and "
+        "plan-deal TwoStep jobs on blocksworld and grippers, so that orchestration "
+        "dominates). Overhead: the time a job held its worker minus its planner time "
+        "(median and p90 over the jobs but each worker's first); end to end: (wall - "
+        "planner / workers) / jobs; trend: the overhead's change over the sweep. The load "
+        "average (1 min) before and after each sweep says what the figures are worth on "
+        "this shared machine (2 cores).",
+        "",
+    ]
+    lines += bench_record.table(
+        ["jobs", "Prefect", "MLflow", "launcher", "workers", "wall s", "planner s",
+         "overhead median s", "p90 s", "end to end s", "trend s/100 jobs", "jobs/min", "load"],
+        [[r["jobs"], "on" if r["prefect"] else "off", "on" if r["mlflow"] else "off",
+          r["launcher"], r["workers"], f"{r['wall_s']:.1f}", f"{r['planner_total_s']:.1f}",
+          f"**{r['overhead_median_s']:.2f}**", f"{r['overhead_p90_s']:.2f}",
+          f"{r['end_to_end_per_job_s']:.2f}", f"{r['trend_s_per_100_jobs']:+.3f}",
+          f"{r['jobs_per_minute']:.0f}",
+          f"{r['load_before'][0]:.1f} / {r['load_after'][0]:.1f}"] for r in sweeps],
+    )  # fmt: skip
+    servers = [r for r in rows if r.get("kind") == "prefect_server"]
+    if servers:
+        lines += ["", "## A sweep's Prefect server: start to a healthy API", ""]
+        lines += bench_record.table(
+            ["fresh database s", "warm s", "load"],
+            [[f"{r['fresh_s']:.1f}", f"{r['warm_s']:.1f}", f"{r['load_before'][0]:.1f}"]
+             for r in servers],
+        )  # fmt: skip
+    scaling = [r for r in rows if r.get("launcher") in ("w1", "w2", "dask2")]
+    if scaling:
+        lines += ["", "## Workers", "", "Prefect and MLflow on; `w1`, `w2`: "
+                  "`hydra.launcher.n_jobs=1`, `2`; `dask2`: a local Dask cluster of 2 worker "
+                  "processes.", ""]  # fmt: skip
+        lines += bench_record.table(
+            ["jobs", "launcher", "workers", "wall s", "planner s", "jobs/min", "load"],
+            [[f"{r['jobs']} ({r['grid']})", r["launcher"], r["workers"], f"{r['wall_s']:.1f}",
+              f"{r['planner_total_s']:.1f}", f"{r['jobs_per_minute']:.1f}",
+              f"{r['load_before'][0]:.1f} / {r['load_after'][0]:.1f}"] for r in scaling],
+        )  # fmt: skip
+    lines += ["", "## Targets (issue 38)", ""]
+    lines += [f"- {line}" for line in targets(rows)]
+    return lines
+
+
 # ----------------------------------------------------------------- printing
 
 
@@ -610,8 +649,8 @@ def main() -> int:
     out("## Prefect server start (the sweep's kind: no UI, idle services off)")
     for i in range(args.servers):
         home = folder / f"server-{i}"
-        fresh, before = server_start(home, env), load()
-        warm = server_start(home, env)
+        fresh, before = server_startup(home, env), load()
+        warm = server_startup(home, env)
         out(f"  fresh database {fresh:5.1f} s, warm {warm:5.1f} s   (load average {before})")
         rows.append({"kind": "prefect_server", "fresh_s": fresh, "warm_s": warm,
                      "load_before": before, "machine": host})  # fmt: skip

@@ -107,6 +107,14 @@ PAGES: tuple[Page, ...] = (
         "bench_startup:page",
     ),
     Page(
+        "sweep",
+        "Sweeps end to end",
+        "what a `twostep -m` sweep costs per job beyond planning, with Prefect and MLflow on "
+        "and off, from 20 to 400 jobs; the Prefect server's start; 1 and 2 workers, Dask",
+        ("sweep.json",),
+        "bench_sweep:page",
+    ),
+    Page(
         "execution",
         "Parallel execution length",
         "the exact scorer against a straightforward search on unified-planning's simulator, "
@@ -184,6 +192,7 @@ BENCH_FILES: tuple[BenchFile, ...] = (
     BenchFile("refusals.txt", "python bench/bench_startup.py --repeat 5 --scenarios refusals [--source DIR]", "commands refused before any work: exit code, lines, what was written, wall and CPU time, before and after issue 37 (cited by the README)"),
     BenchFile("resume.txt", "python bench/bench_resume.py", "a sweep, then the same command again reusing every job (cited by the README)"),
     BenchFile("score_cli.txt", "python bench/bench_score_cli.py --repeats 5", "twostep-score's wall and CPU time on four 60-step plans (cited by the README)"),
+    BenchFile("sweep.txt", "python bench/bench_sweep.py --jobs 20 100 400 --variants on off --launchers all basic --basic-max-jobs 20 --on-max-jobs 100 --no-small-scaling --save docs/bench/sweep.txt --json docs/bench/sweep.json", "the printed output of sweep.json, with the phases of a job (cited by the README)"),
     BenchFile("startup.txt", "python bench/bench_startup.py --repeat 3 --scenarios default,logged,cold", "printed output of earlier runs, appended (cited by the README; the page: startup.json)"),
 )  # fmt: skip
 ARCHIVE = BENCH / "archive"

@@ -61,6 +61,7 @@ def job_runs(out: Path) -> list[Any]:
 
 
 @pytest.mark.skipif(available_cores() < 2, reason="a parallel sweep needs 2 cores")
+@pytest.mark.timeout(1200)  # three sweeps, each with its Prefect server, on a busy machine
 def test_a_parallel_sweep_gives_what_a_one_process_sweep_gives(tmp_path: Path) -> None:
     data = make_data(tmp_path / "data")
     sweeps = {}
