@@ -513,6 +513,23 @@ def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
           f"{r['jobs_per_minute']:.0f}",
           f"{r['load_before'][0]:.1f} / {r['load_after'][0]:.1f}"] for r in sweeps],
     )  # fmt: skip
+    if sweeps:
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(8, 4))
+        ax = fig.subplots()
+        for r in sweeps:
+            series = [p for p in r.get("series", []) if not p.get("first")]
+            label = (f"{r['jobs']} jobs, Prefect/MLflow {'on' if r['prefect'] else 'off'}, "
+                     f"{r['launcher']}")  # fmt: skip
+            ax.plot([p["num"] for p in series], [p["overhead_s"] for p in series], ".",
+                    markersize=3, label=label)  # fmt: skip
+        ax.set_xlabel("job number in the sweep")
+        ax.set_ylabel("overhead per job (s): held its worker - planner")
+        ax.set_yscale("log")
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        lines += ["", figure(fig, "overhead", "each job's overhead over the sweep, by sweep")]
     servers = [r for r in rows if r.get("kind") == "prefect_server"]
     if servers:
         lines += ["", "## A sweep's Prefect server: start to a healthy API", ""]
