@@ -94,6 +94,8 @@ def llm_settings(cfg: TwostepConfig) -> LLMSettings:
         timeout_s=float(llm.timeout_s),
         use_cache=bool(llm.use_cache),
         local=bool(llm.local),
+        bundle=Path(llm.bundle) if llm.bundle else None,
+        translator=llm.translator,
     )
 
 
@@ -133,6 +135,28 @@ def check_job(cfg: TwostepConfig) -> None:
         bad = file_problem(path)
         if bad is not None:
             raise JobError(bad)
+    if (
+        cfg.method.name == MethodName.TWOSTEP
+        and cfg.decomposer.name == "llm"
+        and cfg.llm.mode == "bundle"
+    ):
+        check_replay(cfg, problem)
+
+
+def check_replay(cfg: TwostepConfig, problem_path: Path) -> None:
+    """A job that replays a bundle's answers: the bundle holds them (its model, domain,
+    task, N and a run for the seed) for this very task file; else one line saying what
+    is missing, before any work (never a fallback that would look like a result)."""
+    from twostep.replay import BundleError, BundleMiss, load_bundle
+
+    if not cfg.llm.bundle:
+        raise JobError("llm.mode=bundle needs llm.bundle=<folder of a replay bundle>")
+    try:
+        bundle = load_bundle(cfg.llm.bundle)
+        bundle.entry(cfg.domain.name, int(cfg.task), int(cfg.agents), cfg.llm.model, int(cfg.seed))
+        bundle.check_task_file(cfg.domain.name, int(cfg.task), problem_path)
+    except (BundleError, BundleMiss) as error:
+        raise JobError(str(error)) from None
 
 
 def check_task(cfg: TwostepConfig, task: BenchmarkTask) -> None:

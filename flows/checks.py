@@ -133,6 +133,12 @@ def _llm_modes() -> Iterable[str]:
     return MODES
 
 
+def _translators() -> Iterable[str]:
+    from twostep.llm.client import TRANSLATORS
+
+    return TRANSLATORS
+
+
 def _methods() -> Iterable[str]:
     from twostep.methods.registry import METHODS
 
@@ -164,6 +170,7 @@ VALUE_RULES: tuple[Rule, ...] = (
     Rule("method.name", one_of(_methods), "method"),
     Rule("decomposer.name", one_of(_decomposers), "decomposer"),
     Rule("llm.mode", one_of(_llm_modes)),
+    Rule("llm.translator", one_of(_translators)),
     Rule("agents", at_least(1)),
     Rule("planner.time_limit_s", seconds()),
     Rule("planner.memory_limit_mb", memory_mb),

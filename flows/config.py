@@ -95,7 +95,7 @@ class LLMConfig:
     max_tokens: int = _LLM.max_tokens
     api_base: str | None = _LLM.api_base
     api_key_env: str | None = _LLM.api_key_env  # the variable's NAME; never the key itself
-    mode: str = _LLM.mode  # live | replay | scripted
+    mode: str = _LLM.mode  # live | replay | scripted | bundle
     cache_dir: str = str(_LLM.cache_dir)
     script: str | None = None
     max_retries: int = _LLM.max_retries
@@ -103,6 +103,10 @@ class LLMConfig:
     timeout_s: float = _LLM.timeout_s
     use_cache: bool = _LLM.use_cache
     local: bool = _LLM.local  # llm=local: serve the model from an in-process llama.cpp server
+    bundle: str | None = (
+        None  # llm=replay: the replay bundle's folder (twostep-data import-answers)
+    )
+    translator: str = _LLM.translator  # llm | rules: who turns English subgoals into PDDL
 
 
 @dataclass

@@ -241,11 +241,14 @@ def translate_task(
     *,
     helper: int = 1,
     earlier: dict[int, str] | None = None,
+    agents: int | None = None,
 ) -> Any:
     from twostep.decomposers.llm import translate_subgoal
 
     return _llm_call_outcome(
-        lambda: translate_subgoal(client, task, english, seed, helper=helper, earlier=earlier)
+        lambda: translate_subgoal(
+            client, task, english, seed, helper=helper, earlier=earlier, agents=agents
+        )
     )
 
 

@@ -49,6 +49,10 @@ NOT_IDENTITY_KEYS: frozenset[str] = frozenset(
      "planner.grounding_time_limit_s"}
 )  # fmt: skip
 
+# Keys added after jobs were stored, at the value that computes what those jobs computed:
+# left out of the identity, so that the stored jobs keep their keys.
+NEUTRAL_VALUES: dict[str, Any] = {"llm.bundle": None, "llm.translator": "llm"}
+
 # Results with these statuses did not finish their work: never stored, retried by a re-run.
 UNFINISHED_STATUSES: frozenset[str] = frozenset({"error", "llm_error", "failed", "resource_limit"})
 
@@ -112,6 +116,8 @@ def identity_config(config: Mapping[str, Any]) -> dict[str, Any]:
             name = f"{prefix}{key}"
             if not is_identity_key(name) or not is_relevant(name + ".", method, decomposer):
                 continue
+            if name in NEUTRAL_VALUES and value == NEUTRAL_VALUES[name]:
+                continue
             out[str(key)] = keep(value, f"{name}.") if isinstance(value, Mapping) else value
         return out
 
@@ -146,6 +152,10 @@ def job_input_files(config: Mapping[str, Any], problem_path: Path | None) -> dic
         script = llm.get("script") if isinstance(llm, Mapping) else None
         if script:
             files["llm_script"] = Path(str(script))
+        bundle = llm.get("bundle") if isinstance(llm, Mapping) else None
+        if bundle:  # the replayed answers (twostep.replay.bundle.BUNDLE_FILE)
+            folder = Path(str(bundle))
+            files["llm_bundle"] = folder if folder.suffix == ".json" else folder / "bundle.json"
         for prompt in sorted(_PROMPTS.glob("*.txt")):
             files[f"prompt:{prompt.name}"] = prompt
     return files

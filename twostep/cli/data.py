@@ -6,6 +6,10 @@ generators; ``check`` verifies that a data folder is exactly what
 ``generate`` would write; ``scale`` writes larger tasks for scaling benchmarks into a
 folder of the same layout; ``example-plan`` re-plans an in-context example (whose plan
 is a static file of the package). Hand-written files (``expert.yaml``) are never touched.
+
+``import-answers`` reads logs of real model answers (the official TwoStep code's run
+logs: ``--format twostep-official``) into a replay bundle (:mod:`twostep.replay`), which
+``twostep ... decomposer=llm llm=replay llm.bundle=DIR`` replays.
 """
 
 from __future__ import annotations
@@ -142,6 +146,34 @@ def _example_plan(args: argparse.Namespace) -> int:
     return 0
 
 
+def _import_answers(args: argparse.Namespace) -> int:
+    from twostep.replay.importer import AnswerImportError, import_logs
+
+    try:
+        report = import_logs(
+            [Path(p) for p in args.logs],
+            args.model,
+            Path(args.out),
+            log_format=args.format,
+            tasks=Path(args.tasks) if args.tasks else None,
+            append=args.append,
+            allow_truncated=args.allow_truncated,
+        )
+    except AnswerImportError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 1
+    for line in report.lines():
+        print(line)
+    bundle = report.bundle
+    subgoals = sum(len(e.answers) for e in bundle.entries)
+    print(
+        f"{Path(args.out) / 'bundle.json'}: {len(bundle.runs)} run(s), {len(bundle.entries)} "
+        f"task answer(s), {subgoals} subgoal(s)"
+        + ("" if bundle.tasks else " (no --tasks: the task files are not checked on replay)")
+    )
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="twostep-data", description="Build, check and scale the benchmark tasks (data/)."
@@ -180,6 +212,31 @@ def build_parser() -> argparse.ArgumentParser:
     example.add_argument("--alias", default=EXAMPLE_ALIAS, help=f"default: {EXAMPLE_ALIAS}")
     example.add_argument("--time-limit", type=float, default=300.0, help="seconds (default 300)")
     example.set_defaults(run=_example_plan)
+    answers = commands.add_parser(
+        "import-answers",
+        help="read logs of real model answers into a replay bundle (llm=replay llm.bundle=DIR)",
+    )
+    answers.add_argument("logs", nargs="+", metavar="LOG", help="log files, in run order")
+    answers.add_argument(
+        "--format",
+        default="twostep-official",
+        choices=["twostep-official"],
+        help="the logs' format (the official TwoStep code's run logs)",
+    )
+    answers.add_argument("--out", required=True, help="the bundle's folder")
+    answers.add_argument("--model", required=True, help="the model that gave the answers")
+    answers.add_argument(
+        "--tasks",
+        help="the folder of the task files the answers refer to (<domain>/pNN.pddl): "
+        "their digests are kept and a replay on other files is refused",
+    )
+    answers.add_argument("--append", action="store_true", help="add to the bundle in --out")
+    answers.add_argument(
+        "--allow-truncated",
+        action="store_true",
+        help="import a log that ends inside a block without that block (else an error)",
+    )
+    answers.set_defaults(run=_import_answers)
     generate.set_defaults(run=_generate)
     check.set_defaults(run=_check)
     scale.set_defaults(run=_scale)

@@ -2,7 +2,11 @@
 
 For helpers 1..N-1: :func:`generate_subgoal` asks for the helper's English subgoal (the
 answer "none" ends the loop), :func:`translate_subgoal` turns it into a PDDL goal and
-checks it against the task (:mod:`twostep.subgoals`, the rules that need no state).
+checks it against the task (:mod:`twostep.subgoals`, the rules that need no state). With
+``llm.translator=rules`` the translation is the model-free grammar's
+(:mod:`twostep.english`): a sentence it cannot read is a discarded proposal whose reason
+starts with :data:`TRANSLATION_FAILED`. Answers replayed from a bundle (``llm.mode=bundle``)
+carry their source (model, file, line) in the exchange.
 Every prompt and raw answer is kept in the proposal's ``exchanges``; an answer that
 gives no usable subgoal becomes a ``discarded`` proposal with the reason.
 
@@ -19,6 +23,7 @@ request names (:attr:`~twostep.decomposers.base.DecompositionRequest.generate` a
 
 from __future__ import annotations
 
+import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -38,6 +43,8 @@ from twostep.subgoals import SubgoalError, SubgoalStatus, goal_conflict
 
 # The run status of a decomposition whose LLM call failed (result.json ``status``).
 LLM_ERROR = "llm_error"
+# How the reason of a subgoal the rules translator could not read begins.
+TRANSLATION_FAILED = "translation failed"
 
 
 def _exchange(
@@ -59,6 +66,27 @@ def _exchange(
         "reason": None,
         "parsed": None,
         "note": None,
+        **({"source": response.source} if response.source else {}),
+    }
+
+
+def _ask(
+    client: LLMClient, messages: Sequence[Message], seed: int, about: dict[str, object]
+) -> LLMResponse:
+    """One call; ``about`` (what it is for) goes along where the answers come from a
+    replay bundle, which finds them by it."""
+    if client.settings.mode == "bundle":
+        return client.complete(messages, seed, about)
+    return client.complete(messages, seed)
+
+
+def _about(step: str, task: BenchmarkTask, agents: int, helper: int) -> dict[str, object]:
+    return {
+        "step": step,
+        "domain": task.domain_name,
+        "task": task.task_id,
+        "agents": agents,
+        "helper": helper,
     }
 
 
@@ -78,7 +106,7 @@ def generate_subgoal(
     (the LLM says no further helper helps: stop) or ``"discarded"`` (``"reason"`` says why).
     """
     messages = generator_messages(task, agents, helper, earlier, fixed_example=fixed_example)
-    response = client.complete(messages, seed)
+    response = _ask(client, messages, seed, _about("generate", task, agents, helper))
     exchange = _exchange("generate", helper, seed, messages, response)
     try:
         parsed = parse_english_subgoal(response.text, helper, task.problem)
@@ -100,19 +128,30 @@ def translate_subgoal(
     *,
     helper: int = 1,
     earlier: Mapping[int, str] | None = None,
+    agents: int | None = None,
 ) -> tuple[str | None, Exchange]:
-    """Translate ``english`` into a PDDL goal checked against the task.
+    """Translate ``english`` into a PDDL goal checked against the task: by the model, or
+    by the rules (``client.settings.translator``).
 
     Returns the goal as canonical PDDL text (``(and ...)``), or None with
     ``exchange["status"] == "discarded"`` and the reason. ``earlier`` maps earlier
-    helpers to their PDDL subgoals, to reject repeats.
+    helpers to their PDDL subgoals, to reject repeats; ``agents`` is the task's N (a
+    replay bundle that logs the model's translations finds them by it).
     """
-    messages = translator_messages(task, english)
-    response = client.complete(messages, seed)
-    exchange = _exchange("translate", helper, seed, messages, response)
     problem = task.problem
+    if client.settings.translator == "rules":
+        exchange = _translate_by_rules(task, english, seed, helper)
+        if exchange["status"] != "ok":
+            return None, exchange
+        text = str(exchange["parsed"])
+    else:
+        messages = translator_messages(task, english)
+        about = _about("translate", task, agents or helper + 1, helper)
+        response = _ask(client, messages, seed, about)
+        exchange = _exchange("translate", helper, seed, messages, response)
+        text = response.text
     try:
-        goal = parse_pddl_subgoal(response.text, problem)
+        goal = parse_pddl_subgoal(text, problem)
     except SubgoalError as exc:
         exchange.update(status="discarded", reason=str(exc))
         return None, exchange
@@ -123,6 +162,36 @@ def translate_subgoal(
         exchange.update(status="discarded", reason=reason)
         return None, exchange
     return goal.to_pddl(), exchange
+
+
+def _translate_by_rules(task: BenchmarkTask, english: str, seed: int, helper: int) -> Exchange:
+    """The rules translator's reading of ``english``, as a translate exchange."""
+    from twostep.english import translate_english
+
+    start = time.perf_counter()
+    translation = translate_english(task.problem, english, task.domain_name)
+    exchange: Exchange = {
+        "step": "translate",
+        "helper": helper,
+        "seed": seed,
+        "model": "rules",
+        "translator": "rules",
+        "cached": False,
+        "scripted": False,
+        "seconds": round(time.perf_counter() - start, 6),
+        "recorded_seconds": 0.0,
+        "messages": [
+            {"role": "user", "text": english},
+            {"role": "assistant", "text": translation.pddl or ""},
+        ],
+        "status": "ok",
+        "reason": None,
+        "parsed": translation.pddl,
+        "note": "; ".join(translation.notes) or None,
+    }
+    if translation.pddl is None:
+        exchange.update(status="discarded", reason=f"{TRANSLATION_FAILED}: {translation.reason}")
+    return exchange
 
 
 @dataclass
@@ -166,6 +235,12 @@ class LLMDecomposer:
     def __init__(self, client: LLMClient, *, fixed_example: bool = True) -> None:
         self.client = client
         self.fixed_example = fixed_example
+
+    @property
+    def _replays_translations(self) -> bool:
+        """A bundle answers the translate step too: it needs the task's N to find them."""
+        settings = self.client.settings
+        return settings.mode == "bundle" and settings.translator == "llm"
 
     def propose(self, request: DecompositionRequest) -> list[SubgoalProposal]:
         """The proposals; :class:`DecomposerError` (``llm_error``) when a call failed."""
@@ -217,8 +292,9 @@ class LLMDecomposer:
             english_so_far.append(english)
             try:
                 pddl, tr = translate(
-                    self.client, task, english, seed, helper=helper, earlier=accepted
-                )
+                    self.client, task, english, seed, helper=helper, earlier=accepted,
+                    **({"agents": request.agents} if self._replays_translations else {}),
+                )  # fmt: skip
             except LLMCallError as exc:
                 result.fail(helper, "translate", exc, [gen])  # the answer given before it
                 break
@@ -245,6 +321,7 @@ def _translated(
 
 __all__ = [
     "LLM_ERROR",
+    "TRANSLATION_FAILED",
     "Exchange",
     "LLMDecomposer",
     "LLMDecomposition",

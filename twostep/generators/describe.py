@@ -180,14 +180,19 @@ GRIPPERS = {
 }
 
 
-def describe_grippers(problem: Problem) -> str:
-    robots = objects_of(problem, "robot", "at-robby")
-    rooms = objects_of(problem, "room", "at-robby")
-    balls = sorted(
+def grippers_balls(problem: Problem) -> list[str]:
+    """The balls of a grippers task: what is somewhere or carried (balls are untyped)."""
+    return sorted(
         {f[1] for f in problem.init | problem.goal.positive if f[0] == "at"}
         | {f[2] for f in problem.init if f[0] == "carry"},
         key=natural_key,
     )
+
+
+def describe_grippers(problem: Problem) -> str:
+    robots = objects_of(problem, "robot", "at-robby")
+    rooms = objects_of(problem, "room", "at-robby")
+    balls = grippers_balls(problem)
     owned: dict[str, set[str]] = {r: set() for r in robots}
     for fact in problem.init:
         if fact[0] in ("free", "carry") and fact[1] in owned:
@@ -249,9 +254,15 @@ BARMAN = {
 }
 
 
+def barman_shots(problem: Problem) -> list[str]:
+    """The shot glasses of a barman task (untyped files: what can contain, but no shaker)."""
+    shakers = objects_of(problem, "shaker", "shaker-level")
+    return [s for s in objects_of(problem, "shot", "contains") if s not in shakers]
+
+
 def describe_barman(problem: Problem) -> str:
     shakers = objects_of(problem, "shaker", "shaker-level")
-    shots = [s for s in objects_of(problem, "shot", "contains") if s not in shakers]
+    shots = barman_shots(problem)
     levels = objects_of(problem, "level", "next")
     dispensers = objects_of(problem, "dispenser", "dispenses")
     ingredients = objects_of(problem, "ingredient", "dispenses")
@@ -395,15 +406,22 @@ TYREWORLD = {
 }
 
 
+def tyreworld_wheels(problem: Problem, intact: bool | None = None) -> list[str]:
+    """The wheels of a tyreworld task: the intact ones (``intact=True``, intact at the
+    start), the flat ones (``False``), or all."""
+    wheels = objects_of(problem, "wheel", "intact", "inflated")
+    if intact is None:
+        return wheels
+    return [w for w in wheels if (("intact", w) in problem.init) == intact]
+
+
 def describe_tyreworld(problem: Problem) -> str:
     objects = problem.all_objects
     tools = sorted((o for o, t in objects.items() if t == "tool"), key=natural_key)
     boots = objects_of(problem, "container", "closed", "unlocked")
     hubs = objects_of(problem, "hub", "fastened", "on-ground")
     nuts = objects_of(problem, "nut", "tight", "loose")
-    wheels = objects_of(problem, "wheel", "intact", "inflated")
-    intact = [w for w in wheels if ("intact", w) in problem.init]
-    flat = [w for w in wheels if w not in intact]
+    intact, flat = tyreworld_wheels(problem, True), tyreworld_wheels(problem, False)
     parts = [f"a {tool}" for tool in tools] + [f"the container {b}" for b in boots]
     for noun, names in (("hub", hubs), ("nut", nuts), ("flat tyre", flat), ("intact tyre", intact)):
         if names:
@@ -437,3 +455,95 @@ def describe_problem(problem: Problem, domain: str | None = None) -> str:
     :func:`describe_generic`.
     """
     return DESCRIBERS.get(domain or problem.domain.name, describe_generic)(problem)
+
+
+# ----------------------------------------------------------------- nouns and phrases
+#
+# The words the describers use, as data, for readers of English about a task (the rules
+# translator, twostep.english): the phrase table of each domain (how each predicate is
+# said) and the common nouns the descriptions use for its objects ("4 shot glasses
+# (shot1, ..., shot4)"), each with the describer's own choice of objects.
+
+
+@dataclass(frozen=True)
+class Noun:
+    """A common noun the descriptions use for some objects of a task (``select``)."""
+
+    singular: str
+    plural: str
+    select: Callable[[Problem], list[str]]
+
+
+def _typed(type_name: str, *predicates: str) -> Callable[[Problem], list[str]]:
+    return lambda problem: objects_of(problem, type_name, *predicates)
+
+
+def _named(select: Callable[[Problem], list[str]], *starts: str) -> Callable[[Problem], list[str]]:
+    """The objects of ``select`` whose name starts with one of ``starts`` (grippers'
+    ``lgripper1`` is a left gripper) or contains its first one (``left1``)."""
+    return lambda problem: [
+        o for o in select(problem) if o.startswith(starts) or starts[0] in o.lower()
+    ]
+
+
+_GRIPPERS_GRIPPERS = _typed("gripper", "free")
+_HUBS = _typed("hub", "fastened", "on-ground")
+
+NOUNS: Mapping[str, tuple[Noun, ...]] = {
+    "blocksworld": (
+        Noun("block", "blocks", _typed("block", "on", "on-table", "clear", "holding")),
+    ),
+    "grippers": (
+        Noun("robot", "robots", _typed("robot", "at-robby")),
+        Noun("room", "rooms", _typed("room", "at-robby")),
+        Noun("ball", "balls", grippers_balls),
+        Noun("gripper", "grippers", _GRIPPERS_GRIPPERS),
+        Noun("left gripper", "left grippers", _named(_GRIPPERS_GRIPPERS, "left", "l")),
+        Noun("right gripper", "right grippers", _named(_GRIPPERS_GRIPPERS, "right", "r")),
+    ),
+    "barman": (
+        Noun("shaker", "shakers", _typed("shaker", "shaker-level")),
+        Noun("shot glass", "shot glasses", barman_shots),
+        Noun("level", "levels", _typed("level", "next")),
+        Noun("dispenser", "dispensers", _typed("dispenser", "dispenses")),
+        Noun("ingredient", "ingredients", _typed("ingredient", "dispenses")),
+        Noun("cocktail", "cocktails", _typed("cocktail", "cocktail-part1")),
+        Noun("hand", "hands", _typed("hand", "handempty")),
+    ),
+    "termes": (Noun("position", "positions", _typed("position", "height")),),
+    "tyreworld": (
+        Noun("hub", "hubs", _HUBS),
+        Noun("nut", "nuts", _typed("nut", "tight", "loose")),
+        Noun("flat tyre", "flat tyres", lambda p: tyreworld_wheels(p, False)),
+        Noun("intact tyre", "intact tyres", lambda p: tyreworld_wheels(p, True)),
+        Noun("tyre", "tyres", tyreworld_wheels),
+        Noun("wheel", "wheels", tyreworld_wheels),
+        Noun("container", "containers", _typed("container", "closed", "unlocked")),
+    ),
+}
+
+PHRASES: Mapping[str, Mapping[str, Phrase]] = {
+    "barman": BARMAN,
+    "blocksworld": BLOCKSWORLD,
+    "grippers": GRIPPERS,
+    "termes": TERMES,
+    "tyreworld": TYREWORLD,
+}
+
+# The PDDL names of the domains whose folder has another name (as DESCRIBERS).
+DOMAIN_ALIASES: Mapping[str, str] = {
+    "blocksworld-4ops": "blocksworld",
+    "gripper-strips": "grippers",
+}
+
+
+def describer_domain(problem: Problem, domain: str | None = None) -> str | None:
+    """The domain whose phrases and nouns describe ``problem`` (None: the generic one):
+    ``domain`` (a data folder's name) when it has a describer, else the PDDL name's."""
+    for name in (domain, problem.domain.name):
+        if name is None:
+            continue
+        name = DOMAIN_ALIASES.get(name, name)
+        if name in PHRASES:
+            return name
+    return None

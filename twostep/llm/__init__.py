@@ -14,6 +14,7 @@ from contextlib import contextmanager
 from dataclasses import replace
 
 from twostep.llm.client import (
+    LLMBundleMiss,
     LLMCacheCorrupt,
     LLMCacheMiss,
     LLMCallError,
@@ -40,6 +41,7 @@ def open_client(settings: LLMSettings) -> Iterator[LLMClient]:
 
 
 __all__ = [
+    "LLMBundleMiss",
     "LLMCacheCorrupt",
     "LLMCacheMiss",
     "LLMCallError",

@@ -12,6 +12,14 @@
   new answer replaces the entry); a replay raises :class:`LLMCacheCorrupt` naming it;
 * ``mode="scripted"``: answers from a YAML script (``answers:`` list, in call order),
   marked ``scripted`` and never written to the cache;
+* ``mode="bundle"``: answers recorded elsewhere by a real model, from a replay bundle
+  (``bundle``: :mod:`twostep.replay`), looked up by what the call is about (the task, N,
+  helper and step the decomposer names) and the seed (which of the bundle's runs); the
+  request is built, keyed and logged as for a live call, the answer carries its source
+  (model, file, line) and is never written to the cache; a call the bundle cannot answer
+  raises :class:`LLMBundleMiss`;
+* ``translator``: ``llm`` (the paper's: the model translates) or ``rules`` (the
+  model-free grammar of :mod:`twostep.english`; the translate step then calls no model);
 * the one retry loop of the project for LLM calls: exponential backoff (``backoff_s``,
   doubling, ``max_retries`` retries) on rate limits, timeouts, connection errors and 5xx,
   none on authentication or bad requests; what still fails is an :class:`LLMCallError`;
@@ -43,7 +51,8 @@ from twostep.redaction import looks_like_a_key, redact_text
 
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 
-MODES = ("live", "replay", "scripted")
+MODES = ("live", "replay", "scripted", "bundle")
+TRANSLATORS = ("llm", "rules")
 CACHE_FORMAT = 1
 OFFLINE_HINT = "or run offline with decomposer=goal-split or llm.mode=replay (cached answers)"
 
@@ -118,6 +127,10 @@ class LLMScriptError(LLMError):
     """The scripted answers are missing, malformed or used up."""
 
 
+class LLMBundleMiss(LLMError):
+    """``mode="bundle"`` and the bundle holds no answer for the call (or cannot be read)."""
+
+
 @dataclass
 class LLMSettings:
     """How to reach the model and how to cache, replay or script its answers."""
@@ -136,11 +149,21 @@ class LLMSettings:
     timeout_s: float = 60.0
     use_cache: bool = True
     local: bool = False  # serve `model` from the in-process llama.cpp server (llm=local)
+    bundle: Path | None = None  # a replay bundle's folder (mode=bundle)
+    translator: str = "llm"  # llm | rules: who turns English subgoals into PDDL
     extra: dict[str, Any] = field(default_factory=dict)  # more litellm.completion kwargs
 
     def __post_init__(self) -> None:
         if self.mode not in MODES:
             raise LLMError(f"llm.mode must be one of {', '.join(MODES)}, got '{self.mode}'")
+        if self.translator not in TRANSLATORS:
+            raise LLMError(
+                f"llm.translator must be one of {', '.join(TRANSLATORS)}, got '{self.translator}'"
+            )
+        if self.mode == "bundle" and self.bundle is None:
+            raise LLMError("llm.mode=bundle needs llm.bundle=<folder of a replay bundle>")
+        if self.bundle is not None:
+            self.bundle = Path(self.bundle)
         problem = key_env_problem(self.api_key_env)
         if problem:
             raise LLMError(problem)
@@ -177,6 +200,7 @@ class LLMResponse:
     seconds: float
     recorded_seconds: float = 0.0
     key: str = ""
+    source: dict[str, Any] | None = None  # a replayed answer: model, run, file, line
 
 
 def key_env_problem(name: str | None) -> str | None:
@@ -247,6 +271,15 @@ class LLMClient:
         self.settings = settings
         self._answers: list[str] | None = None
         self._next_answer = 0
+        self._bundle: Any = None
+        if settings.mode == "bundle":
+            from twostep.replay import BundleError, load_bundle
+
+            assert settings.bundle is not None
+            try:
+                self._bundle = load_bundle(settings.bundle)
+            except BundleError as error:
+                raise LLMBundleMiss(str(error)) from None
         if settings.mode == "scripted":
             if answers is None:
                 if settings.script is None:
@@ -281,13 +314,20 @@ class LLMClient:
 
     # ------------------------------------------------------------------ calls
 
-    def complete(self, messages: Sequence[Message], seed: int) -> LLMResponse:
-        """Answer ``messages``; ``seed`` goes to the provider and into the cache key."""
+    def complete(
+        self, messages: Sequence[Message], seed: int, about: Mapping[str, Any] | None = None
+    ) -> LLMResponse:
+        """Answer ``messages``; ``seed`` goes to the provider and into the cache key.
+
+        ``about`` says what the call is for (``step``, ``domain``, ``task``, ``agents``,
+        ``helper``): a replay bundle finds its answer by it (``mode="bundle"``)."""
         start = time.perf_counter()
         s = self.settings
         if s.mode == "scripted":
             return self._scripted(start)
         request = self.request(messages, seed)
+        if s.mode == "bundle":
+            return self._replayed(request, seed, about or {}, start)
         key = self.cache_key(request)
         if s.use_cache or s.mode == "replay":
             hit = self._read_cache(key, replay=s.mode == "replay")
@@ -326,6 +366,57 @@ class LLMClient:
         text = self._answers[self._next_answer]
         self._next_answer += 1
         return LLMResponse(text, False, True, "scripted", time.perf_counter() - start)
+
+    def _replayed(
+        self, request: dict[str, Any], seed: int, about: Mapping[str, Any], start: float
+    ) -> LLMResponse:
+        """The bundle's answer for the call ``about`` describes (see the class docstring)."""
+        from twostep.replay import BundleMiss
+
+        s = self.settings
+        bundle = self._bundle
+        step = str(about.get("step", ""))
+        try:
+            domain, task = str(about["domain"]), int(about["task"])
+            agents, helper = int(about["agents"]), int(about["helper"])
+        except (KeyError, TypeError, ValueError):
+            raise LLMBundleMiss(
+                "llm.mode=bundle: the call does not say which task, N and helper it is for"
+            ) from None
+        try:
+            entry = bundle.entry(domain, task, agents, s.model, seed)
+        except BundleMiss as error:
+            raise LLMBundleMiss(str(error)) from None
+        run = bundle.run(entry.run)
+        if step == "translate":
+            recorded = entry.translations[helper - 1] if helper <= len(entry.translations) else None
+            if recorded is None:
+                raise LLMBundleMiss(
+                    f"{run.file} logs no translations of its model (llm.translator=llm "
+                    "replays them): use llm.translator=rules"
+                )
+            text, line = recorded, entry.line
+        else:
+            if not 1 <= helper <= len(entry.answers):
+                raise LLMBundleMiss(
+                    f"{run.where(entry.line)} holds {len(entry.answers)} answer(s); helper "
+                    f"{helper} has none"
+                )
+            answer = entry.answers[helper - 1]
+            text, line = answer.text, answer.line
+        source = {
+            "kind": "replayed",
+            "model": run.model,
+            "run": run.id,
+            "file": run.file,
+            "line": line,
+            "bundle": str(bundle.path or s.bundle),
+        }
+        # The key a live call would have, marked as replayed: never confused with one.
+        key = self.cache_key({**request, "replayed_from": f"{run.id}:{run.sha256}"})
+        return LLMResponse(
+            text, False, False, run.model, time.perf_counter() - start, 0.0, key, source
+        )
 
     def _call_arguments(self, request: Mapping[str, Any]) -> tuple[dict[str, Any], str | None]:
         """litellm's arguments for ``request``, and the key among them (None: no key)."""

@@ -39,6 +39,15 @@ _MARKER = re.compile(
 )
 _AGENT_LABEL = re.compile(r"^\s*\**agent\s*\d+\**\s*:\s*", re.IGNORECASE)
 _SENTENCE_END = re.compile(r"(?<=[.!?])\s+")
+# "agent1 subgoal:", "**agent2 subgoal:**" (the official code's prompt ends with one):
+# a label before the answer, and where a later one starts the answer for another helper.
+_SUBGOAL_LABEL = re.compile(
+    r"[\s*_`]*agent\s*\d+(?:'s)?\s*(?:sub)?goals?[\s*_`]*:[\s*_`]*", re.IGNORECASE
+)
+_FENCE_MARK = re.compile(r"```[a-zA-Z]*")
+# A sentence about what the agent holds things with ("All hands are empty."): part of a
+# condition even though it names nothing of the task.
+_AGENT_STATE = re.compile(r"\b(?:hands?|arms?|grippers?)\b.*\b(?:empty|free)\b", re.I)
 
 
 def _clean_condition(text: str) -> str:
@@ -54,9 +63,12 @@ def parse_english_subgoal(
 
     Raises :class:`SubgoalError` for an empty answer or prose without a condition.
     """
-    text = answer.strip()
+    text = _FENCE_MARK.sub("", answer).strip()
     if not text:
         raise SubgoalError("empty answer from the subgoal generator")
+    text = _own_part(text)
+    if not text:
+        raise SubgoalError("the generator's answer holds only a label")
     if _NONE.match(text) or _NONE.match(_AGENT_LABEL.sub("", text.splitlines()[0])):
         return EnglishSubgoal("none")
     matches = list(_MARKER.finditer(text))
@@ -75,12 +87,35 @@ def parse_english_subgoal(
     if _NONE_LEAD.match(_AGENT_LABEL.sub("", text)):
         return EnglishSubgoal("none")  # "None. No further helper would ..."
     sentences = [s for s in _SENTENCE_END.split(" ".join(text.split())) if s.strip()]
-    last = _clean_condition(_AGENT_LABEL.sub("", sentences[-1]))
-    if last and (problem is None or _mentions_task(last, problem)):
+    taken: list[str] = []
+    for sentence in reversed(sentences):
+        cleaned = _clean_condition(_AGENT_LABEL.sub("", sentence))
+        if not cleaned:
+            break
+        names = problem is None or _mentions_task(cleaned, problem)
+        if not names and _AGENT_STATE.search(cleaned) is None:
+            break
+        taken.insert(0, cleaned)
+    if taken and (problem is None or any(_mentions_task(t, problem) for t in taken)):
+        which = "sentence" if len(taken) == 1 else f"{len(taken)} sentences"
         return EnglishSubgoal(
-            "subgoal", last, note="no 'final goal condition' phrase: used the last sentence"
+            "subgoal",
+            ". ".join(taken),
+            note=f"no 'final goal condition' phrase: used the last {which}",
         )
     raise SubgoalError("no final goal condition in the generator's answer")
+
+
+def _own_part(text: str) -> str:
+    """The answer without a leading helper label, up to where a label for another helper
+    starts (an answer that goes on to the next helpers' subgoals)."""
+    lead = _SUBGOAL_LABEL.match(text)
+    if lead:
+        text = text[lead.end() :]
+    later = _SUBGOAL_LABEL.search(text)
+    if later and later.start() > 0:
+        text = text[: later.start()]
+    return text.strip().strip("`").strip()
 
 
 def _lead_in(text: str, match: re.Match[str]) -> str:
@@ -91,15 +126,16 @@ def _lead_in(text: str, match: re.Match[str]) -> str:
 
 
 def _mentions_task(text: str, problem: Problem) -> bool:
-    """Whether ``text`` names an object or a predicate of the task."""
+    """Whether ``text`` names an object, a predicate or a type of the task."""
     lowered = text.lower()
     words = set(re.findall(r"[a-z0-9][a-z0-9_\-]*", lowered))
     if words & set(problem.all_objects):
         return True
     spaced = " ".join(re.findall(r"[a-z0-9]+", lowered))
+    types = [t for t in problem.domain.types if t != "object"]
     return any(
-        re.search(rf"\b{' '.join(re.findall(r'[a-z0-9]+', pred))}\b", spaced)
-        for pred in problem.domain.predicates
+        re.search(rf"\b{' '.join(re.findall(r'[a-z0-9]+', name))}s?\d*\b", spaced)
+        for name in [*problem.domain.predicates, *types]
     )
 
 

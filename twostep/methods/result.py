@@ -265,10 +265,28 @@ def adopt_execution(run: RunResult, fields: Mapping[str, Any]) -> None:
 
 
 def record_proposals(run: RunResult, proposals: Sequence[SubgoalProposal]) -> None:
-    """The proposals as result.json records them, with their LLM time."""
+    """The proposals as result.json records them, with their LLM time; where answers were
+    replayed from a bundle, ``answer_source`` says from where (``replayed, model gpt-4o,
+    10_8_2_agent.txt:14``); where the rules translated, ``translation`` counts what they
+    read and what they could not (``failed``: those subgoals are discarded)."""
     run.llm_time_s = sum(p.llm_time_s for p in proposals)
-    run.scripted_llm = any(x.get("scripted") for p in proposals for x in p.exchanges)
+    exchanges = [x for p in proposals for x in p.exchanges]
+    run.scripted_llm = any(x.get("scripted") for x in exchanges)
     run.subgoals = [p.to_dict() for p in proposals]
+    sources = [x["source"] for x in exchanges if isinstance(x.get("source"), dict)]
+    if sources:
+        models = ", ".join(dict.fromkeys(str(s.get("model")) for s in sources))
+        places = ", ".join(dict.fromkeys(f"{s.get('file')}:{s.get('line')}" for s in sources))
+        run.extra["answer_source"] = f"replayed, model {models}, {places}"
+        run.extra["answer_bundle"] = str(sources[0].get("bundle"))
+    rules = [x for x in exchanges if x.get("translator") == "rules"]
+    if rules:
+        failed = sum(1 for x in rules if x.get("parsed") is None)
+        run.extra["translation"] = {
+            "translator": "rules",
+            "read": len(rules) - failed,
+            "failed": failed,
+        }
 
 
 def check_run(problem: Problem, run: RunResult, agent_predicates: Collection[str]) -> None:
