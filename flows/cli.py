@@ -32,6 +32,7 @@ from flows.config import agents_run, override_problem, register
 from flows.console import format_schedule, format_summary
 from flows.environment import quiet_defaults
 from flows.launcher import launch_fields, register_plugins
+from flows.replay_sweeper import expose_plugin
 from flows.sweep_callback import SweepCallback
 from twostep.cli import console_main
 
@@ -45,6 +46,7 @@ JOB_LOG = "twostep.run"  # the job log's own logger (the summary, not the consol
 
 quiet_defaults()
 register()
+expose_plugin()  # experiment=paper_replay's sweeper (hydra/sweeper=bundle), before the scan
 register_plugins()  # the default launcher and sweeper of a sweep (flows/launcher.py)
 
 # Set by a single run once its job is recorded: the process may then end without

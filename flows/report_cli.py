@@ -351,6 +351,13 @@ def _parser() -> argparse.ArgumentParser:
         help="data root for Table II's task descriptions (<DIR>/alfworld/titles.yaml; "
         "default: the runs' data.root, else the package's data)",
     )
+    parser.add_argument(
+        "--bundle",
+        type=Path,
+        metavar="DIR",
+        help="the replay bundle of an experiment=paper_replay sweep: adds Table I and Fig. 3 "
+        "with the official code's numbers (default: the bundle the runs name, llm.bundle)",
+    )
     parser.add_argument("--no-log", action="store_true", help="do not log the report run to MLflow")
     return parser
 
@@ -424,6 +431,26 @@ def _safe_dir_name(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.\-]+", "_", name).strip("_") or "report"
 
 
+def _replay_report(report: Report, bundle: Path | None, out_dir: Path) -> list[Path]:
+    """Table I and Fig. 3 of a replay (:mod:`twostep.report.replay`) when the runs replay
+    a bundle (or ``--bundle`` names one); a bundle that cannot be read: a warning."""
+    from twostep.replay import BundleError, load_bundle
+    from twostep.report.replay import replay_bundle, replay_model, replay_settings, replay_tables
+    from twostep.report.replay_plots import write_replay
+
+    found = bundle or replay_bundle(report.runs)
+    if found is None:
+        return []
+    try:
+        loaded = load_bundle(Path(found))
+        model = replay_model(report.runs) or (loaded.models[0] if loaded.models else "")
+        tables = replay_tables(report.runs, loaded, model)
+        return write_replay(tables, Path(found), out_dir, replay_settings(report.runs))
+    except (BundleError, OSError) as error:
+        print(f"twostep-report: warning: no replay tables: {_one_line(error)}", file=sys.stderr)
+        return []
+
+
 @console_main
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command; returns the exit code (0 ok, 1 nothing to report)."""
@@ -468,8 +495,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"twostep-report: cannot write to {out_dir}: {_one_line(error)}", file=sys.stderr)
         return 1
 
+    replay = _replay_report(report, args.bundle, out_dir)
+    paths += replay
     print(read_line)
     print(format_console(report))
+    if replay:
+        print(f"replay: {out_dir / 'replay.md'} (Table I and Fig. 3 from the bundle's answers)")
     figures = sum(1 for p in paths if p.suffix == ".png")
     tables = sum(1 for p in paths if p.suffix == ".csv")
     print(

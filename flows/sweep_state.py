@@ -105,6 +105,13 @@ def count_jobs(config: DictConfig) -> int | None:
     earlier one, as in the sweeper), parsed with Hydra's public override parser; the
     grid is the product of the number of values of every key.
     """
+    if str(config.hydra.sweeper.get("_target_", "")).endswith("BundleSweeper"):
+        from flows.replay_sweeper import planned_jobs  # experiment=paper_replay
+
+        try:
+            return len(planned_jobs(config))
+        except Exception:
+            return None
     try:
         from hydra.core.override_parser.overrides_parser import OverridesParser
 

@@ -53,6 +53,7 @@ EXPERIMENT_PARAMS: tuple[str, ...] = (
     "planner.time_limit_s",
     "llm.model",
     "llm.mode",
+    "llm.translator",
     "score_mode",
     "executor.name",
 )
@@ -215,6 +216,10 @@ def _outcome_metrics(result: Mapping[str, Any]) -> dict[str, Any]:
         metrics["subgoals_proposed"] = float(len(statuses))
         metrics["subgoals_accepted"] = float(statuses.count("accepted"))
         metrics["subgoals_discarded"] = float(statuses.count("discarded"))
+    translation = result.get("translation")
+    if isinstance(translation, Mapping) and isinstance(translation.get("failed"), int):
+        # the rules translator could not read these (llm.translator=rules): discarded
+        metrics["subgoals_untranslated"] = float(translation["failed"])
     calls = [c for c in result.get("planner_calls") or [] if isinstance(c, Mapping)]
     for call in calls:
         number = _number(call.get("planner_time_s"))

@@ -9,7 +9,9 @@ is a static file of the package). Hand-written files (``expert.yaml``) are never
 
 ``import-answers`` reads logs of real model answers (the official TwoStep code's run
 logs: ``--format twostep-official``) into a replay bundle (:mod:`twostep.replay`), which
-``twostep ... decomposer=llm llm=replay llm.bundle=DIR`` replays.
+``twostep ... decomposer=llm llm=replay llm.bundle=DIR`` replays; ``check-answers``
+checks the rules translator on a bundle against the helper costs its logs record
+(:mod:`twostep.replay.check`) and writes ``translation_check.json`` beside it.
 """
 
 from __future__ import annotations
@@ -174,6 +176,113 @@ def _import_answers(args: argparse.Namespace) -> int:
     return 0
 
 
+CHECK_FILE = "translation_check.json"
+
+
+def _agent_predicates(domains: Sequence[str], given: str | None) -> dict[str, list[str]]:
+    """Each domain's agent predicates: the YAML file given (domain -> list), else the
+    installed ``conf/domain/<domain>.yaml`` (the Hydra config's own)."""
+    from importlib import resources
+
+    from twostep.files import read_yaml_file
+
+    table: dict[str, list[str]] = {}
+    if given:
+        data = read_yaml_file(Path(given)) or {}
+        table = {str(k): [str(p) for p in v or []] for k, v in dict(data).items()}
+    for domain in domains:
+        if domain in table:
+            continue
+        conf = resources.files("flows.conf").joinpath("domain", f"{domain}.yaml")
+        if not conf.is_file():
+            raise ValueError(
+                f"no agent predicates for domain '{domain}': give them with --agent-predicates"
+            )
+        table[domain] = [str(p) for p in read_yaml_file(Path(str(conf)))["agent_predicates"]]
+    return table
+
+
+def _check_answers(args: argparse.Namespace) -> int:
+    import json
+
+    from twostep.benchmark import BenchmarkError, load_task
+    from twostep.files import write_json_atomic
+    from twostep.planner import PlannerSettings
+    from twostep.replay import BundleError, load_bundle
+    from twostep.replay.check import check_entry, settings_text, summarise
+
+    try:
+        bundle = load_bundle(args.bundle)
+    except BundleError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 1
+    entries = [
+        e
+        for e in bundle.entries
+        if (not args.domain or e.domain in args.domain)
+        and (not args.agents or e.agents in args.agents)
+    ]
+    try:
+        predicates = _agent_predicates(sorted({e.domain for e in entries}), args.agent_predicates)
+    except (ValueError, OSError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 1
+    settings = PlannerSettings(alias=args.alias, search_time_limit_s=args.time_limit)
+    root = Path(args.data_root)
+    checks = []
+    for number, entry in enumerate(entries, start=1):
+        try:
+            task = load_task(entry.domain, entry.task, root)
+        except BenchmarkError as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 1
+        if bundle.task_digest(entry.domain, entry.task):
+            try:
+                bundle.check_task_file(entry.domain, entry.task, task.problem_path)
+            except LookupError as error:
+                print(f"error: {error}", file=sys.stderr)
+                return 1
+        found = check_entry(entry, task, predicates[entry.domain], settings)
+        checks += found
+        states = " ".join(c.status for c in found)
+        print(
+            f"[{number}/{len(entries)}] {entry.domain} p{entry.task:02d} N={entry.agents} "
+            f"({entry.run}): {states}",
+            flush=True,
+        )
+    from importlib import metadata
+
+    version = metadata.version("up-fast-downward")
+    summary = summarise(checks)
+    out = Path(args.out) if args.out else Path(args.bundle) / CHECK_FILE
+    write_json_atomic(
+        out,
+        {
+            "bundle": str(args.bundle),
+            "data_root": str(root),
+            "planner": {
+                "alias": settings.alias,
+                "search_time_limit_s": settings.search_time_limit_s,
+                "up-fast-downward": version,
+                "text": settings_text(settings, f"up-fast-downward {version}"),
+            },
+            "summary": summary,
+            "subgoals": [c.to_dict() for c in checks],
+        },
+    )
+    print(f"planner: {settings_text(settings, f'up-fast-downward {version}')}")
+    print(f"{'domain':<12} {'subgoals':>8} {'translated':>14} {'logged cost':>16}")
+    for row in summary:
+        translated = f"{row['translated']} ({row['translated_pct']}%)"
+        match = (
+            f"{row['match']}/{row['compared']} ({row['match_pct']}%)" if row["compared"] else "-"
+        )
+        print(f"{row['domain']:<12} {row['subgoals']:>8} {translated:>14} {match:>16}")
+    print(f"written: {out}")
+    del json
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="twostep-data", description="Build, check and scale the benchmark tasks (data/)."
@@ -237,6 +346,32 @@ def build_parser() -> argparse.ArgumentParser:
         help="import a log that ends inside a block without that block (else an error)",
     )
     answers.set_defaults(run=_import_answers)
+    check_answers = commands.add_parser(
+        "check-answers",
+        help="check the rules translator on a bundle against the helper costs its logs record",
+    )
+    check_answers.add_argument("bundle", help="the bundle's folder")
+    check_answers.add_argument(
+        "--data-root", required=True, help="the folder of the tasks the answers refer to"
+    )
+    check_answers.add_argument(
+        "--alias", default="lama", help="planner alias (default: lama, anytime, as logged)"
+    )
+    check_answers.add_argument(
+        "--time-limit",
+        type=float,
+        default=100.0,
+        help="search time limit per helper plan, s (default: 100, the official runs')",
+    )
+    check_answers.add_argument("--domain", action="append", help="only this domain (repeatable)")
+    check_answers.add_argument(
+        "--agents", action="append", type=int, help="only this N (repeatable)"
+    )
+    check_answers.add_argument(
+        "--agent-predicates", help="YAML: domain -> agent predicates (default: conf/domain/)"
+    )
+    check_answers.add_argument("--out", help=f"the result file (default: <bundle>/{CHECK_FILE})")
+    check_answers.set_defaults(run=_check_answers)
     generate.set_defaults(run=_generate)
     check.set_defaults(run=_check)
     scale.set_defaults(run=_scale)

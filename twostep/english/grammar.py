@@ -623,62 +623,66 @@ class Grammar:
         combination: Sequence[Mention],
         slots: Sequence[int],
     ) -> list[tuple[str, ...]] | str:
-        """Complete ``args``: the arguments left out, and the phrases that name several
-        objects, from the task's initial state and goal (see the module docstring)."""
+        """Complete ``args``: the phrases that name several objects, and the arguments
+        left out, from the task's initial state and goal (see the module docstring)."""
         arity = len(types)
-        options: list[dict[int, str]] = [dict(args)]
-        for k in template.omitted:
-            bound = list(args.values())
-            found = sorted(
-                {
-                    o
-                    for o in self.problem.all_objects
-                    if self._type_distance(o, types[k]) is not None
-                    and o not in bound
-                    and self._related(o, bound)
-                },
-                key=natural_key,
-            )
-            same = [
-                o
-                for o in found
-                if any(
-                    f[0] == template.predicate and o in f[1:] and all(b in f[1:] for b in bound)
-                    for f in self.known
-                )
-            ]
-            found = same or found
-            if len(found) != 1:
-                what = "no" if not found else f"{len(found)} ({', '.join(found[:4])})"
-                return (
-                    f"{template.predicate}: argument {k + 1} is left out and the task has "
-                    f"{what} {types[k]} related to {', '.join(bound) or 'it'}"
-                )
-            for option in options:
-                option[k] = found[0]
+        picks = itertools.product(*[[(k, o) for o in loose[k].candidates] for k in loose])
+        full: list[tuple[str, ...]] = []
+        problem = ""
+        for pick in picks:
+            chosen = {**args, **dict(pick)}
+            for k in template.omitted:
+                found = self._left_out(template.predicate, types[k], list(chosen.values()))
+                if len(found) != 1:
+                    what = "no" if not found else f"{len(found)} ({', '.join(found[:4])})"
+                    related = ", ".join(chosen.values()) or "it"
+                    problem = (
+                        f"{template.predicate}: argument {k + 1} is left out and the task has "
+                        f"{what} {types[k]} related to {related}"
+                    )
+                    break
+                chosen[k] = found[0]
+            else:
+                full.append(tuple(chosen[k] for k in range(arity)))
         if not loose:
-            return [tuple(option[k] for k in range(arity)) for option in options]
+            return full or problem
+        if not full:
+            return problem
         goal = self.problem.goal.positive
-        out: list[tuple[str, ...]] = []
-        for option in options:
-            choices = [[(k, o) for o in loose[k].candidates] for k in loose]
-            full = [
-                tuple({**option, **dict(pick)}[k] for k in range(arity))
-                for pick in itertools.product(*choices)
-            ]
-            indefinite = any(m.mode == "a" for m in loose.values())
-            facts_in = [f for f in full if (template.predicate, *f) in goal]
-            if not facts_in or not indefinite:
-                facts_in = facts_in or [f for f in full if (template.predicate, *f) in self.known]
-            plural = all(m.plural and m.mode != "a" for m in loose.values())
-            if not facts_in or (len(facts_in) > 1 and not plural):
-                mention = next(iter(loose.values()))
-                many = ", ".join(mention.candidates[:4]) + (
-                    ", ..." if len(mention.candidates) > 4 else ""
-                )
-                return f"'{mention.text}' is ambiguous here: it may name {many}"
-            out += facts_in
-        return out
+        indefinite = any(m.mode == "a" for m in loose.values())
+        facts_in = [f for f in full if (template.predicate, *f) in goal] if indefinite else []
+        facts_in = facts_in or [f for f in full if (template.predicate, *f) in self.known]
+        plural = all(m.plural and m.mode != "a" for m in loose.values())
+        if not facts_in or (len(facts_in) > 1 and not plural):
+            mention = next(iter(loose.values()))
+            many = ", ".join(mention.candidates[:4]) + (
+                ", ..." if len(mention.candidates) > 4 else ""
+            )
+            return f"'{mention.text}' is ambiguous here: it may name {many}"
+        return facts_in
+
+    def _left_out(self, predicate: str, type_name: str, bound: Sequence[str]) -> list[str]:
+        """The objects of ``type_name`` the task relates to ``bound`` (in a fact of its
+        initial state or goal; in one of ``predicate`` when there are such)."""
+        found = sorted(
+            {
+                o
+                for o in self.problem.all_objects
+                if o not in bound
+                and self._type_distance(o, type_name) is not None
+                and self._related(o, bound)
+            },
+            key=natural_key,
+        )
+        same = [
+            o
+            for o in found
+            if any(
+                f[0] == predicate and o in f[1:] and all(b in f[1:] for b in bound)
+                for f in self.known
+            )
+        ]
+        return same or found
 
 
 def _depth(domain: Domain, type_name: str) -> int:

@@ -508,6 +508,7 @@ NOUNS: Mapping[str, tuple[Noun, ...]] = {
         Noun("dispenser", "dispensers", _typed("dispenser", "dispenses")),
         Noun("ingredient", "ingredients", _typed("ingredient", "dispenses")),
         Noun("cocktail", "cocktails", _typed("cocktail", "cocktail-part1")),
+        Noun("cocktail recipe", "cocktail recipes", _typed("cocktail", "cocktail-part1")),
         Noun("hand", "hands", _typed("hand", "handempty")),
     ),
     "termes": (Noun("position", "positions", _typed("position", "height")),),

@@ -106,6 +106,17 @@ def parse_english_subgoal(
     raise SubgoalError("no final goal condition in the generator's answer")
 
 
+def continuation(answer: str) -> str | None:
+    """What an answer goes on to say for another helper after its own subgoal (the text
+    from a later "agentK subgoal:" label on), or None."""
+    text = _FENCE_MARK.sub("", answer).strip()
+    lead = _SUBGOAL_LABEL.match(text)
+    if lead:
+        text = text[lead.end() :]
+    later = _SUBGOAL_LABEL.search(text)
+    return text[later.start() :].strip() if later and later.start() > 0 else None
+
+
 def _own_part(text: str) -> str:
     """The answer without a leading helper label, up to where a label for another helper
     starts (an answer that goes on to the next helpers' subgoals)."""
@@ -212,6 +223,7 @@ def parse_pddl_subgoal(answer: str, problem: Problem) -> Goal:
 __all__ = [
     "EnglishSubgoal",
     "SubgoalError",
+    "continuation",
     "extract_pddl_goal",
     "parse_english_subgoal",
     "parse_pddl_subgoal",

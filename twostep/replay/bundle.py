@@ -55,13 +55,16 @@ class OfficialNumbers:
     """What the official code logged for one task and N (None: not in the log).
 
     ``helper_costs[i]`` is the cost of helper i+1's plan for the model's own translation
-    (None: the log says no plan was found); ``exec_length`` the official code's
-    multi-agent execution length, ``sa_cost`` its single-agent plan cost (anytime LAMA).
+    (None: not logged, or no plan: ``helper_no_plan`` lists the helpers whose planner call
+    the log says found none); ``exec_length`` is the official code's multi-agent execution
+    length, ``sa_cost`` its single-agent plan cost (anytime LAMA).
     """
 
     sa_cost: float | None = None
     sa_time_s: float | None = None
     helper_costs: tuple[float | None, ...] = ()
+    helper_no_plan: tuple[int, ...] = ()
+    helper_times_s: tuple[float | None, ...] = ()
     main_cost: float | None = None
     exec_length: float | None = None
     planning_time_s: float | None = None
@@ -70,6 +73,8 @@ class OfficialNumbers:
     def to_dict(self) -> dict[str, Any]:
         data = asdict(self)
         data["helper_costs"] = list(self.helper_costs)
+        data["helper_no_plan"] = list(self.helper_no_plan)
+        data["helper_times_s"] = list(self.helper_times_s)
         return data
 
     @classmethod
@@ -78,6 +83,8 @@ class OfficialNumbers:
             sa_cost=data.get("sa_cost"),
             sa_time_s=data.get("sa_time_s"),
             helper_costs=tuple(data.get("helper_costs") or ()),
+            helper_no_plan=tuple(int(h) for h in data.get("helper_no_plan") or ()),
+            helper_times_s=tuple(data.get("helper_times_s") or ()),
             main_cost=data.get("main_cost"),
             exec_length=data.get("exec_length"),
             planning_time_s=data.get("planning_time_s"),
@@ -184,6 +191,10 @@ class Bundle:
         (seed 0 replays the first)."""
         used = {e.run for e in self.entries if e.domain == domain and e.agents == agents}
         return [r for r in self.runs if r.id in used and same_model(model, r.model)]
+
+    def has(self, run_id: str, domain: str, task: int, agents: int) -> bool:
+        """Whether run ``run_id`` holds answers for that task and N."""
+        return (run_id, domain, task, agents) in self._index
 
     def cells(self) -> list[tuple[str, int, int]]:
         """Every (domain, task, N) with answers, sorted."""

@@ -157,6 +157,8 @@ class _Block:
     agents_line: int | None = None
     run_label: str | None = None
     translations: list[str] = field(default_factory=list)
+    no_plan: list[int] = field(default_factory=list)
+    helper_times: dict[int, float | None] = field(default_factory=dict)
 
     def task_is(self, domain: str, task: int, where: str) -> None:
         """Every line of a block names the same task; the first one sets it."""
@@ -192,6 +194,9 @@ class _Block:
                 self.sa_cost, self.sa_time = cost, _float(match["time"])
             elif match["helper"] is not None:
                 self.helper_costs[int(match["helper"])] = cost
+                self.helper_times[int(match["helper"])] = _float(match["time"])
+                if cost is None:
+                    self.no_plan.append(int(match["helper"]))
             else:
                 self.main_cost = cost
         elif match := _TASK.match(line):
@@ -231,6 +236,10 @@ class _Block:
             sa_time_s=self.sa_time,
             helper_costs=tuple(self.helper_costs.get(i) for i in range(1, helpers + 1))
             if self.helper_costs
+            else (),
+            helper_no_plan=tuple(sorted(set(self.no_plan))),
+            helper_times_s=tuple(self.helper_times.get(i) for i in range(1, helpers + 1))
+            if self.helper_times
             else (),
             main_cost=self.main_cost,
             exec_length=self.exec_length,

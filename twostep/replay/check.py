@@ -1,0 +1,233 @@
+"""The rules translator against the logs: does our reading of each replayed subgoal give a
+helper plan of the cost the official code logged for the model's own translation?
+
+For every entry of a bundle, :func:`check_entry` replays what the official code did with
+its helpers, with the rules translator (:mod:`twostep.english`) in place of the model's
+translation: helper i's English answer is read (:func:`twostep.llm.parsing.
+parse_english_subgoal`), translated, and planned from the environment the helpers before
+it left (their plans progress it; agent facts are each agent's own), with the planner
+settings given (the official runs': anytime LAMA, 100 s). Its plan's length is compared
+with the cost the log records for that helper. The official code planned whatever goal
+the model wrote, so the translated goal is planned whenever it is a goal of the task
+(twostep's own discard rules, e.g. a repeat of an earlier helper's subgoal, are recorded
+as ``rule`` but do not stop the comparison); a goal already true costs 0.
+
+Two things of the official code are read as it did them: it logs an empty plan (a goal
+that already holds) as "no solution found", so a cost of 0 matches a "no solution" logged
+well before its time limit (under 90 % of the check's limit, which is the official runs'
+by default); and where a model's answer goes on to another helper's subgoal ("...
+\n agent3 subgoal: ..."), the official code translated the whole answer while twostep
+reads the helper's own part: such rows say so (``continued``).
+
+:func:`summarise` gives, per domain: subgoals, how many translate, and of those with a
+logged cost how many give that cost. A different cost is kept beside its subgoal.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Collection, Iterable
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from twostep.benchmark import BenchmarkTask
+from twostep.english import translate_english
+from twostep.llm.parsing import continuation, parse_english_subgoal
+from twostep.pddl import Goal
+from twostep.planner import PlannerSettings, PlanResult, plan
+from twostep.progression import environment_part, handoff_problem, progress_state
+from twostep.replay.bundle import Answer, Entry
+from twostep.strips import Grounder
+from twostep.subgoals import SubgoalError, check_subgoal, parse_subgoal
+
+# What became of one replayed subgoal
+MATCH = "match"  # translated, planned: the logged cost (or no plan, as logged)
+DIFFERS = "differs"  # translated, planned: another cost than the log's
+UNTRANSLATED = "untranslated"  # the rules could not read it (or no condition in the answer)
+NOT_LOGGED = "not_logged"  # translated, but the log has no cost to compare with
+
+
+@dataclass(frozen=True)
+class SubgoalCheck:
+    """One replayed subgoal: its reading, its plan's cost and the logged one."""
+
+    run: str
+    domain: str
+    task: int
+    agents: int
+    helper: int
+    line: int
+    answer: str
+    condition: str | None
+    pddl: str | None
+    status: str
+    reason: str | None  # why untranslated, or twostep's own rule that would discard it
+    logged_cost: float | None
+    logged_no_plan: bool
+    cost: float | None  # None: no plan found
+    planner: str | None  # the planner's status
+    seconds: float = 0.0
+    continued: bool = False  # the answer went on to another helper's subgoal
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class _RowMaker:
+    """The fields of a check row that one answer fixes; called with the rest."""
+
+    entry: Entry
+    answer: Answer
+    logged: float | None
+    no_plan: bool
+    start: float
+
+    def __call__(self, **fields: Any) -> SubgoalCheck:
+        base: dict[str, Any] = {
+            "run": self.entry.run,
+            "domain": self.entry.domain,
+            "task": self.entry.task,
+            "agents": self.entry.agents,
+            "helper": self.answer.helper,
+            "line": self.answer.line,
+            "answer": self.answer.text,
+            "condition": None,
+            "pddl": None,
+            "status": UNTRANSLATED,
+            "reason": None,
+            "logged_cost": self.logged,
+            "logged_no_plan": self.no_plan,
+            "cost": None,
+            "planner": None,
+            "continued": continuation(self.answer.text) is not None,
+        }
+        base.update(fields)
+        base["seconds"] = round(time.perf_counter() - self.start, 3)
+        return SubgoalCheck(**base)
+
+
+def _plan_length(result: PlanResult) -> float | None:
+    return float(len(result.plan)) if result.solved and result.plan is not None else None
+
+
+def check_entry(
+    entry: Entry,
+    task: BenchmarkTask,
+    agent_predicates: Collection[str],
+    settings: PlannerSettings,
+    planner: Callable[[Any, PlannerSettings], PlanResult] = plan,
+) -> list[SubgoalCheck]:
+    """Every helper of ``entry`` on ``task`` (see the module docstring)."""
+    problem = task.problem
+    environment = environment_part(problem.init, agent_predicates)
+    goals: dict[int, Goal] = {}
+    checks: list[SubgoalCheck] = []
+    official = entry.official
+    for answer in entry.answers:
+        start = time.perf_counter()
+        helper = answer.helper
+        logged = (
+            official.helper_costs[helper - 1] if helper - 1 < len(official.helper_costs) else None
+        )
+        no_plan = helper in official.helper_no_plan
+        times = official.helper_times_s
+        logged_time = times[helper - 1] if helper - 1 < len(times) else None
+        # an empty plan is logged as "no solution found", in about no time
+        empty_logged = (
+            no_plan and logged_time is not None and logged_time < 0.9 * settings.search_time_limit_s
+        )
+
+        row = _RowMaker(entry, answer, logged, no_plan, start)
+
+        try:
+            parsed = parse_english_subgoal(answer.text, helper, problem)
+        except SubgoalError as error:
+            checks.append(row(reason=f"no condition in the answer: {error}"))
+            continue
+        if parsed.kind != "subgoal" or parsed.text is None:
+            checks.append(row(reason="the answer is 'none'"))
+            continue
+        translation = translate_english(problem, parsed.text, task.domain_name)
+        if translation.pddl is None:
+            checks.append(row(condition=parsed.text, reason=translation.reason))
+            continue
+        try:
+            goal = parse_subgoal(translation.pddl, problem)
+        except SubgoalError as error:
+            checks.append(row(condition=parsed.text, pddl=translation.pddl, reason=str(error)))
+            continue
+        helper_problem = handoff_problem(problem, environment, goal, agent_predicates)
+        rule: str | None = None
+        try:
+            check_subgoal(translation.pddl, problem, start=helper_problem.init, earlier=goals)
+        except SubgoalError as error:
+            rule = str(error)
+        result = planner(helper_problem, settings)
+        cost = _plan_length(result)
+        if cost is not None and result.plan is not None:
+            grounded = Grounder(helper_problem).ground_plan(result.plan)
+            environment = progress_state(helper_problem.init, grounded, agent_predicates)
+            goals[helper] = goal
+        if logged is None and not no_plan:
+            status = NOT_LOGGED
+        elif (
+            (cost is None and no_plan)
+            or (cost == 0 and empty_logged)
+            or (cost is not None and cost == logged)
+        ):
+            status = MATCH
+        else:
+            status = DIFFERS
+        checks.append(
+            row(
+                condition=parsed.text,
+                pddl=translation.pddl,
+                status=status,
+                reason=rule,
+                cost=cost,
+                planner=result.status.value,
+            )
+        )
+    return checks
+
+
+def summarise(checks: Iterable[SubgoalCheck]) -> list[dict[str, Any]]:
+    """Per domain (and all): subgoals, translated (count, %), with a logged cost, giving
+    it (count, % of the translated ones with a logged cost), differing."""
+    rows: dict[str, dict[str, Any]] = {}
+    for check in checks:
+        for key in (check.domain, "all"):
+            row = rows.setdefault(
+                key,
+                {
+                    "domain": key, "subgoals": 0, "translated": 0, "compared": 0, "match": 0,
+                    "differs": 0, "differs_continued": 0,
+                },
+            )  # fmt: skip
+            row["subgoals"] += 1
+            if check.status != UNTRANSLATED:
+                row["translated"] += 1
+            if check.status in (MATCH, DIFFERS):
+                row["compared"] += 1
+                row[check.status] += 1
+                if check.status == DIFFERS and check.continued:
+                    row["differs_continued"] += 1
+    out = []
+    for key in sorted(rows, key=lambda k: (k == "all", k)):
+        row = rows[key]
+        row["translated_pct"] = (
+            round(100 * row["translated"] / row["subgoals"], 1) if row["subgoals"] else None
+        )
+        row["match_pct"] = (
+            round(100 * row["match"] / row["compared"], 1) if row["compared"] else None
+        )
+        out.append(row)
+    return out
+
+
+def settings_text(settings: PlannerSettings, version: str) -> str:
+    return (
+        f"Fast Downward ({version}), alias {settings.alias}, search time limit "
+        f"{settings.search_time_limit_s:g} s per helper plan"
+    )
