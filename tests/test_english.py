@@ -41,6 +41,12 @@ CASES = [
     (
         "blocksworld",
         1,
+        "block b3 is stacked on b2 and the robot arm is not holding anything",
+        "(and (on b3 b2) (arm-empty))",
+    ),
+    (
+        "blocksworld",
+        1,
         "All blocks are clear and on the table.",
         "(and (clear b1) (clear b2) (clear b3) (on-table b1) (on-table b2) (on-table b3))",
     ),
@@ -69,6 +75,21 @@ CASES = [
         " (free robot2 lgripper2) (free robot2 rgripper2))",
     ),
     ("grippers", 1, "robot2's left gripper is free", "(and (free robot2 lgripper2))"),
+    (
+        "grippers",
+        1,
+        "robot1 is holding ball2 in its right gripper",
+        "(and (carry robot1 ball2 rgripper1))",
+    ),
+    (
+        "grippers",
+        1,
+        "robot2's right gripper holds ball1 and all other grippers are free",
+        "(and (carry robot2 ball1 rgripper2) (free robot1 lgripper1) (free robot1 rgripper1)"
+        " (free robot2 lgripper2))",
+    ),
+    ("grippers", 1, "ball2 is at room2", "(and (at ball2 room2))"),
+    ("grippers", 1, "(and (at ball2 room2))", "(and (at ball2 room2))"),  # PDDL already
     # barman p01: shaker1..3, shot1..4, hands left and right
     (
         "barman",
@@ -85,6 +106,18 @@ CASES = [
     ),
     ("barman", 1, "shot glass 2 is clean and on the table", "(and (clean shot2) (ontable shot2))"),
     ("barman", 1, "The right hand holds shaker3.", "(and (holding right shaker3))"),
+    (
+        "barman",
+        1,
+        "shot1 contains ingredient2 and the robot is not holding anything",
+        "(and (contains shot1 ingredient2) (handempty left) (handempty right))",
+    ),
+    (
+        "barman",
+        1,
+        "the left and right hands hold nothing",
+        "(and (handempty left) (handempty right))",
+    ),
     ("barman", 1, "shot3 does not contain ingredient1", "(and (not (contains shot3 ingredient1)))"),
     # tyreworld p01: one hub, one nut, flat tyre w1 on it, intact tyre r1 in the boot
     ("tyreworld", 1, "The intact tyre is inflated and all hands are empty.", "(and (inflated r1))"),

@@ -40,9 +40,28 @@ def goal_text(reading: Reading) -> str:
     return "(and " + " ".join(literals) + ")"
 
 
+def _written_in_pddl(problem: Problem, text: str) -> str | None:
+    """The goal, when the "English" subgoal is a PDDL goal of the task already."""
+    from twostep.llm.parsing import extract_pddl_goal
+    from twostep.subgoals import SubgoalError, parse_subgoal
+
+    if "(" not in text:
+        return None
+    found = extract_pddl_goal(text)
+    if found is None:
+        return None
+    try:
+        return parse_subgoal(found, problem).to_pddl()
+    except SubgoalError:
+        return None
+
+
 def translate_english(problem: Problem, english: str, domain: str | None = None) -> Translation:
     """``english`` as a PDDL goal of ``problem``; ``domain`` names the describer whose
     phrases to use (default: the one of the PDDL domain's name, else predicate names)."""
+    written = _written_in_pddl(problem, english)
+    if written is not None:
+        return Translation(english, written, None, ("the subgoal is written in PDDL",))
     grammar = Grammar(problem, describer_domain(problem, domain))
     try:
         reading = read_sentence(grammar, english)

@@ -114,6 +114,10 @@ _LEADS: tuple[tuple[str, ...], ...] = (
 )
 _AGENT_WORDS = frozenset({"you", "your", "robot", "agent"})
 _EMPTY, _FREE = stem("empty"), stem("free")
+_ANYTHING, _NOTHING = stem("anything"), stem("nothing")
+_IDLE_WORDS = {
+    ("be", _EMPTY), ("be", _FREE), ("be", "not", "hold", _ANYTHING), ("hold", _NOTHING)
+}  # fmt: skip
 RELEASE = "<release>"
 _SELF = frozenset({"you", "yourself", "itself", "himself", "herself", "agent"})
 _MAX_SPAN = 14
@@ -138,11 +142,23 @@ class Template:
     def cost(self) -> int:
         return int(self.negative) + len(self.omitted)
 
+    @property
+    def idle(self) -> bool:
+        """Says that what an agent holds things with holds nothing ("is empty")."""
+        words = tuple(i for i in self.items if isinstance(i, str) and i != AGENT)
+        return self.agent_part and not self.negative and words in _IDLE_WORDS
+
 
 # What "all hands are empty" reads as where the domain has no agent state.
 _RELEASE_TEMPLATES = tuple(
     Template(RELEASE, (AGENT, "be", *words), text="the agent holds nothing")
-    for words in ((_EMPTY,), (_FREE,), ("not", "hold", "anything"), ("not", "carry", "anything"))
+    for words in (
+        (_EMPTY,),
+        (_FREE,),
+        ("not", "hold", _ANYTHING),
+        ("not", "carry", _ANYTHING),
+        ("hold", _NOTHING),
+    )
 )
 
 
@@ -338,6 +354,19 @@ def _agent_part_templates(templates: Sequence[Template], lexicon: Lexicon) -> li
             template.text, True,
         )  # fmt: skip
         out.append(marked)
+        items = template.items
+        if len(items) >= 2 and items[-2] == "be" and items[-1] in (_EMPTY, _FREE):
+            for words in (("be", "not", "hold", _ANYTHING), ("hold", _NOTHING)):
+                out.append(
+                    Template(
+                        template.predicate,
+                        (*items[:-2], *words),
+                        template.negative,
+                        template.omitted,
+                        template.text,
+                        True,
+                    )
+                )
         for a, b in ((_EMPTY, _FREE), (_FREE, _EMPTY)):
             if a in template.items:
                 swapped = tuple(b if i == a else i for i in template.items)
@@ -349,6 +378,47 @@ def _agent_part_templates(templates: Sequence[Template], lexicon: Lexicon) -> li
                         template.omitted,
                         template.text,
                         True,
+                    )
+                )
+    return out
+
+
+def _possession_variants(templates: Sequence[Template]) -> list[Template]:
+    """ "holds" for "carries" and the other way round, where the domain says only one of
+    them ("robot1 holds ball1 in lgripper1" in grippers, whose phrase is "carries")."""
+    verbs = ("carry", "hold")
+    used = {i for t in templates for i in t.items if i in verbs}
+    out = []
+    for template in templates:
+        items = template.items
+        if (
+            len(items) == 5
+            and items[1] in verbs
+            and items[3] == "in"
+            and not template.negative
+            and all(isinstance(items[k], int) for k in (0, 2, 4))
+        ):
+            # "lgripper1 holds ball1" for "robot1 carries ball1 in lgripper1": the holder
+            # is then the one the task relates to that gripper
+            holder, held, place = items[0], items[2], items[4]
+            assert isinstance(holder, int)
+            for verb in verbs:
+                out.append(
+                    Template(
+                        template.predicate, (place, verb, held), False, (holder,), template.text
+                    )
+                )
+        for verb in used & set(template.items):
+            for other in set(verbs) - used:
+                items = tuple(other if i == verb else i for i in template.items)
+                out.append(
+                    Template(
+                        template.predicate,
+                        items,
+                        template.negative,
+                        template.omitted,
+                        template.text,
+                        template.agent_part,
                     )
                 )
     return out
@@ -366,8 +436,17 @@ class Grammar:
         self.lexicon = Lexicon(problem, domain)
         predicates = tuple(sorted((p, len(t)) for p, t in problem.domain.predicates.items()))
         base = _domain_templates(problem.domain.name, predicates, domain)
+        base = (*base, *_possession_variants(base))
         self.templates = _agent_part_templates(base, self.lexicon)
         self.agent_state = any(t.agent_part for t in self.templates)
+        self.agent_templates = any(AGENT in t.items for t in self.templates)
+        self.parts = tuple(
+            o
+            for noun in self.lexicon.nouns
+            if noun.words and noun.words[-1] in AGENT_PARTS and not noun.plural
+            and len(noun.words) == 1
+            for o in noun.objects
+        )  # fmt: skip
         if not self.agent_state:
             self.templates += list(_RELEASE_TEMPLATES)
         self.adjectives: dict[str, str] = {}
@@ -384,6 +463,9 @@ class Grammar:
             ):
                 self.adjectives.setdefault(items[2], template.predicate)
         self.known = problem.init | problem.goal.positive
+        words = {i for t in self.templates for i in t.items if isinstance(i, str)}
+        # "ball1 is at room2" where the domain says "in" (and has no "at"): the same place
+        self.place_synonyms = {"at": "in"} if "in" in words and "at" not in words else {}
 
     # -------------------------------------------------------------- noun phrases
 
@@ -522,13 +604,19 @@ class Grammar:
         """The agent (or what it holds things with) where the domain names no such objects."""
         norms = [t.norm for t in head]
         words = set(norms)
-        if words <= _SELF or (words & AGENT_PARTS and not any(
-            self.lexicon.has_noun(w) for w in words & AGENT_PARTS
-        ) and words <= AGENT_PARTS | _SELF | {"robot", "own"}):  # fmt: skip
-            return Mention(text, (), "agent" if self.agent_state else "release")
-        if words == {"robot"} and not self.lexicon.has_noun("robot"):
-            return Mention(text, (), "agent" if self.agent_state else "release")
-        return None
+        agent = words <= _SELF or (
+            words & AGENT_PARTS
+            and not any(self.lexicon.has_noun(w) for w in words & AGENT_PARTS)
+            and words <= AGENT_PARTS | _SELF | {"robot", "own"}
+        )
+        if not agent and not (words == {"robot"} and not self.lexicon.has_noun("robot")):
+            return None
+        if not self.agent_state:
+            return Mention(text, (), "release")
+        if not self.agent_templates and self.parts:
+            # the agent of a domain whose hands are objects: said idle, all its hands are
+            return Mention(text, self.parts, "parts", True)
+        return Mention(text, (), "agent")
 
     def _related(self, obj: str, others: Sequence[str]) -> bool:
         return any(obj in fact[1:] and all(o in fact[1:] for o in others) for fact in self.known)
@@ -586,7 +674,7 @@ class Grammar:
                     )
                 cost += min(d for d, _ in fitting)
                 objects = [o for _, o in fitting]
-                if mention.mode in ("all", "exact") or len(objects) == 1:
+                if mention.mode in ("all", "exact", "parts") or len(objects) == 1:
                     chosen[k] = objects
                 else:
                     loose[k] = Mention(mention.text, tuple(objects), mention.mode, mention.plural)
@@ -682,7 +770,13 @@ class Grammar:
                 for f in self.known
             )
         ]
-        return same or found
+        if same or found or len(bound) < 2:
+            return same or found
+        # related to one of them ("lgripper1 holds ball1": the robot of that gripper)
+        return sorted(
+            {o for b in bound for o in self._left_out(predicate, type_name, [b])},
+            key=natural_key,
+        )
 
 
 def _depth(domain: Domain, type_name: str) -> int:
@@ -757,10 +851,12 @@ class _Parser:
                 yield from self.match(rest, i, bindings, subject)
                 return
             end = min(len(toks), i + _MAX_SPAN)
+            # "its" names the clause's own subject once there is one
+            context = next(iter(bindings.values()), subject)
             for j in range(end, i, -1):
                 if not rest and not self._boundary(j):
                     continue
-                found = self.mentions(i, j, subject)
+                found = self.mentions(i, j, context)
                 if found is None:
                     continue
                 agentish = all(m.mode in ("agent", "release") for m in found)
@@ -771,6 +867,8 @@ class _Parser:
         j = i
         while j < len(toks) and (toks[j].raw in ARTICLES or toks[j].raw in _FILLERS):
             j += 1
+        if item != "be" and j + 1 < len(toks) and toks[j].norm == "be" and toks[j + 1].norm == item:
+            j += 1  # "is holding" says what "holds" says
         if j < len(toks) and toks[j].norm == item:
             yield from self.match(rest, j + 1, bindings, subject)
 
@@ -810,6 +908,8 @@ class _Parser:
                 continue
             if template.predicate == RELEASE:
                 yield j, Clause([], 0, bindings.get(AGENT), [_RELEASE_NOTE])
+                continue
+            if not template.idle and any(m.mode == "parts" for ms in bindings.values() for m in ms):
                 continue
             clause = self.grammar.resolve(template, bindings)
             if isinstance(clause, str):
@@ -900,7 +1000,9 @@ def read_sentence(grammar: Grammar, sentence: str) -> Reading:
     """The facts ``sentence`` says about the grammar's task; :class:`ReadError` with the
     reason when it cannot be read, or reads several ways."""
     text = _LABEL.sub("", sentence.strip())
-    toks = normalise(tokens(text))
+    toks = [
+        Token(t.raw, grammar.place_synonyms.get(t.norm, t.norm)) for t in normalise(tokens(text))
+    ]
     if not toks:
         raise ReadError("an empty subgoal")
     parser = _Parser(grammar, toks)

@@ -80,7 +80,7 @@ class Lexicon:
             if re.search(r"[-_]", name):
                 self._add(tokens(re.sub(r"[-_]", " ", name)), name)
             number = _number(name)
-            for singular, _, members in nouns:
+            for singular, plural, members in nouns:
                 if name not in members:
                     continue
                 words = tokens(singular)
@@ -90,9 +90,10 @@ class Lexicon:
                     self._add(["".join(words) + number], name)
                     self._add(["-".join([*words, number])], name)
                     self._add([*words, "number", number], name)
-                else:
-                    self._add([*words, *tokens(name)], name)
-                    self._add([*tokens(name), *words], name)
+                # "block b2", "left hand", "hand left", "left and right hands"
+                self._add([*words, *tokens(name)], name)
+                self._add([*tokens(name), *words], name)
+                self._add([*tokens(name), *tokens(plural)], name)
         self.longest_name = max((len(k) for k in self.names), default=1)
 
     def _add(self, words: Iterable[str], name: str) -> None:
