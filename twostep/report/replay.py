@@ -274,3 +274,41 @@ def replay_settings(runs: pd.DataFrame) -> dict[str, str]:
         "score": f"{score} (minimum makespan)" if score == "exact" else score,
         "translator": translator,
     }
+
+
+def compact_markdown(tables: ReplayTables) -> str:
+    """Table I in one line per domain and row: ``length (tasks)`` per N, ``± std`` where
+    runs differ; then each row's length / SA averaged over the domains."""
+    table = tables.table
+    if table.empty:
+        return ""
+    ns = sorted(int(n) for n in table["agents"].unique())
+    head = "| domain | row | " + " | ".join(f"N = {n}" for n in ns) + " |"
+    lines = [head, "|---|---|" + "---:|" * len(ns)]
+    for domain in sorted(table["domain"].unique()):
+        for source in SOURCES:
+            cells = []
+            for n in ns:
+                found = table[
+                    (table["domain"] == domain)
+                    & (table["agents"] == n)
+                    & (table["source"] == source)
+                ]
+                if found.empty or not found.iloc[0]["runs"]:
+                    cells.append("-")
+                    continue
+                row = found.iloc[0]
+                spread = "" if math.isnan(row["std"]) else f" ± {_number(row['std'])}"
+                cells.append(f"{_number(row['exec_length'])}{spread} ({row['tasks']})")
+            lines.append(f"| {domain} | {LABELS[source]} | " + " | ".join(cells) + " |")
+    for source in SOURCES:
+        cells = []
+        for n in ns:
+            found = tables.macro[(tables.macro["agents"] == n) & (tables.macro["source"] == source)]
+            if found.empty:
+                cells.append("-")
+            else:
+                row = found.iloc[0]
+                cells.append(f"{_number(row['length_over_sa'], 2)} ({row['domains']} dom.)")
+        lines.append(f"| length / own SA | {LABELS[source]} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"

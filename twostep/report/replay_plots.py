@@ -18,7 +18,14 @@ from matplotlib.figure import Figure
 
 from twostep.files import write_text_atomic
 from twostep.report.plots import _new_figure, paper_style, save_figure
-from twostep.report.replay import LABELS, SOURCES, ReplayTables, coverage_markdown, table_markdown
+from twostep.report.replay import (
+    LABELS,
+    SOURCES,
+    ReplayTables,
+    compact_markdown,
+    coverage_markdown,
+    table_markdown,
+)
 from twostep.report.style import COLUMN_WIDTH_IN, OKABE_ITO, TEXT_WIDTH_IN
 
 COLOURS = {
@@ -104,6 +111,11 @@ def write_replay(
         "Each cell averages the tasks all three rows cover at that N (`tasks`; `own tasks`: "
         "what the row has alone). `runs`: logs (official) or seeds (TwoStep) averaged; with "
         "more than one the cell shows mean ± standard deviation over runs, with one none.",
+        "",
+        "Execution length (tasks) per domain, row and N:",
+        "",
+        compact_markdown(tables),
+        "The cells in full:",
         "",
         table_markdown(tables),
     ]
