@@ -316,7 +316,8 @@ def test_check_against_the_logged_costs(tmp_path: Path, data_root: Path) -> None
     (summary, _) = summarise(checks)
     assert summary == {
         "domain": "blocksworld", "subgoals": 4, "translated": 3, "compared": 3, "match": 2,
-        "differs": 1, "differs_continued": 0, "translated_pct": 75.0, "match_pct": 66.7,
+        "differs": 1, "differs_continued": 0, "differs_official_limit": 0, "translated_pct": 75.0,
+        "match_pct": 66.7, "match_pct_comparable": 66.7,
     }  # fmt: skip
 
 
@@ -337,9 +338,9 @@ def test_an_empty_plan_is_what_the_official_code_logs_as_no_solution(
     task = load_task("blocksworld", 1, data_root)
     settings = PlannerSettings(alias="lama", search_time_limit_s=100)
     checks = [c for e in bundle.entries for c in check_entry(e, task, BLOCKS, settings)]
-    assert [(c.status, c.cost, c.logged_no_plan) for c in checks] == [
-        (MATCH, 0.0, True),
-        (DIFFERS, 0.0, True),
+    assert [(c.status, c.cost, c.logged_no_plan, c.why) for c in checks] == [
+        (MATCH, 0.0, True, None),
+        (DIFFERS, 0.0, True, "official_limit"),  # a known cause, said beside it
     ]
 
 

@@ -203,8 +203,6 @@ def _agent_predicates(domains: Sequence[str], given: str | None) -> dict[str, li
 
 
 def _check_answers(args: argparse.Namespace) -> int:
-    import json
-
     from twostep.benchmark import BenchmarkError, load_task
     from twostep.files import write_json_atomic
     from twostep.planner import PlannerSettings
@@ -271,15 +269,27 @@ def _check_answers(args: argparse.Namespace) -> int:
         },
     )
     print(f"planner: {settings_text(settings, f'up-fast-downward {version}')}")
-    print(f"{'domain':<12} {'subgoals':>8} {'translated':>14} {'logged cost':>16}")
+    print(
+        f"{'domain':<12} {'subgoals':>8} {'translated':>14} {'logged cost':>16} "
+        f"{'goes on':>8} {'at limit':>9} {'other':>6} {'comparable':>16}"
+    )
     for row in summary:
         translated = f"{row['translated']} ({row['translated_pct']}%)"
         match = (
             f"{row['match']}/{row['compared']} ({row['match_pct']}%)" if row["compared"] else "-"
         )
-        print(f"{row['domain']:<12} {row['subgoals']:>8} {translated:>14} {match:>16}")
+        known = row["differs_continued"] + row["differs_official_limit"]
+        comparable = f"{row['match']}/{row['compared'] - known} ({row['match_pct_comparable']}%)"
+        print(
+            f"{row['domain']:<12} {row['subgoals']:>8} {translated:>14} {match:>16} "
+            f"{row['differs_continued']:>8} {row['differs_official_limit']:>9} "
+            f"{row['differs'] - known:>6} {comparable:>16}"
+        )
+    print(
+        "goes on: the answer goes on to another helper's subgoal (the official code "
+        "translated both); at limit: the official call ran to its time limit without a plan"
+    )
     print(f"written: {out}")
-    del json
     return 0
 
 

@@ -40,6 +40,16 @@ from twostep.replay.bundle import Answer, Entry
 from twostep.strips import Grounder
 from twostep.subgoals import SubgoalError, check_subgoal, parse_subgoal
 
+# Known causes of a cost other than the log's
+CONTINUED = "continued"  # the answer went on to another helper's subgoal (translated whole)
+OFFICIAL_LIMIT = "official_limit"  # the official call ran to its limit without a plan
+WHY = {
+    CONTINUED: "the answer goes on to another helper's subgoal, which the official code "
+    "translated with it",
+    OFFICIAL_LIMIT: "the official planner call ran to its time limit without a plan, where "
+    "this reading is planned (its own translation, not logged, asked for something else)",
+}
+
 # What became of one replayed subgoal
 MATCH = "match"  # translated, planned: the logged cost (or no plan, as logged)
 DIFFERS = "differs"  # translated, planned: another cost than the log's
@@ -68,6 +78,8 @@ class SubgoalCheck:
     planner: str | None  # the planner's status
     seconds: float = 0.0
     continued: bool = False  # the answer went on to another helper's subgoal
+    logged_time_s: float | None = None  # the official planner call's time
+    why: str | None = None  # a known cause of a different cost (WHY)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -81,6 +93,7 @@ class _RowMaker:
     answer: Answer
     logged: float | None
     no_plan: bool
+    logged_time: float | None
     start: float
 
     def __call__(self, **fields: Any) -> SubgoalCheck:
@@ -101,6 +114,7 @@ class _RowMaker:
             "cost": None,
             "planner": None,
             "continued": continuation(self.answer.text) is not None,
+            "logged_time_s": self.logged_time,
         }
         base.update(fields)
         base["seconds"] = round(time.perf_counter() - self.start, 3)
@@ -138,7 +152,7 @@ def check_entry(
             no_plan and logged_time is not None and logged_time < 0.9 * settings.search_time_limit_s
         )
 
-        row = _RowMaker(entry, answer, logged, no_plan, start)
+        row = _RowMaker(entry, answer, logged, no_plan, logged_time, start)
 
         try:
             parsed = parse_english_subgoal(answer.text, helper, problem)
@@ -179,6 +193,11 @@ def check_entry(
             status = MATCH
         else:
             status = DIFFERS
+        why = None
+        if status == DIFFERS and continuation(answer.text) is not None:
+            why = CONTINUED
+        elif status == DIFFERS and no_plan and not empty_logged and cost is not None:
+            why = OFFICIAL_LIMIT
         checks.append(
             row(
                 condition=parsed.text,
@@ -187,6 +206,7 @@ def check_entry(
                 reason=rule,
                 cost=cost,
                 planner=result.status.value,
+                why=why,
             )
         )
     return checks
@@ -194,7 +214,8 @@ def check_entry(
 
 def summarise(checks: Iterable[SubgoalCheck]) -> list[dict[str, Any]]:
     """Per domain (and all): subgoals, translated (count, %), with a logged cost, giving
-    it (count, % of the translated ones with a logged cost), differing."""
+    it (count, % of the translated ones with a logged cost), differing (and why, where a
+    cause is known: :data:`WHY`); ``match_pct_comparable`` leaves those out."""
     rows: dict[str, dict[str, Any]] = {}
     for check in checks:
         for key in (check.domain, "all"):
@@ -202,7 +223,7 @@ def summarise(checks: Iterable[SubgoalCheck]) -> list[dict[str, Any]]:
                 key,
                 {
                     "domain": key, "subgoals": 0, "translated": 0, "compared": 0, "match": 0,
-                    "differs": 0, "differs_continued": 0,
+                    "differs": 0, "differs_continued": 0, "differs_official_limit": 0,
                 },
             )  # fmt: skip
             row["subgoals"] += 1
@@ -211,8 +232,8 @@ def summarise(checks: Iterable[SubgoalCheck]) -> list[dict[str, Any]]:
             if check.status in (MATCH, DIFFERS):
                 row["compared"] += 1
                 row[check.status] += 1
-                if check.status == DIFFERS and check.continued:
-                    row["differs_continued"] += 1
+                if check.why is not None:
+                    row[f"differs_{check.why}"] += 1
     out = []
     for key in sorted(rows, key=lambda k: (k == "all", k)):
         row = rows[key]
@@ -221,6 +242,11 @@ def summarise(checks: Iterable[SubgoalCheck]) -> list[dict[str, Any]]:
         )
         row["match_pct"] = (
             round(100 * row["match"] / row["compared"], 1) if row["compared"] else None
+        )
+        known = row["differs_continued"] + row["differs_official_limit"]
+        comparable = row["compared"] - known
+        row["match_pct_comparable"] = (
+            round(100 * row["match"] / comparable, 1) if comparable else None
         )
         out.append(row)
     return out

@@ -205,16 +205,20 @@ def coverage_markdown(check: Mapping[str, Any]) -> str:
     lines = [
         f"Planner of the check: {check.get('planner', {}).get('text', '?')}.",
         "",
-        "| domain | subgoals | translated | logged cost given |",
-        "|---|---:|---:|---:|",
+        "| domain | subgoals | translated | logged cost given | another cost: the answer "
+        "goes on | the official call at its limit | other | given, of the comparable |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for row in check.get("summary", []):
         match = (
             f"{row['match']}/{row['compared']} ({row['match_pct']} %)" if row["compared"] else "-"
         )
+        known = row.get("differs_continued", 0) + row.get("differs_official_limit", 0)
         lines.append(
             f"| {row['domain']} | {row['subgoals']} | {row['translated']} "
-            f"({row['translated_pct']} %) | {match} |"
+            f"({row['translated_pct']} %) | {match} | {row.get('differs_continued', 0)} | "
+            f"{row.get('differs_official_limit', 0)} | {row['differs'] - known} | "
+            f"{row['match']}/{row['compared'] - known} ({row.get('match_pct_comparable')} %) |"
         )
     failed = [s for s in check.get("subgoals", []) if s["status"] == "untranslated"]
     differs = [s for s in check.get("subgoals", []) if s["status"] == "differs"]
@@ -238,6 +242,8 @@ def coverage_markdown(check: Mapping[str, Any]) -> str:
                 cost = "no plan" if item["cost"] is None else f"{item['cost']:g}"
                 logged = "no plan" if item["logged_no_plan"] else f"{item['logged_cost']:g}"
                 note = f" ({item['reason']})" if item.get("reason") else ""
+                if item.get("why"):
+                    note += f"; {item['why'].replace('_', ' ')}"
                 lines.append(
                     f'- {where}: "{said}" -> `{item["pddl"]}`: {cost}, logged {logged}{note}'
                 )
