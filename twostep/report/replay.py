@@ -220,33 +220,40 @@ def coverage_markdown(check: Mapping[str, Any]) -> str:
             f"{row.get('differs_official_limit', 0)} | {row['differs'] - known} | "
             f"{row['match']}/{row['compared'] - known} ({row.get('match_pct_comparable')} %) |"
         )
-    failed = [s for s in check.get("subgoals", []) if s["status"] == "untranslated"]
-    differs = [s for s in check.get("subgoals", []) if s["status"] == "differs"]
-    for title, items in (("Not translated", failed), ("Another cost than logged", differs)):
+    subgoals = check.get("subgoals", [])
+    failed = [s for s in subgoals if s["status"] == "untranslated"]
+    differs = [s for s in subgoals if s["status"] == "differs"]
+    groups: list[tuple[str, list[dict[str, Any]]]] = [("Not translated", failed)]
+    for why, title in (
+        ("continued", "Another cost than logged: the answer goes on to another helper"),
+        ("official_limit", "Another cost than logged: the official call ran to its limit"),
+        (None, "Another cost than logged, no known cause"),
+    ):
+        groups.append((title, [s for s in differs if s.get("why") == why]))
+    for title, items in groups:
         if not items:
             continue
-        lines += ["", f"{title} ({len(items)}), first of each kind:", ""]
+        lines += ["", f"{title} ({len(items)}), examples:", ""]
         seen: set[str] = set()
         for item in items:
-            key = f"{item['domain']}:{item.get('condition') or item['answer']}"
-            if key in seen or len(seen) >= 8:
+            said = item.get("condition") or item["answer"]
+            if said in seen or len(seen) >= 4:
                 continue
-            seen.add(key)
+            seen.add(said)
             where = (
                 f"{item['domain']} p{item['task']:02d} N={item['agents']} helper {item['helper']}"
             )
-            said = item.get("condition") or item["answer"]
             if item["status"] == "untranslated":
                 lines.append(f'- {where}: "{said}": {item["reason"]}')
-            else:
-                cost = "no plan" if item["cost"] is None else f"{item['cost']:g}"
-                logged = "no plan" if item["logged_no_plan"] else f"{item['logged_cost']:g}"
-                note = f" ({item['reason']})" if item.get("reason") else ""
-                if item.get("why"):
-                    note += f"; {item['why'].replace('_', ' ')}"
-                lines.append(
-                    f'- {where}: "{said}" -> `{item["pddl"]}`: {cost}, logged {logged}{note}'
-                )
+                continue
+            cost = "no plan" if item["cost"] is None else f"{item['cost']:g}"
+            logged = "no plan" if item["logged_no_plan"] else f"{item['logged_cost']:g}"
+            if item.get("logged_time_s") is not None:
+                logged += f" in {item['logged_time_s']:g} s"
+            note = f" ({item['reason']})" if item.get("reason") else ""
+            answer = " ".join(str(item["answer"]).split())
+            shown = f'"{said}"' if not item.get("continued") else f'"{answer}"'
+            lines.append(f"- {where}: {shown} -> `{item['pddl']}`: {cost}, logged {logged}{note}")
     return "\n".join(lines) + "\n"
 
 

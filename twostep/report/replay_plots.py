@@ -33,7 +33,7 @@ COLOURS = {
     "twostep": (OKABE_ITO["reddish purple"], "v", "-"),
     "plan-deal": (OKABE_ITO["orange"], "P", "-"),
 }
-CHECK_FILE = "translation_check.json"
+CHECK_GLOB = "translation_check*.json"
 
 
 def replay_figure(tables: ReplayTables) -> Figure:
@@ -90,8 +90,9 @@ def replay_figure(tables: ReplayTables) -> Figure:
 def write_replay(
     tables: ReplayTables, bundle_dir: Path, out_dir: Path, settings: dict[str, Any]
 ) -> list[Path]:
-    """``replay.md`` (Table I, the macro row, the translation check if the bundle has
-    one), ``replay_table1.csv`` and the figure ``replay_fig3`` (PNG, PDF, SVG)."""
+    """``replay.md`` (Table I, the macro row, the translation checks the bundle's folder
+    holds: ``translation_check*.json``), ``replay_table1.csv`` and the figure
+    ``replay_fig3`` (PNG, PDF, SVG)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
     csv = out_dir / "replay_table1.csv"
@@ -119,10 +120,12 @@ def write_replay(
         "",
         table_markdown(tables),
     ]
-    check = bundle_dir / CHECK_FILE
-    if check.is_file():
+    checks = sorted(bundle_dir.glob(CHECK_GLOB))
+    if checks:
+        lines += ["## Translation of the replayed subgoals (rules)", ""]
+    for check in checks:  # twostep-data check-answers (one file per planner setting)
         data = json.loads(check.read_text(encoding="utf-8"))
-        lines += ["## Translation of the replayed subgoals (rules)", "", coverage_markdown(data)]
+        lines += [f"`{check.name}`:", "", coverage_markdown(data)]
     if not tables.empty:
         lines += ["![Fig. 3 from replayed answers](replay_fig3.png)", ""]
     page = out_dir / "replay.md"
