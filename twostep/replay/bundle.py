@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from twostep.files import NotTextError, read_text_file, write_json_atomic
+from twostep.files import NotTextError, read_input_bytes, read_text_file, write_json_atomic
 
 BUNDLE_FILE = "bundle.json"
 BUNDLE_FORMAT = "twostep-replay-bundle"
@@ -250,8 +250,8 @@ class Bundle:
         if recorded is None:
             return
         try:
-            digest = hashlib.sha256(Path(problem_path).read_bytes()).hexdigest()
-        except OSError:
+            digest = hashlib.sha256(read_input_bytes(Path(problem_path))).hexdigest()
+        except (OSError, NotTextError):
             digest = "missing"
         if digest != recorded:
             raise BundleMiss(

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from twostep.files import NotTextError, read_text_file
+from twostep.files import NotTextError, read_input_bytes, read_text_file
 from twostep.replay.bundle import (
     BUNDLE_FILE,
     Bundle,
@@ -182,4 +182,8 @@ def _record_tasks(bundle: Bundle, folder: Path) -> None:
             raise AnswerImportError(
                 f"--tasks {folder}: no {domain}/p{task:02d}.pddl (the logs answer that task)"
             )
-        bundle.tasks[task_name(domain, task)] = hashlib.sha256(path.read_bytes()).hexdigest()
+        try:
+            data = read_input_bytes(path)
+        except (OSError, NotTextError) as error:
+            raise AnswerImportError(f"--tasks {folder}: {error}") from None
+        bundle.tasks[task_name(domain, task)] = hashlib.sha256(data).hexdigest()
