@@ -53,7 +53,7 @@ def test_paper_replay_from_logs_to_table_one(tmp_path: Path, data_root: Path) ->
     log = tmp_path / "10_8_2_agent.txt"
     log.write_text(
         block("blocksworld", 1, ["b3 is clear and on the table."], length=5.0, sa_cost=8.0)
-        + block("blocksworld", 2, ["b9 floats."], length=9.0, sa_cost=10.0)
+        + block("blocksworld", 2, ["b1 floats above b2."], length=9.0, sa_cost=10.0)
     )
     answers, out = tmp_path / "answers", tmp_path / "out"
     tool(
@@ -73,7 +73,7 @@ def test_paper_replay_from_logs_to_table_one(tmp_path: Path, data_root: Path) ->
     replayed = {r["task"]: r for r in results if r.get("decomposer") == "llm"}
     assert replayed[1]["answer_source"] == "replayed, model gpt-4o, 10_8_2_agent.txt:2"
     assert [s["status"] for s in replayed[1]["subgoals"]] == ["accepted"]
-    # p02's answer names a block the task does not have: a counted translation failure
+    # p02's answer says what no phrase of the domain says: a counted translation failure
     assert replayed[2]["translation"] == {"translator": "rules", "read": 0, "failed": 1}
     assert replayed[2]["subgoals"][0]["reason"].startswith("translation failed")
     for result in results:  # every schedule, by our simulator and by the independent one
