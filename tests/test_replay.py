@@ -366,3 +366,23 @@ def test_the_grid_is_what_the_bundle_answers(two_runs: Path) -> None:
     ]
     assert len(replay_jobs(bundle, "gpt-4o", ["twostep"], agents=[3])) == 1
     assert replay_jobs(bundle, "o1-mini") == []
+
+
+# ------------------------------------------------------------------ job identity
+
+
+def test_the_new_llm_keys_keep_stored_jobs_keys_and_the_bundle_is_an_input(tmp_path: Path) -> None:
+    """llm.bundle and llm.translator at the values that compute what jobs computed before
+    them leave the job key as it was; a bundle's content is one of the job's inputs."""
+    from twostep.identity import job_input_files, job_key
+
+    before = {"domain": {"name": "blocksworld"}, "task": 1, "agents": 2, "seed": 0,
+              "method": {"name": "twostep"}, "decomposer": {"name": "llm"},
+              "llm": {"model": "openai/gpt-4o", "mode": "live"}}  # fmt: skip
+    after = {**before, "llm": {**before["llm"], "bundle": None, "translator": "llm"}}
+    assert job_key(after) == job_key(before)
+    rules = {**before, "llm": {**before["llm"], "translator": "rules"}}
+    assert job_key(rules) != job_key(before)
+    replayed = {**before, "llm": {**before["llm"], "mode": "bundle", "bundle": str(tmp_path)}}
+    files = job_input_files(replayed, tmp_path / "p01.pddl")
+    assert files["llm_bundle"] == tmp_path / BUNDLE_FILE
