@@ -134,10 +134,26 @@ def test_reasoning_before_the_answers_and_blocks_without_answers(tmp_path: Path)
     assert report.without_answers == {"log.txt": 1}
 
 
-def test_logged_translations_are_kept(tmp_path: Path) -> None:
-    text = block("blocksworld", 1, ["b3 is clear."], translations=["(and (clear b3))"])
+def test_logged_translations_are_kept_replayed_and_compared(
+    tmp_path: Path, data_root: Path
+) -> None:
+    text = block(
+        "blocksworld",
+        1,
+        ["b3 is clear.", "b1 is clear."],
+        translations=["(and (clear b3))", "(and (on-table b3))"],
+    )
     (entry,) = import_logs([write(tmp_path, "log.txt", text)], "m", tmp_path / "b").bundle.entries
-    assert entry.translations == ("(:goal (and (clear b3)) )",)  # as the log prints it
+    assert entry.translations == ("(:goal (and (clear b3)) )", "(:goal (and (on-table b3)) )")
+    task = load_task("blocksworld", 1, data_root)
+    client = LLMClient(
+        LLMSettings(model="m", mode="bundle", bundle=tmp_path / "b", translator="llm")
+    )
+    pddl, exchange = translate_subgoal(client, task, "b3 is clear", 0, helper=1, agents=3)
+    assert pddl == "(and (clear b3))" and exchange["source"]["line"] == 2
+    checks = check_entry(entry, task, BLOCKS, PlannerSettings(search_time_limit_s=10))
+    # the rules read helper 1 as the model did, helper 2 otherwise
+    assert [c.same_as_logged for c in checks] == [True, False]
 
 
 @pytest.mark.parametrize(
@@ -317,7 +333,8 @@ def test_check_against_the_logged_costs(tmp_path: Path, data_root: Path) -> None
     assert summary == {
         "domain": "blocksworld", "subgoals": 4, "translated": 3, "compared": 3, "match": 2,
         "differs": 1, "differs_continued": 0, "differs_official_limit": 0, "translated_pct": 75.0,
-        "match_pct": 66.7, "match_pct_comparable": 66.7,
+        "match_pct": 66.7, "match_pct_comparable": 66.7, "with_logged_translation": 0,
+        "same_as_logged": 0,
     }  # fmt: skip
 
 

@@ -289,6 +289,13 @@ def _check_answers(args: argparse.Namespace) -> int:
         "goes on: the answer goes on to another helper's subgoal (the official code "
         "translated both); at limit: the official call ran to its time limit without a plan"
     )
+    for row in summary:
+        if row["with_logged_translation"]:
+            print(
+                f"{row['domain']}: the model's own translation is in the log for "
+                f"{row['with_logged_translation']} subgoal(s); the rules give the same goal "
+                f"for {row['same_as_logged']}"
+            )
     print(f"written: {out}")
     return 0
 

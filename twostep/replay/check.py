@@ -32,7 +32,7 @@ from typing import Any
 
 from twostep.benchmark import BenchmarkTask
 from twostep.english import translate_english
-from twostep.llm.parsing import continuation, parse_english_subgoal
+from twostep.llm.parsing import continuation, extract_pddl_goal, parse_english_subgoal
 from twostep.pddl import Goal
 from twostep.planner import PlannerSettings, PlanResult, plan
 from twostep.progression import environment_part, handoff_problem, progress_state
@@ -80,6 +80,8 @@ class SubgoalCheck:
     continued: bool = False  # the answer went on to another helper's subgoal
     logged_time_s: float | None = None  # the official planner call's time
     why: str | None = None  # a known cause of a different cost (WHY)
+    # where the log prints the model's own translation: whether ours is the same goal
+    same_as_logged: bool | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -207,9 +209,25 @@ def check_entry(
                 cost=cost,
                 planner=result.status.value,
                 why=why,
+                same_as_logged=_same_goal(entry, helper, goal, problem),
             )
         )
     return checks
+
+
+def _same_goal(entry: Entry, helper: int, goal: Goal, problem: Any) -> bool | None:
+    """Whether ``goal`` is the goal of the model's own translation the log printed for
+    this helper (None: the log prints none, or not a goal of the task)."""
+    if helper > len(entry.translations) or entry.translations[helper - 1] is None:
+        return None
+    text = extract_pddl_goal(str(entry.translations[helper - 1]))
+    try:
+        logged = parse_subgoal(text, problem) if text else None
+    except SubgoalError:
+        return False
+    if logged is None:
+        return False
+    return (logged.positive, logged.negative) == (goal.positive, goal.negative)
 
 
 def summarise(checks: Iterable[SubgoalCheck]) -> list[dict[str, Any]]:
@@ -224,9 +242,13 @@ def summarise(checks: Iterable[SubgoalCheck]) -> list[dict[str, Any]]:
                 {
                     "domain": key, "subgoals": 0, "translated": 0, "compared": 0, "match": 0,
                     "differs": 0, "differs_continued": 0, "differs_official_limit": 0,
+                    "with_logged_translation": 0, "same_as_logged": 0,
                 },
             )  # fmt: skip
             row["subgoals"] += 1
+            if check.same_as_logged is not None:
+                row["with_logged_translation"] += 1
+                row["same_as_logged"] += int(check.same_as_logged)
             if check.status != UNTRANSLATED:
                 row["translated"] += 1
             if check.status in (MATCH, DIFFERS):
