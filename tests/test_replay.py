@@ -332,10 +332,38 @@ def test_check_against_the_logged_costs(tmp_path: Path, data_root: Path) -> None
     (summary, _) = summarise(checks)
     assert summary == {
         "domain": "blocksworld", "subgoals": 4, "translated": 3, "compared": 3, "match": 2,
-        "differs": 1, "differs_continued": 0, "differs_official_limit": 0, "translated_pct": 75.0,
-        "match_pct": 66.7, "match_pct_comparable": 66.7, "with_logged_translation": 0,
-        "same_as_logged": 0,
+        "differs": 1, "differs_continued": 0, "differs_official_limit": 0,
+        "differs_after_continued": 0, "differs_known": 0, "differs_other": 1,
+        "translated_pct": 75.0, "match_pct": 66.7, "match_pct_comparable": 66.7,
+        "with_logged_translation": 0, "same_as_logged": 0,
     }  # fmt: skip
+
+
+def test_a_helper_after_an_answer_that_goes_on_starts_elsewhere(
+    tmp_path: Path, data_root: Path
+) -> None:
+    """p01 (b3 on b1 on b2) at N = 3. Helper 1's answer goes on to helper 2's subgoal: the
+    official code translated both (b3 and b1 on the table: 4 steps, logged) and helper 2's
+    own goal then already held (logged "no solution found" at once). Read as twostep
+    reads it, helper 1 puts b3 down (2 steps) and helper 2 still has b1 to move (2 steps):
+    both differ, for the causes said beside them, and nothing is left unexplained."""
+    text = block(
+        "blocksworld", 1,
+        ["b3 is clear and on the table. \n agent3 subgoal: b1 is on the table.",
+         "b1 is on the table."],
+        helper_costs=[4.0, None],
+    )  # fmt: skip
+    bundle = import_logs([write(tmp_path, "log.txt", text)], "m", tmp_path / "b").bundle
+    task = load_task("blocksworld", 1, data_root)
+    settings = PlannerSettings(alias="lama", search_time_limit_s=10)
+    checks = [c for e in bundle.entries for c in check_entry(e, task, BLOCKS, settings)]
+    assert [(c.status, c.cost, c.why) for c in checks] == [
+        (DIFFERS, 2.0, "continued"),
+        (DIFFERS, 2.0, "after_continued"),
+    ]
+    (summary, _) = summarise(checks)
+    assert (summary["differs_known"], summary["differs_other"]) == (2, 0)
+    assert summary["match_pct_comparable"] is None  # nothing left to compare
 
 
 def test_an_empty_plan_is_what_the_official_code_logs_as_no_solution(

@@ -271,23 +271,27 @@ def _check_answers(args: argparse.Namespace) -> int:
     print(f"planner: {settings_text(settings, f'up-fast-downward {version}')}")
     print(
         f"{'domain':<12} {'subgoals':>8} {'translated':>14} {'logged cost':>16} "
-        f"{'goes on':>8} {'at limit':>9} {'other':>6} {'comparable':>16}"
+        f"{'goes on':>8} {'after it':>9} {'at limit':>9} {'other':>6} {'comparable':>16}"
     )
     for row in summary:
         translated = f"{row['translated']} ({row['translated_pct']}%)"
         match = (
             f"{row['match']}/{row['compared']} ({row['match_pct']}%)" if row["compared"] else "-"
         )
-        known = row["differs_continued"] + row["differs_official_limit"]
-        comparable = f"{row['match']}/{row['compared'] - known} ({row['match_pct_comparable']}%)"
+        comparable = (
+            f"{row['match']}/{row['compared'] - row['differs_known']} "
+            f"({row['match_pct_comparable']}%)"
+        )
         print(
             f"{row['domain']:<12} {row['subgoals']:>8} {translated:>14} {match:>16} "
-            f"{row['differs_continued']:>8} {row['differs_official_limit']:>9} "
-            f"{row['differs'] - known:>6} {comparable:>16}"
+            f"{row['differs_continued']:>8} {row['differs_after_continued']:>9} "
+            f"{row['differs_official_limit']:>9} {row['differs_other']:>6} {comparable:>16}"
         )
     print(
-        "goes on: the answer goes on to another helper's subgoal (the official code "
-        "translated both); at limit: the official call ran to its time limit without a plan"
+        "another cost than logged, for a known cause of the official code's: goes on: the "
+        "answer goes on to another helper's subgoal (the official code translated both); "
+        "after it: a later helper of such a task (the official one started after both goals); "
+        "at limit: the official call ran to its time limit without a plan"
     )
     for row in summary:
         if row["with_logged_translation"]:

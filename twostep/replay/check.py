@@ -17,7 +17,9 @@ that already holds) as "no solution found", so a cost of 0 matches a "no solutio
 well before its time limit (under 90 % of the check's limit, which is the official runs'
 by default); and where a model's answer goes on to another helper's subgoal ("...
 \n agent3 subgoal: ..."), the official code translated the whole answer while twostep
-reads the helper's own part: such rows say so (``continued``).
+reads the helper's own part: such rows say so (``continued``), and so do the later helpers
+of that task, which the official code started from the state after both goals
+(``after_continued``).
 
 :func:`summarise` gives, per domain: subgoals, how many translate, and of those with a
 logged cost how many give that cost. A different cost is kept beside its subgoal.
@@ -43,9 +45,12 @@ from twostep.subgoals import SubgoalError, check_subgoal, parse_subgoal
 # Known causes of a cost other than the log's
 CONTINUED = "continued"  # the answer went on to another helper's subgoal (translated whole)
 OFFICIAL_LIMIT = "official_limit"  # the official call ran to its limit without a plan
+AFTER_CONTINUED = "after_continued"  # an earlier helper's answer went on: another start
 WHY = {
     CONTINUED: "the answer goes on to another helper's subgoal, which the official code "
     "translated with it",
+    AFTER_CONTINUED: "an earlier helper's answer of the task went on to another subgoal: the "
+    "official helper before this one planned both, so this one started from another state",
     OFFICIAL_LIMIT: "the official planner call ran to its time limit without a plan, where "
     "this reading is planned (its own translation, not logged, asked for something else)",
 }
@@ -140,6 +145,7 @@ def check_entry(
     goals: dict[int, Goal] = {}
     checks: list[SubgoalCheck] = []
     official = entry.official
+    went_on = False  # an earlier answer of this task went on to another helper's subgoal
     for answer in entry.answers:
         start = time.perf_counter()
         helper = answer.helper
@@ -155,6 +161,7 @@ def check_entry(
         )
 
         row = _RowMaker(entry, answer, logged, no_plan, logged_time, start)
+        after_continued, went_on = went_on, went_on or continuation(answer.text) is not None
 
         try:
             parsed = parse_english_subgoal(answer.text, helper, problem)
@@ -200,6 +207,8 @@ def check_entry(
             why = CONTINUED
         elif status == DIFFERS and no_plan and not empty_logged and cost is not None:
             why = OFFICIAL_LIMIT
+        elif status == DIFFERS and after_continued:
+            why = AFTER_CONTINUED
         checks.append(
             row(
                 condition=parsed.text,
@@ -233,7 +242,8 @@ def _same_goal(entry: Entry, helper: int, goal: Goal, problem: Any) -> bool | No
 def summarise(checks: Iterable[SubgoalCheck]) -> list[dict[str, Any]]:
     """Per domain (and all): subgoals, translated (count, %), with a logged cost, giving
     it (count, % of the translated ones with a logged cost), differing (and why, where a
-    cause is known: :data:`WHY`); ``match_pct_comparable`` leaves those out."""
+    cause is known: :data:`WHY`; ``differs_known``, ``differs_other``);
+    ``match_pct_comparable`` leaves the known ones out."""
     rows: dict[str, dict[str, Any]] = {}
     for check in checks:
         for key in (check.domain, "all"):
@@ -242,7 +252,8 @@ def summarise(checks: Iterable[SubgoalCheck]) -> list[dict[str, Any]]:
                 {
                     "domain": key, "subgoals": 0, "translated": 0, "compared": 0, "match": 0,
                     "differs": 0, "differs_continued": 0, "differs_official_limit": 0,
-                    "with_logged_translation": 0, "same_as_logged": 0,
+                    "differs_after_continued": 0, "with_logged_translation": 0,
+                    "same_as_logged": 0,
                 },
             )  # fmt: skip
             row["subgoals"] += 1
@@ -265,8 +276,9 @@ def summarise(checks: Iterable[SubgoalCheck]) -> list[dict[str, Any]]:
         row["match_pct"] = (
             round(100 * row["match"] / row["compared"], 1) if row["compared"] else None
         )
-        known = row["differs_continued"] + row["differs_official_limit"]
-        comparable = row["compared"] - known
+        row["differs_known"] = sum(row[f"differs_{why}"] for why in WHY)
+        row["differs_other"] = row["differs"] - row["differs_known"]
+        comparable = row["compared"] - row["differs_known"]
         row["match_pct_comparable"] = (
             round(100 * row["match"] / comparable, 1) if comparable else None
         )

@@ -202,23 +202,26 @@ def table_markdown(tables: ReplayTables) -> str:
 def coverage_markdown(check: Mapping[str, Any]) -> str:
     """The translation check (``twostep-data check-answers``) as Markdown, with its
     planner settings and examples of what failed or differed."""
+    if any("differs_known" not in row for row in check.get("summary", [])):
+        return "Written by an earlier twostep-data: run `twostep-data check-answers` again.\n"
     lines = [
         f"Planner of the check: {check.get('planner', {}).get('text', '?')}.",
         "",
         "| domain | subgoals | translated | logged cost given | another cost: the answer "
-        "goes on | the official call at its limit | other | given, of the comparable |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|",
+        "goes on | after such an answer | the official call at its limit | other | given, of "
+        "the comparable |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for row in check.get("summary", []):
         match = (
             f"{row['match']}/{row['compared']} ({row['match_pct']} %)" if row["compared"] else "-"
         )
-        known = row.get("differs_continued", 0) + row.get("differs_official_limit", 0)
         lines.append(
             f"| {row['domain']} | {row['subgoals']} | {row['translated']} "
-            f"({row['translated_pct']} %) | {match} | {row.get('differs_continued', 0)} | "
-            f"{row.get('differs_official_limit', 0)} | {row['differs'] - known} | "
-            f"{row['match']}/{row['compared'] - known} ({row.get('match_pct_comparable')} %) |"
+            f"({row['translated_pct']} %) | {match} | {row['differs_continued']} | "
+            f"{row['differs_after_continued']} | {row['differs_official_limit']} | "
+            f"{row['differs_other']} | {row['match']}/{row['compared'] - row['differs_known']} "
+            f"({row['match_pct_comparable']} %) |"
         )
     subgoals = check.get("subgoals", [])
     failed = [s for s in subgoals if s["status"] == "untranslated"]
@@ -226,6 +229,7 @@ def coverage_markdown(check: Mapping[str, Any]) -> str:
     groups: list[tuple[str, list[dict[str, Any]]]] = [("Not translated", failed)]
     for why, title in (
         ("continued", "Another cost than logged: the answer goes on to another helper"),
+        ("after_continued", "Another cost than logged: after an answer that goes on"),
         ("official_limit", "Another cost than logged: the official call ran to its limit"),
         (None, "Another cost than logged, no known cause"),
     ):
