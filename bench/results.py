@@ -190,7 +190,7 @@ BENCH_FILES: tuple[BenchFile, ...] = (
     BenchFile("planner.txt", "python bench/bench_planner.py", "printed output of an earlier run (cited by the README; the page: planner.json)"),
     BenchFile("planner_stress.txt", "python bench/bench_planner.py --data data/stress; --data data/large --domains tyreworld", "the planner on the stress set and the larger tyreworld task (cited by the README)"),
     BenchFile("refusals.txt", "python bench/bench_startup.py --repeat 5 --scenarios refusals [--source DIR]", "commands refused before any work: exit code, lines, what was written, wall and CPU time, before and after issue 37 (cited by the README)"),
-    BenchFile("replay.txt", "python bench/bench_replay.py outputs/multiruns/<date>/<time>", "the README's replay sweep: every schedule re-validated, job times (cited by the README)"),
+    BenchFile("replay.txt", "python bench/bench_replay.py outputs/multiruns/<date>/<time>; twostep-data check-answers answers --data-root official/domains", "the README's replay sweep: every schedule re-validated, job times; the rules translator against the official logs' helper costs (cited by the README)"),
     BenchFile("resume.txt", "python bench/bench_resume.py", "a sweep, then the same command again reusing every job (cited by the README)"),
     BenchFile("score_cli.txt", "python bench/bench_score_cli.py --repeats 5", "twostep-score's wall and CPU time on four 60-step plans (cited by the README)"),
     BenchFile("sweep.txt", "python bench/bench_sweep.py --jobs 20 100 400 --variants on off --launchers all basic --basic-max-jobs 20 --on-max-jobs 100 --no-small-scaling --save docs/bench/sweep.txt --json docs/bench/sweep.json", "the printed output of sweep.json, with the phases of a job (cited by the README)"),

@@ -79,8 +79,9 @@ def _compose(*overrides: str) -> Any:
         ("planner.time_limit_s=-5", "planner.time_limit_s=-5.0 must be > 0"),
         (
             "llm.mode=sometimes",
-            "llm.mode=sometimes is not allowed (allowed: live, replay, scripted)",
+            "llm.mode=sometimes is not allowed (allowed: live, replay, scripted, bundle)",
         ),
+        ("llm.translator=regex", "llm.translator=regex is not allowed (allowed: llm, rules)"),
         ("agents=0", "agents=0 must be at least 1"),
         ("llm.timeout_s=0", "llm.timeout_s=0.0 must be > 0"),
         # issue 20, finding 7: before, `OverflowError: timeout is too large` (no key named)
