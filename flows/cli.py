@@ -145,6 +145,8 @@ def _sweep_record(outcome: JobOutcome) -> dict[str, Any]:
         "finished_at": time.time(),
         "mlflow_run_id": outcome.mlflow_run_id,
         "tracking_error": outcome.tracking_error,
+        "store_refused": outcome.refused_entries,  # stored entries not used: not this job's
+        "not_stored": outcome.not_stored,  # why the job store could not keep it
         **outcome.stats.to_dict(),
         **outcome.timings,
         "phases": outcome.phases,  # where the job's time went (bench/bench_sweep.py)

@@ -210,6 +210,17 @@ def footer(state: SweepState, summary: Mapping[str, Any], failed: list[dict[str,
         f"{summary['jobs_reused']} reused | planner calls: {summary['planner_calls_run']} run, "
         f"{summary['plan_cache_hits']} from cache | {clock(summary['sweep_wall_time_s'])}"
     ]
+    refused, unstored = summary.get("jobs_store_refused", 0), summary.get("jobs_not_stored", 0)
+    if refused:
+        lines.append(
+            f"job store: {refused} stored entr{'y' if refused == 1 else 'ies'} not this "
+            "job's or not whole: computed again (warnings above)"
+        )
+    if unstored:
+        lines.append(
+            f"job store: {unstored} job(s) could not be stored (their run directories keep "
+            "their results; a re-run computes them again)"
+        )
     for record in failed[:10]:
         lines.append(f"  failed: {record.get('name')}: {record.get('error')}")
     runs = summary.get("prefect_flow_runs")

@@ -43,7 +43,7 @@ from flows.console import one_line
 from flows.services import running_prefect_api
 from flows.status import JobStatus, job_status
 from flows.step_stats import StepStats, counting_steps
-from flows.store import JobStore, job_config, job_inputs, job_key
+from flows.store import JobEntry, JobStore, job_config, job_inputs, job_key
 from flows.sweep_state import SweepState
 from flows.tracking.context import run_context_tags
 from flows.tracking.runs import (
@@ -55,7 +55,7 @@ from flows.tracking.runs import (
 )
 from twostep.benchmark import BenchmarkError
 from twostep.embodied.run import draws_pictures
-from twostep.identity import is_complete_result, job_name
+from twostep.identity import job_name
 from twostep.llm.client import LLMScriptError
 from twostep.pddl import PDDLError
 from twostep.processes import ResourceLimitError
@@ -83,6 +83,9 @@ class JobOutcome:
     phases: dict[str, float] = field(default_factory=dict)
     mlflow_run_id: str | None = None
     tracking_error: str | None = None  # logging failed; the result itself is safe
+    # why a stored entry of this job was not used (not this job's, changed, cut short)
+    refused_entries: list[str] = field(default_factory=list)
+    not_stored: str | None = None  # why the finished job could not be stored (disk full, ...)
 
 
 def failed_result(
@@ -241,16 +244,17 @@ def execute_job(
     """
     start, started_at = time.perf_counter(), time.time()
     config = job_config(cfg)
-    key = job_key(config, job_inputs(config))
+    inputs = job_inputs(config)
+    key = job_key(config, inputs)
+    entry = JobEntry.of(config, key, inputs)
     cfg = typed(cfg)
-    name = job_name(config)
     refused = _input_problem(cfg)  # values, data, keys: one line, before any work
     tracking = bool(cfg.mlflow.enabled)
     if tracking and sweep is None:
         check_store(str(cfg.mlflow.tracking_uri), float(cfg.mlflow.connect_timeout_s))
     store = JobStore(str(cfg.orchestration.job_store))
     reuse = cfg.orchestration.reuse_results and refused is None
-    stored = store.load_or_claim(key, accept=is_complete_result) if reuse else None
+    stored = store.load_or_claim(key, expect=entry) if reuse else None  # only if it is this job's
     destination = MlflowDestination(str(cfg.mlflow.tracking_uri), _experiment(cfg, sweep))
     run_log = None
     held = destination.held_run(store, key) if tracking else None
@@ -261,9 +265,9 @@ def execute_job(
         )
     setup_s = time.perf_counter() - start
     try:
-        outcome, details = _run_or_reuse(
-            cfg, config, (key, name), sweep, stored, refused, store, start
-        )
+        outcome, details = _run_or_reuse(cfg, config, entry, sweep, stored, refused, store, start)
+        outcome.refused_entries = [why for k, why in store.refused.items() if k == key]
+        outcome.not_stored = store.unwritten.get(key)
         outcome.phases["setup_s"] = setup_s
         outcome.mlflow_run_id = held
         files_start = time.perf_counter()
@@ -305,7 +309,7 @@ def _input_problem(cfg: TwostepConfig) -> str | None:
 def _run_or_reuse(
     cfg: TwostepConfig,
     config: dict[str, Any],
-    identity: tuple[str, str],
+    entry: JobEntry,
     sweep: SweepState | None,
     stored: dict[str, Any] | None,
     refused: str | None,
@@ -313,8 +317,9 @@ def _run_or_reuse(
     start: float,
 ) -> tuple[JobOutcome, str | None]:
     """The job's outcome (the stored result, or computed and stored now) and, for a job
-    that raised, its traceback (``identity``: its key and name; ``start``: when it started)."""
-    key, name = identity
+    that raised, its traceback (``entry``: its key, job and inputs; ``start``: when it
+    started)."""
+    key, name = entry.key, job_name(config)
     stats, error, details, status = StepStats(), refused, None, JobStatus.FAILED.value
     input_error = refused is not None
     compute_timings: dict[str, float] = {"server_wait_s": 0.0}
@@ -334,7 +339,8 @@ def _run_or_reuse(
         store_start = time.perf_counter()
         phases["compute_s"] = store_start - compute_start
         if error is None:
-            store.save(key, config, result)  # unless it did not finish (llm_error, error)
+            # unless it did not finish (llm_error, error); sealed with its inputs
+            store.save(key, config, result, entry.inputs)
         phases["store_s"] = time.perf_counter() - store_start
     if error is not None:
         result = failed_result(config, error, status)

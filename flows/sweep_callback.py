@@ -299,6 +299,9 @@ class SweepCallback(Callback):
             "jobs_failed": len(failed),
             "jobs_timeout": sum(1 for r in records if r.get("status") == "timeout"),
             "jobs_reused": sum(1 for r in records if r.get("reused")),
+            # stored entries not used (another job's, changed, cut short): computed again
+            "jobs_store_refused": sum(1 for r in records if r.get("store_refused")),
+            "jobs_not_stored": sum(1 for r in records if r.get("not_stored")),
             "plan_cache_hits": sum(int(r.get("plan_cache_hits") or 0) for r in records),
             "planner_calls_run": sum(int(r.get("plan_calls") or 0) for r in records),
             "sweep_wall_time_s": round(time.time() - state.started_at, 3),

@@ -44,10 +44,15 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
         tmp.unlink(missing_ok=True)
 
 
+def json_text(data: Any, indent: int | None = 2) -> str:
+    """``data`` as the JSON text :func:`write_json_atomic` writes (``default=str`` for
+    paths and enums)."""
+    return json.dumps(data, indent=indent, ensure_ascii=False, default=str) + "\n"
+
+
 def write_json_atomic(path: Path, data: Any, indent: int | None = 2) -> None:
     """Write ``data`` as JSON atomically (``default=str`` for paths and enums)."""
-    text = json.dumps(data, indent=indent, ensure_ascii=False, default=str)
-    write_text_atomic(path, text + "\n")
+    write_text_atomic(path, json_text(data, indent))
 
 
 class NotTextError(ValueError):

@@ -15,7 +15,7 @@ grouping of runs (``twostep/report``) all ask this module.
   a re-run with unchanged inputs finds the stored result.
 * A result is **stored** (reused by later runs) unless its status says the job did not
   finish its work (:func:`is_storable`): a re-run tries those again; a stored entry is
-  reused only when it is a whole result (:func:`is_complete_result`).
+  reused only when it is a whole, consistent result (:func:`result_problem`).
 
 Plain data in, plain data out; the only I/O is reading the input files' bytes (through
 :func:`twostep.files.read_input_bytes`).
@@ -210,11 +210,46 @@ def is_storable(result: Mapping[str, Any]) -> bool:
 def is_complete_result(result: Mapping[str, Any]) -> bool:
     """Whether a stored entry is the whole result of a finished job (an emptied, cut or
     hand-edited entry is not: the job is computed again)."""
-    return (
-        set(result) >= RESULT_KEYS
-        and isinstance(result.get("success"), bool)
-        and is_storable(result)
-    )
+    return result_problem(result) is None
+
+
+SOLVED = "solved"  # the status of every success (``RunResult.status``)
+
+
+def result_problem(result: Mapping[str, Any]) -> str | None:
+    """Why a stored entry is not the whole, consistent result of a finished job (None: it
+    is): every key of :data:`RESULT_KEYS`, a status that is stored, and a success that
+    says so throughout (status ``solved``, its plans, an execution length, a schedule of
+    that many steps holding every planned action)."""
+    missing = sorted(RESULT_KEYS - set(result))
+    if missing:
+        return f"no {', '.join(missing)}"
+    if not isinstance(result.get("success"), bool):
+        return "'success' is neither true nor false"
+    status = str(result.get("status"))
+    if not is_storable(result):
+        return f"status '{status}' is never stored"
+    if not result["success"]:
+        return "a failure with status 'solved'" if status == SOLVED else None
+    if status != SOLVED:
+        return f"a success with status '{status}'"
+    plans = result.get("plans")
+    if not isinstance(plans, Mapping) or not all(
+        isinstance(steps, list) and all(isinstance(step, str) for step in steps)
+        for steps in plans.values()
+    ):
+        return "a success without its plans"
+    length = result.get("exec_length")
+    if isinstance(length, bool) or not isinstance(length, int) or length < 0:
+        return "a success without its execution length"
+    schedule = result.get("schedule")
+    if not isinstance(schedule, list) or len(schedule) != length:
+        return f"a success whose schedule is not {length} steps long (its exec_length)"
+    planned = sum(len(steps) for steps in plans.values())
+    scheduled = sum(len(step) if isinstance(step, list) else 0 for step in schedule)
+    if planned != scheduled:
+        return f"a success whose schedule holds {scheduled} actions, its plans {planned}"
+    return None
 
 
 # Where a job's answer depends on its seed: the LLM's answers (the seed is part of every

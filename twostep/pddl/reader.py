@@ -15,6 +15,7 @@ import functools
 import hashlib
 import json
 import pickle
+import sys
 from dataclasses import replace
 from importlib import metadata
 from pathlib import Path
@@ -188,17 +189,52 @@ def _load_problem(domain_path: Path, problem_path: Path, cache_dir: str | Path |
         json.dumps([_parser_version(), *sources, domain_text, problem_text]).encode()
     ).hexdigest()
     entry = Path(cache_dir) / f"{key}.pickle"
-    try:
-        cached = pickle.loads(entry.read_bytes())
-    except Exception:  # absent, or written by other code: parse again
-        cached = None
-    if isinstance(cached, Problem):
+    cached = _cached_problem(entry, key, sources)
+    if cached is not None:
         return cached
     problem = parse_problem(domain_text, problem_text, *sources)
     problem.grounded  # noqa: B018 -- the entry holds the grounding too
+    payload = pickle.dumps(problem, protocol=pickle.HIGHEST_PROTOCOL)
+    header = f"{CACHE_MAGIC} {key} {hashlib.sha256(payload).hexdigest()}\n".encode()
     with contextlib.suppress(OSError):  # a read-only cache only costs the parse
-        write_bytes_atomic(entry, pickle.dumps(problem, protocol=pickle.HIGHEST_PROTOCOL))
+        write_bytes_atomic(entry, header + payload)
     return problem
+
+
+# A task-cache entry: one header line (this tag, the entry's key, the SHA-256 of the
+# pickle after it), then the pickled Problem. The header is checked before unpickling.
+CACHE_MAGIC = "twostep-task-cache/1"
+
+
+def _cached_problem(entry: Path, key: str, sources: tuple[str, str]) -> Problem | None:
+    """The problem cached in ``entry`` when the entry is this task's own (its header names
+    ``key``, its pickle has the checksum the header gives, and the problem read back is of
+    these two files); None when absent, or after one warning line when it is not (another
+    task's entry copied over it, a cut or edited file): the caller parses again and
+    replaces it. An entry without a header (older twostep) is parsed again silently."""
+    try:
+        data = entry.read_bytes()
+    except OSError:
+        return None
+    head, _, payload = data.partition(b"\n")
+    if not head.startswith(CACHE_MAGIC.encode() + b" "):
+        return None
+    fields = head.decode("ascii", "replace").split(" ")
+    why = None
+    if len(fields) != 3 or fields[1] != key:
+        why = "is another task's entry"
+    elif hashlib.sha256(payload).hexdigest() != fields[2]:
+        why = "has changed since it was written (checksum)"
+    else:
+        try:
+            cached = pickle.loads(payload)  # our own entry, checked above
+        except Exception:
+            cached = None
+        if isinstance(cached, Problem) and (cached.domain.source, cached.source) == sources:
+            return cached
+        why = "does not hold this task"
+    print(f"warning: task cache entry {entry} {why}: parsing the task again", file=sys.stderr)
+    return None
 
 
 @functools.cache
