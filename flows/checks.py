@@ -324,24 +324,30 @@ def sweep_problem(config: Any) -> str | None:
 
 
 def secret_problem(cfg: Any) -> str | None:
-    """A key pasted where a variable's name belongs (``llm.api_key_env``), in the config or
-    in any value a sweep's override lists: refused before Hydra writes the config and the
-    overrides to disk. The message never repeats the value."""
+    """A key pasted where a variable's name belongs (``llm.api_key_env``) or into a name
+    (``llm.model``), in the config or in any value a sweep's override lists: refused
+    before Hydra writes the config and the overrides to disk. The message never repeats
+    the value."""
     from hydra.core.override_parser.overrides_parser import OverridesParser
 
-    from twostep.llm.client import key_env_problem
+    from twostep.llm.client import key_env_problem, model_problem
 
-    values = [cfg.llm.api_key_env]
+    checks = {"llm.api_key_env": key_env_problem, "llm.model": model_problem}
+    values: list[tuple[str, Any]] = [
+        ("llm.api_key_env", cfg.llm.api_key_env),
+        ("llm.model", cfg.llm.model),
+    ]
     overrides = [str(o) for o in cfg.hydra.overrides.task] if "hydra" in cfg else []
-    named = [o for o in overrides if o.lstrip("+~").split("=", 1)[0] == "llm.api_key_env"]
+    named = [o for o in overrides if o.lstrip("+~").split("=", 1)[0] in checks]
     try:
         for override in OverridesParser.create().parse_overrides(named):
             sweep = override.is_sweep_override()
-            values += list(override.sweep_iterator()) if sweep else [override.value()]
+            listed = list(override.sweep_iterator()) if sweep else [override.value()]
+            values += [(override.key_or_group, value) for value in listed]
     except Exception:  # Hydra refuses the override itself, with its own message
         pass
-    for value in values:
-        problem = key_env_problem(None if value is None else str(value))
+    for key, value in values:
+        problem = checks[key](None if value is None else str(value))
         if problem:
             return problem
     return None

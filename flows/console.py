@@ -57,7 +57,7 @@ def format_summary(result: RunResult | Mapping[str, Any], name: str | None = Non
     r = result if isinstance(result, Mapping) else result.to_dict()
     name = name or job_name(r)
     if r.get("status") == "failed" and "error" in r:
-        return f"{name} | FAILED: {r['error']}"
+        return redact_text(f"{name} | FAILED: {r['error']}")
     status, message = str(r.get("status")), str(r.get("message") or "")
     if r.get("success"):
         outcome = "success"
@@ -96,7 +96,7 @@ def format_summary(result: RunResult | Mapping[str, Any], name: str | None = Non
             parts.append(
                 f"embodied: {r.get('embodied_status')}{where}: {embodied.get('reason', '')}"
             )
-    return " | ".join(parts)
+    return redact_text(" | ".join(parts))
 
 
 def _agent_number(agent: str) -> int:

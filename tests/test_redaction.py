@@ -58,3 +58,40 @@ def test_redact_config_masks_urls_and_keys_given_as_names() -> None:
         "hosts": ["https://***@c", 3],
         "other_env": "HOME",
     }
+
+
+# issue 39, finding 7: keys in query strings, bearer tokens, keys inside names
+@pytest.mark.parametrize(
+    ("text", "masked"),
+    [
+        ("http://h:9/v1?api_key=AIzaXyz0123", "http://h:9/v1?api_key=***"),
+        ("https://h/v1?v=2&access_token=abc.def&x=1", "https://h/v1?v=2&access_token=***&x=1"),
+        ("https://h/?sig=a%2Fb#frag", "https://h/?sig=***#frag"),
+        ("'https://h/v1?key=abc'", "'https://h/v1?key=***'"),  # as a yaml file quotes it
+        ("https://h/?api-version=2024-02-01", "https://h/?api-version=2024-02-01"),  # no key
+        ("Authorization: Bearer abc.DEF-123", "Authorization: Bearer ***"),
+        ("a Google key AIzaSyA0123456789", "a Google key AIza***"),
+    ],
+)
+def test_query_string_keys_and_tokens_are_masked(text: str, masked: str) -> None:
+    assert redact_text(text) == masked
+
+
+@pytest.mark.parametrize(
+    ("model", "holds"),
+    [
+        ("openai/gpt-4o", False),
+        ("anthropic/claude-3-5-sonnet-20241022", False),
+        ("together_ai/meta-llama/Meta-Llama-3.1-70B-Instruct-Turbo", False),
+        ("ollama/llama3.1:8b", False),
+        ("hosted_vllm/Qwen/Qwen2.5-7B-Instruct", False),
+        ("ft:gpt-4o-mini-2024-07-18:my-org::9abcDEF1", False),
+        ("openai/sk-proj-0123456789", True),
+        ("gemini/AIzaSyA0123456789", True),
+        ("openai/gskQ7w2Lr9Xb4Tn8Vc1Mz5Kp3Hd6", True),  # 24+ letters and digits in one run
+    ],
+)
+def test_a_key_inside_a_model_name_is_recognised(model: str, holds: bool) -> None:
+    from twostep.redaction import holds_a_key
+
+    assert holds_a_key(model) is holds

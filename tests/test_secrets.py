@@ -98,3 +98,74 @@ def test_credentials_in_a_url_are_masked_everywhere(data_root: Path, tmp_path: P
     masked = f"http://***@{host}/v1"
     (config,) = out.glob("jobs/*/config.json")
     assert masked in config.read_text()  # the URL is kept, without its credentials
+
+
+# ----------------------------------------------------------------- issue 39, finding 7
+
+KEY_SHAPED = "AIza" + "Canary0d1eNotARealKey7f3a9b"  # Google's key shape, made up here
+
+
+@pytest.mark.parametrize("sweep", [[], ["-m", "seed=0"]], ids=["single run", "sweep"])
+def test_a_key_in_the_api_base_query_string_is_masked_everywhere(
+    data_root: Path, tmp_path: Path, sweep: list[str]
+) -> None:
+    """Before: `?api_key=<key>` in llm.api_base was stored as the MLflow param and in
+    .hydra/{config,hydra,overrides}.yaml (and the Prefect parameters: see below). Nothing
+    answers on port 9: the job fails on the LLM, and is recorded."""
+    out = tmp_path / "out"
+    done = subprocess.run(
+        [sys.executable, "-m", "flows.cli", *sweep, "domain=blocksworld", "task=6",
+         "method=twostep", "decomposer=llm", "llm=gpt-4o", "llm.max_retries=0",
+         f"llm.api_base='http://127.0.0.1:9/v1?api_key={KEY_SHAPED}&v=1'",
+         f"data.root={data_root}", f"output.root={out}", "orchestration.prefect=false"],
+        capture_output=True, text=True, cwd=REPO, timeout=240,
+        env={**os.environ, "OPENAI_API_KEY": "not-used"},
+    )  # fmt: skip
+    assert "Traceback" not in done.stderr, done.stderr
+    assert (out / "mlflow.db").is_file() and list(out.glob("*runs/**/.hydra/overrides.yaml"))
+    assert KEY_SHAPED not in done.stdout + done.stderr
+    assert [
+        p for p in out.rglob("*") if p.is_file() and KEY_SHAPED.encode() in p.read_bytes()
+    ] == []
+    (overrides,) = out.glob("*runs/**/.hydra/overrides.yaml")
+    assert "?api_key=***&v=1" in overrides.read_text()  # the URL is kept, its key masked
+
+
+def test_prefect_parameters_mask_a_query_string_key() -> None:
+    from flows.prefect_flow import flow_parameters
+
+    config = {"method": {"name": "twostep"}, "decomposer": {"name": "llm"},
+              "llm": {"api_base": f"https://h/v1?key={KEY_SHAPED}",
+                      "headers": f"Bearer {KEY_SHAPED}"}}  # fmt: skip
+    shown = str(flow_parameters(config))
+    assert KEY_SHAPED not in shown and "https://h/v1?key=***" in shown
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["llm.model=openai/sk-" + CANARY],
+        ["llm.model=openai/" + KEY_SHAPED],
+        ["-m", "llm.model=openai/gpt-4o,openai/sk-" + CANARY],
+        ["llm.api_key=sk-" + CANARY],
+        ["+llm.api_key=sk-" + CANARY],
+        [f"+llm.extra_headers={{Authorization:'Bearer {CANARY}'}}"],
+    ],
+    ids=["model", "model-google-shape", "model-in-a-sweep", "api_key", "+api_key", "+headers"],
+)
+def test_a_key_in_a_name_or_an_unknown_key_is_refused_and_never_shown(
+    data_root: Path, tmp_path: Path, args: list[str]
+) -> None:
+    """Before: a key in llm.model was printed in the credentials error and stored in five
+    places; +llm.extra_headers was accepted and stored; Hydra echoed llm.api_key=<key>."""
+    out = tmp_path / "out"
+    done = subprocess.run(
+        [sys.executable, "-m", "flows.cli", *args, "domain=blocksworld", "task=6",
+         "method=twostep", "decomposer=llm", "llm=gpt-4o",
+         f"data.root={data_root}", f"output.root={out}", "orchestration.prefect=false"],
+        capture_output=True, text=True, cwd=REPO, timeout=240,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert done.stderr.startswith("error: ") and len(done.stderr.splitlines()) == 1
+    assert CANARY not in done.stderr and KEY_SHAPED not in done.stderr and not done.stdout
+    assert not out.exists()  # refused before any folder

@@ -47,7 +47,7 @@ from pathlib import Path
 from typing import Any
 
 from twostep.files import FileFormatError, NotTextError, read_yaml_file, write_json_atomic
-from twostep.redaction import looks_like_a_key, redact_text
+from twostep.redaction import holds_a_key, looks_like_a_key, redact_text
 
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 
@@ -212,6 +212,18 @@ def key_env_problem(name: str | None) -> str | None:
         "llm.api_key_env looks like a key, not a variable name: give the name of the "
         "environment variable that holds the key (e.g. llm.api_key_env=OPENAI_API_KEY); "
         "the value is not shown"
+    )
+
+
+def model_problem(model: str | None) -> str | None:
+    """Why ``model`` cannot be ``llm.model`` (None: it can): it holds something shaped
+    like a key (:func:`~twostep.redaction.holds_a_key`). The value is never repeated."""
+    if model is None or not holds_a_key(model):
+        return None
+    return (
+        "llm.model looks like it holds a key: give the model's name only "
+        "(e.g. llm.model=openai/gpt-4o) and the key in the environment variable named by "
+        "llm.api_key_env; the value is not shown"
     )
 
 
