@@ -376,8 +376,40 @@ def writable_locations(cfg: Any, run_dir: Path | None = None) -> list[tuple[str,
     return locations
 
 
+# What ends the path part of an address: MLflow's database and artifact addresses are
+# built from output.root (conf/config.yaml), and SQLAlchemy and urllib read a '?' as the
+# start of options (``mode=ro/out/mlflow.db``) and a '#' as a fragment.
+URL_BREAKING = "?#"
+
+
+def address_problem(cfg: Any) -> str | None:
+    """A folder name that a legal path may hold but an MLflow address built from it
+    cannot (None: none): one line naming the key and the character."""
+    if not cfg.mlflow.enabled:
+        return None
+    root = str(cfg.output.root)
+    for key in ("tracking_uri", "artifact_location"):
+        uri = cfg.mlflow.get(key)
+        if uri is None or root not in str(uri):
+            continue
+        bad = sorted({c for c in root if c in URL_BREAKING})
+        if bad:
+            shown = " or ".join(f"'{c}'" for c in bad)
+            return (
+                f"output.root {root} holds {shown}, which MLflow's address "
+                f"(mlflow.{key}) cannot hold (the address ends there: what follows is read as "
+                "options or a fragment); choose a "
+                "folder without it, or set mlflow.tracking_uri and "
+                "mlflow.artifact_location yourself (or mlflow.enabled=false)"
+            )
+    return None
+
+
 def check_writable(cfg: Any, run_dir: Path | None = None) -> None:
     """Raise :class:`ValidationError` naming the first location that cannot be written."""
+    problem = address_problem(cfg)
+    if problem:
+        raise ValidationError(problem)
     for key, folder in writable_locations(cfg, run_dir):
         problem = write_problem(folder)
         if problem:

@@ -31,10 +31,11 @@ from flows.artifacts import picture_paths
 from flows.config import agents_run, override_problem, register
 from flows.console import format_schedule, format_summary
 from flows.environment import quiet_defaults
+from flows.faults import FAULTED, guard_jobs, quiet_store_errors
 from flows.launcher import launch_fields, register_plugins
 from flows.replay_sweeper import expose_plugin
 from flows.sweep_callback import SweepCallback
-from twostep.cli import console_main
+from twostep.cli import ReaderGoneSafe, console_main
 
 if TYPE_CHECKING:
     from flows.job import JobOutcome
@@ -161,6 +162,10 @@ def main() -> None:
 
         print(version_text())
         return
+    # A closed stdout (`twostep ... | head -1`) never turns recorded jobs into a traceback.
+    sys.stdout = ReaderGoneSafe(sys.stdout)  # type: ignore[assignment]
+    quiet_store_errors()  # a full disk: one line per job, not MLflow's tracebacks
+    guard_jobs()  # ... and a run directory that cannot be written is one failed job
     problem = override_problem(sys.argv[1:])  # a typo'd key never runs
     if problem is not None:
         print(f"error: {problem}", file=sys.stderr, flush=True)
@@ -178,6 +183,8 @@ def main() -> None:
         TrackingWorker.discard_prestarted()  # no job took it (bad input, MLflow off, ...)
     if code == 1 and not SweepCallback.composed:
         code = 2  # Hydra refused the command line (its message is printed): bad input
+    if code == 0 and FAULTED:
+        code = 1  # a single run whose run directory could not be written (its line says)
     if _SINGLE_RUN_DONE:
         _fast_exit(code if isinstance(code, int) else 1)
     sys.exit(code)

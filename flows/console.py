@@ -28,6 +28,9 @@ def one_line(error: BaseException, name_type: bool = True, limit: int | None = N
     False (errors whose message is written for the user), cut at ``limit`` characters;
     credentials inside URLs masked (:mod:`twostep.redaction`)."""
     lines = [line for line in redact_text(str(error)).strip().splitlines() if line.strip()]
+    # SQLAlchemy's preamble ("(raised as a result of Query-invoked autoflush; ...)"):
+    # the line after it says what went wrong (database or disk is full).
+    lines = [line for line in lines if not line.startswith("(raised as a result of")] or lines
     text = lines[0] if lines else ""
     if not name_type:
         text = text or type(error).__name__
@@ -215,6 +218,12 @@ def footer(state: SweepState, summary: Mapping[str, Any], failed: list[dict[str,
         lines.append(
             f"job store: {refused} stored entr{'y' if refused == 1 else 'ies'} not this "
             "job's or not whole: computed again (warnings above)"
+        )
+    faults = summary.get("jobs_fault", 0)
+    if faults:
+        lines.append(
+            f"{faults} job(s) could not write their run directory (a full disk or a "
+            "read-only folder: see their lines); a re-run computes them"
         )
     if unstored:
         lines.append(

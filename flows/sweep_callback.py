@@ -29,7 +29,7 @@ import shlex
 import socket
 import sys
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -179,6 +179,17 @@ def _ui_links(state: SweepState, output_root: str) -> list[str]:
     return lines
 
 
+def _written(path: Path, write: Callable[[], object]) -> bool:
+    """Write a file of the sweep's end; a full disk or a read-only folder is one warning
+    line (the summary is still printed)."""
+    try:
+        write()
+    except OSError as error:
+        print(f"warning: {path} not written ({error.strerror or error})", file=sys.stderr)
+        return False
+    return True
+
+
 class SweepCallback(Callback):
     """Sets up and tears down what the jobs of one multirun share (see module doc)."""
 
@@ -291,7 +302,11 @@ class SweepCallback(Callback):
         state = self._state
         if state is None:
             return
+        from flows.faults import UNRECORDED
+
         records = job_records(Path(state.sweep_dir))
+        seen = {r.get("num") for r in records}
+        records += [r for r in UNRECORDED if r.get("num") not in seen]  # disk full: kept here
         failed = [r for r in records if r.get("status") == "failed"]
         summary: dict[str, Any] = {
             "jobs_total": state.total_jobs,
@@ -302,6 +317,8 @@ class SweepCallback(Callback):
             # stored entries not used (another job's, changed, cut short): computed again
             "jobs_store_refused": sum(1 for r in records if r.get("store_refused")),
             "jobs_not_stored": sum(1 for r in records if r.get("not_stored")),
+            # could not start or finish writing: a full disk, a read-only folder
+            "jobs_fault": sum(1 for r in records if r.get("fault")),
             "plan_cache_hits": sum(int(r.get("plan_cache_hits") or 0) for r in records),
             "planner_calls_run": sum(int(r.get("plan_calls") or 0) for r in records),
             "sweep_wall_time_s": round(time.time() - state.started_at, 3),
@@ -328,18 +345,21 @@ class SweepCallback(Callback):
             with contextlib.suppress(Exception):
                 self._cluster.close()
         rows = result_rows(records)
-        results = write_results_csv(rows, Path(state.sweep_dir) / RESULTS_CSV)
-        write_json_atomic(state.folder / "summary.json", summary)
+        results = Path(state.sweep_dir) / RESULTS_CSV
+        written = _written(results, lambda: write_results_csv(rows, results))
+        summary_file = state.folder / "summary.json"
+        _written(summary_file, lambda: write_json_atomic(summary_file, summary))
         print(footer(state, summary, failed), flush=True)
         print(timing_line(summary), flush=True)
         table = format_results(rows)
         if table:
-            print(f"{table}\nresults: {results}", flush=True)
+            print(f"{table}\nresults: {results if written else 'not written'}", flush=True)
         if state.tracking_uri is not None:  # MLflow's client, while the report draws
             with contextlib.suppress(Exception):
                 import mlflow.tracking  # noqa: F401
-        report = drawing.files() if drawing is not None else []
-        self._end_parent_run(state, summary, bool(failed), [(results, None), *report])
+        report = drawing.files() if drawing is not None and written else []
+        files = [(results, None), *report] if written else []
+        self._end_parent_run(state, summary, bool(failed), files)
         for line in _ui_links(state, str(config.output.root)):
             print(line, flush=True)
         if failed:
@@ -364,4 +384,9 @@ class SweepCallback(Callback):
         try:
             end_sweep_run(state, metrics, failed, files)
         except Exception as error:  # the jobs are recorded; the summary metrics are extra
-            print(f"warning: could not end the MLflow parent run: {error}", file=sys.stderr)
+            from flows.console import one_line
+
+            print(
+                f"warning: could not end the MLflow parent run: {one_line(error)}",
+                file=sys.stderr,
+            )

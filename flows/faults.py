@@ -1,0 +1,106 @@
+"""Faults of the machine while jobs run (a full disk, a read-only output folder): one line
+each, never a traceback, and the sweep goes on to its summary.
+
+Hydra creates a job's run directory and writes its ``.hydra/*.yaml`` before any callback
+of ours runs (``hydra.core.utils.run_job``); a full disk or a folder made read-only
+mid-sweep made that a traceback that ended the sweep without its summary and left its
+MLflow parent run ``RUNNING``. :func:`guard_jobs` wraps ``run_job`` (for the launchers
+that run jobs in this process: Hydra's basic launcher, and a single run): such a job
+is a ``failed`` job with one line naming the folder and the error, recorded in the
+sweep (or kept here, :data:`UNRECORDED`, when even its record cannot be written), and
+the next job is tried. The same holds for a job that raised ``OSError`` while writing its
+own files. :func:`quiet_store_errors` keeps MLflow's SQLAlchemy tracebacks off the
+console (the job's ``warning: ...: not logged to MLflow: ...`` line says it), and Python's
+``--- Logging error ---`` tracebacks of a log file that cannot be written.
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+from pathlib import Path
+from typing import Any
+
+# Records of jobs that failed on a fault and whose record could not be written either
+# (the disk is full): the sweep's summary counts them (flows.sweep_callback).
+UNRECORDED: list[dict[str, Any]] = []
+# Set when a job of this process failed on a fault (a single run exits 1).
+FAULTED: list[str] = []
+
+_MLFLOW_LOGGERS = ("mlflow.store.db.utils", "alembic.runtime.migration")
+
+
+def quiet_store_errors() -> None:
+    """No tracebacks from MLflow's store (a job says itself what was not logged) or from
+    a log handler that cannot write (``logging.raiseExceptions``)."""
+    logging.raiseExceptions = False
+    for name in _MLFLOW_LOGGERS:
+        logging.getLogger(name).setLevel(logging.CRITICAL)
+
+
+def _fault_line(error: OSError, config: Any) -> str:
+    where = error.filename or str(config.hydra.runtime.get("output_dir") or "")
+    what = error.strerror or type(error).__name__
+    return f"cannot write {where} ({what})"
+
+
+def _job_label(config: Any) -> str:
+    try:
+        from flows.store import job_config
+        from twostep.identity import job_name
+
+        return job_name(job_config(config))
+    except Exception:  # a config that does not resolve: its overrides say which job
+        return " ".join(str(o) for o in config.hydra.overrides.task)
+
+
+def _failed(config: Any, error: OSError) -> Any:
+    """A job that met a fault: its one line, its record, and a return Hydra accepts."""
+    from hydra.core.utils import JobReturn, JobStatus
+    from hydra.types import RunMode
+
+    line = _fault_line(error, config)
+    name = _job_label(config)
+    FAULTED.append(line)
+    print(f"error: {name}: {line}", file=sys.stderr, flush=True)
+    if config.hydra.mode == RunMode.MULTIRUN:
+        from flows.sweep_state import record_job
+
+        num = int(config.hydra.job.num)
+        record = {"num": num, "name": name, "status": "failed", "error": line, "fault": True}
+        try:
+            record_job(Path(str(config.hydra.sweep.dir)), num, record)
+        except OSError:
+            UNRECORDED.append(record)
+    ret = JobReturn()
+    ret.status = JobStatus.COMPLETED  # recorded as failed: the sweep goes on
+    ret.return_value = None
+    return ret
+
+
+def _guarded(run_job: Any) -> Any:
+    def run_job_guarded(task_function: Any, config: Any, *args: Any, **kwargs: Any) -> Any:
+        from hydra.core.utils import JobStatus
+
+        try:
+            ret = run_job(task_function, config, *args, **kwargs)
+        except OSError as error:  # Hydra's mkdir or config files
+            return _failed(config, error)
+        if ret.status == JobStatus.FAILED and isinstance(ret._return_value, OSError):
+            return _failed(config, ret._return_value)
+        return ret
+
+    run_job_guarded.__wrapped__ = run_job  # type: ignore[attr-defined]
+    return run_job_guarded
+
+
+def guard_jobs() -> None:
+    """Wrap Hydra's ``run_job`` where the in-process launchers call it (once)."""
+    import hydra._internal.core_plugins.basic_launcher as basic
+    import hydra._internal.hydra as hydra_main
+    import hydra.core.utils as utils
+
+    for module in (utils, basic, hydra_main):
+        current = getattr(module, "run_job", None)
+        if current is not None and not hasattr(current, "__wrapped__"):
+            module.run_job = _guarded(current)  # type: ignore[attr-defined]
