@@ -51,6 +51,7 @@ from flows.tracking.runs import (
     JobRunLog,
     check_store,
     job_record,
+    missing_artifacts,
     run_exists,
 )
 from twostep.benchmark import BenchmarkError
@@ -258,6 +259,9 @@ def execute_job(
     destination = MlflowDestination(str(cfg.mlflow.tracking_uri), _experiment(cfg, sweep))
     run_log = None
     held = destination.held_run(store, key) if tracking else None
+    refill = held is not None and _artifacts_gone(destination, held, job_name(config))
+    if refill:
+        held = None  # logged again below: its run gets the job's files back
     if tracking and held is None:
         location = cfg.mlflow.artifact_location
         run_log = JobRunLog.open(
@@ -282,7 +286,7 @@ def execute_job(
             # once) never both create its run.
             with store.locked(key):
                 window = (started_at, time.time())
-                _log_run(run_log, outcome, config, files, store, destination, window)
+                _log_run(run_log, outcome, config, files, store, destination, window, refill)
     finally:
         store.release(key)  # a process waiting for this job reads its result and run now
         if run_log is not None:
@@ -416,6 +420,7 @@ def _log_run(
     store: JobStore,
     destination: MlflowDestination,
     window: tuple[float, float],
+    refill: bool = False,
 ) -> None:
     """Log the job to its MLflow run (``window``: when the job started and ended, the run's
     start and end) and remember where and what; a failure is a warning
@@ -427,7 +432,7 @@ def _log_run(
     there), tagged ``twostep.restored_from_job_store``.
     """
     try:
-        held = destination.held_run(store, outcome.key)
+        held = None if refill else destination.held_run(store, outcome.key)
         if held is not None:  # a parallel process logged it meanwhile
             outcome.mlflow_run_id = held
             return
@@ -459,6 +464,20 @@ def _log_run(
             f"warning: {outcome.name}: not logged to MLflow: {outcome.tracking_error}",
             file=sys.stderr,
         )
+
+
+def _artifacts_gone(destination: MlflowDestination, run_id: str, name: str) -> bool:
+    """Whether the job's MLflow run lost its files (its artifact folder deleted): one
+    line says so, and the job's files are logged to the run again."""
+    gone = missing_artifacts(destination.uri, run_id)
+    if gone is not None:
+        print(
+            f"warning: {name}: the files of its MLflow run {run_id} are gone ({gone}): "
+            "logging them again from the job store",
+            file=sys.stderr,
+            flush=True,
+        )
+    return gone is not None
 
 
 def _restored_record(

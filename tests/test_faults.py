@@ -6,6 +6,7 @@ Every run goes through the ``twostep`` command as a user starts it."""
 
 from __future__ import annotations
 
+import shutil
 import sqlite3
 import subprocess
 import sys
@@ -158,3 +159,28 @@ def test_a_full_disk_mid_sweep_is_lines_and_a_summary(data: Path, small_disk: Pa
     assert again.returncode == 0, again.stderr
     assert "sweep finished: 12/12 jobs: 12 ok" in again.stdout
     assert "RUNNING" not in run_statuses(out / "mlflow.db")
+
+
+def test_deleted_mlflow_artifacts_are_logged_again_with_a_line(data: Path, tmp_path: Path) -> None:
+    """Finding 5. Before: after `rm -rf outputs/mlruns` a re-run said `reused` and the
+    runs kept pointing at the deleted files, for good."""
+    out = tmp_path / "out"
+    args = ["-m", "task=1,3", "method=sa", f"data.root={data}", f"output.root={out}", *FAST]
+    assert twostep(*args).returncode == 0
+    mlruns = out / "mlruns"
+    before = {p.relative_to(mlruns): p.read_bytes() for p in mlruns.rglob("*.plan")}
+    files = {p.relative_to(mlruns) for p in mlruns.rglob("*") if p.is_file()}
+    assert len(before) == 2  # one plan per job
+    shutil.rmtree(mlruns)
+    again = twostep(*args)
+    assert again.returncode == 0 and "Traceback" not in again.stderr, again.stderr
+    gone = [line for line in again.stderr.splitlines() if "files of its MLflow run" in line]
+    assert len(gone) == 2 and all(line.startswith("warning: blocksworld-p0") for line in gone)
+    after = {p.relative_to(mlruns): p.read_bytes() for p in mlruns.rglob("*.plan")}
+    assert after == before  # the same files, where the runs say they are
+    restored = {p.relative_to(mlruns) for p in mlruns.rglob("*") if p.is_file()}
+    job_files = {p for p in files if "result.json" in p.name or p.suffix in (".plan", ".txt")}
+    assert job_files <= restored
+    assert len([s for s in run_statuses(out / "mlflow.db")]) == 3  # 2 jobs + 1 parent, still
+    third = twostep(*args)
+    assert "files of its MLflow run" not in third.stderr  # nothing missing any more

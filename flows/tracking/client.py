@@ -128,6 +128,36 @@ def run_exists(tracking_uri: str, run_id: str, timeout_s: float = 10.0) -> bool:
     return False
 
 
+def missing_artifacts(tracking_uri: str, run_id: str) -> str | None:
+    """The artifact folder of run ``run_id`` when the store names a local one that is
+    gone or empty (``rm -rf outputs/mlruns``); None when it is there, or when that cannot
+    be told cheaply (a tracking server, remote artifacts: nothing is claimed)."""
+    database = sqlite_path(tracking_uri)
+    if database is None or not database.is_file():
+        return None
+    import sqlite3
+    from contextlib import closing
+    from urllib.request import url2pathname
+
+    try:
+        with closing(sqlite3.connect(f"file:{database}?mode=ro", uri=True, timeout=30.0)) as db:
+            rows = db.execute(
+                "SELECT artifact_uri FROM runs WHERE run_uuid = ?", (run_id,)
+            ).fetchall()
+    except sqlite3.Error:
+        return None
+    if len(rows) != 1 or not rows[0][0]:
+        return None
+    uri = str(rows[0][0])
+    parsed = urlparse(uri)
+    if parsed.scheme not in ("", "file"):
+        return None
+    folder = Path(url2pathname(parsed.path) if parsed.scheme else uri)
+    if folder.is_dir() and any(folder.iterdir()):
+        return None
+    return str(folder)
+
+
 def _check_sqlite(path: Path, uri: str, hint: str) -> None:
     import sqlite3
 
@@ -433,6 +463,10 @@ def log_job_run(
         start_ms=record.get("start_ms"),
     )
     if found is not None and found.data.tags.get(STATUS) in ("success", "timeout"):
+        if missing_artifacts(tracker.tracking_uri, run_id) is not None:  # mlruns/ deleted
+            for path, folder in record["files"]:
+                if Path(path).is_file():
+                    _retry(partial(tracker.client.log_artifact, run_id, str(path), folder))
         return run_id
     tracker.log_job(
         run_id,

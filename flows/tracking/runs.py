@@ -25,7 +25,14 @@ from typing import TYPE_CHECKING, Any
 
 from flows.locations import sqlite_path
 from flows.servers import file_lock
-from flows.tracking.client import Tracker, TrackingError, check_store, log_job_run, run_exists
+from flows.tracking.client import (
+    Tracker,
+    TrackingError,
+    check_store,
+    log_job_run,
+    missing_artifacts,
+    run_exists,
+)
 from flows.tracking.contents import (
     DEFAULT_EXPERIMENT,
     OVERRIDES,
@@ -47,6 +54,7 @@ __all__ = [
     "end_sweep_run",
     "experiment_name_for",
     "job_record",
+    "missing_artifacts",
     "run_exists",
     "sweep_run_ids",
 ]
