@@ -115,6 +115,28 @@ def seconds(optional: bool = False) -> Check:
     return check
 
 
+def between(low: float, high: float, low_open: bool = False, optional: bool = False) -> Check:
+    """A finite number from ``low`` (excluded when ``low_open``) to ``high`` (``optional``:
+    or null)."""
+
+    def check(key: str, value: Any) -> str | None:
+        if value is None and optional:
+            return None
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            number = math.nan
+        above = number > low if low_open else number >= low
+        if math.isfinite(number) and above and number <= high:
+            return None
+        lowest = f"> {low:g}" if low_open else f"{low:g}"
+        return (
+            f"{key}={value} is out of range (allowed: {lowest} to {high:g}{' or null' * optional})"
+        )
+
+    return check
+
+
 def _not_a_key(key: str, value: Any) -> str | None:
     from twostep.llm.client import key_env_problem
 
@@ -151,6 +173,17 @@ def _decomposers() -> Iterable[str]:
     return DECOMPOSERS
 
 
+def _cuts() -> Iterable[str]:
+    from twostep.dealing import CUTS
+    from twostep.methods.plan_deal import BEST
+
+    return (*CUTS, BEST)
+
+
+def _log_levels() -> Iterable[str]:
+    return ("DEBUG", "INFO", "WARNING", "ERROR", "CRITICAL")
+
+
 @dataclass(frozen=True)
 class Rule:
     """The allowed values of one config key (``key``: dotted; ``shown``: its name in the
@@ -158,6 +191,7 @@ class Rule:
 
     key: str
     check: Check
+    allowed: str  # what is allowed, as the docs' table of ranges says it (a test compares)
     shown: str = ""
 
     @property
@@ -165,23 +199,36 @@ class Rule:
         return self.shown or self.key
 
 
+SECONDS = "> 0, at most 1000000 (seconds)"
 VALUE_RULES: tuple[Rule, ...] = (
-    Rule("score_mode", one_of(_score_modes)),
-    Rule("method.name", one_of(_methods), "method"),
-    Rule("decomposer.name", one_of(_decomposers), "decomposer"),
-    Rule("llm.mode", one_of(_llm_modes)),
-    Rule("llm.translator", one_of(_translators)),
-    Rule("agents", at_least(1)),
-    Rule("planner.time_limit_s", seconds()),
-    Rule("planner.memory_limit_mb", memory_mb),
-    Rule("planner.grounding_time_limit_s", seconds(optional=True)),
-    Rule("llm.timeout_s", seconds()),
-    Rule("llm.max_retries", at_least(0)),
-    Rule("llm.api_key_env", _not_a_key),
-    Rule("score_max_nodes", at_least(0, optional=True, hint=" (or null)")),
-    Rule("score_time_limit_s", seconds(optional=True)),
-    Rule("mlflow.connect_timeout_s", seconds()),
-    Rule("orchestration.server_startup_timeout_s", seconds()),
+    Rule("score_mode", one_of(_score_modes), "exact, paper"),
+    Rule("method.name", one_of(_methods), "sa, ma, twostep", "method"),
+    Rule("decomposer.name", one_of(_decomposers), "the decomposers' names", "decomposer"),
+    Rule("decomposer.cut", one_of(_cuts), "free, holding, mover, best"),
+    Rule("decomposer.link_degree", at_least(0), ">= 0"),
+    Rule("llm.mode", one_of(_llm_modes), "live, replay, scripted"),
+    Rule("llm.translator", one_of(_translators), "llm, rules"),
+    Rule("agents", at_least(1), ">= 1"),
+    Rule("seed", at_least(0), ">= 0"),
+    Rule("planner.time_limit_s", seconds(), SECONDS),
+    Rule("planner.memory_limit_mb", memory_mb, ">= 64 (MB), or null (4096)"),
+    Rule("planner.grounding_time_limit_s", seconds(optional=True), f"{SECONDS}, or null"),
+    Rule("llm.timeout_s", seconds(), SECONDS),
+    Rule("llm.max_retries", at_least(0), ">= 0"),
+    Rule("llm.backoff_s", between(0, MAX_SECONDS), "0 to 1000000 (seconds)"),
+    Rule("llm.temperature", between(0, 2), "0 to 2"),
+    Rule("llm.top_p", between(0, 1, low_open=True, optional=True), "> 0 to 1, or null"),
+    Rule("llm.max_tokens", at_least(1), ">= 1"),
+    Rule("llm.api_key_env", _not_a_key, "a variable's name, never a key"),
+    Rule("executor.max_steps", at_least(1, optional=True), ">= 1, or null"),
+    Rule("executor.stall_limit", at_least(1), ">= 1"),
+    Rule("executor.backoff_radius", at_least(1), ">= 1"),
+    Rule("score_max_nodes", at_least(0, optional=True, hint=" (or null)"), ">= 0, or null"),
+    Rule("score_time_limit_s", seconds(optional=True), f"{SECONDS}, or null"),
+    Rule("mlflow.connect_timeout_s", seconds(), SECONDS),
+    Rule("orchestration.server_startup_timeout_s", seconds(), SECONDS),
+    Rule("orchestration.dask_workers", at_least(1), ">= 1"),
+    Rule("orchestration.prefect_log_level", one_of(_log_levels), ", ".join(_log_levels())),
 )
 
 
