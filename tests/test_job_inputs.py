@@ -216,3 +216,30 @@ def test_single_run_logs_to_mlflow_through_its_worker(tmp_path: Path) -> None:
     assert run.data.tags["twostep.status"] == "success"
     assert run.data.metrics["exec_length"] == first["exec_length"]
     assert {a.path for a in client.list_artifacts(run.info.run_id)} >= {"result.json"}
+
+
+def test_an_embodied_jobs_key_holds_its_kitchen(tmp_path: Path) -> None:
+    """Issue 39: the floor plan an embodied job reads (its task folder's kitchen.yaml) is
+    one of its inputs; a symbolic job, or one on a named scene, does not read it."""
+    from flows.store import job_config, job_inputs, job_key
+
+    data = tmp_path / "data"
+    shutil.copytree(REPO / "data" / "alfworld", data / "alfworld")
+    kitchen = data / "alfworld" / "kitchen.yaml"
+
+    def key(*overrides: str) -> tuple[str, dict[str, str]]:
+        config = job_config(job_cfg(data, tmp_path / "out", "domain=alfworld", "task=4",
+                                    *overrides))  # fmt: skip
+        inputs = job_inputs(config)
+        return job_key(config, inputs), inputs
+
+    embodied, inputs = key("executor=embodied")
+    symbolic, symbolic_inputs = key("executor=symbolic")
+    scene, scene_inputs = key("executor=embodied", "executor.layout=open")
+    assert "kitchen" in inputs and "kitchen" not in symbolic_inputs | scene_inputs
+    kitchen.write_text(kitchen.read_text().replace("width: 13", "width: 14"))
+    assert key("executor=embodied")[0] != embodied  # an edited kitchen is another job
+    assert (
+        key("executor=symbolic")[0] == symbolic
+        and key("executor=embodied", "executor.layout=open")[0] == scene
+    )

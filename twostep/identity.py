@@ -158,7 +158,27 @@ def job_input_files(config: Mapping[str, Any], problem_path: Path | None) -> dic
             files["llm_bundle"] = folder if folder.suffix == ".json" else folder / "bundle.json"
         for prompt in sorted(_PROMPTS.glob("*.txt")):
             files[f"prompt:{prompt.name}"] = prompt
+    kitchen = _kitchen_file(config, problem_path.parent if problem_path else folder)
+    if kitchen is not None:
+        files["kitchen"] = kitchen
     return files
+
+
+def _kitchen_file(config: Mapping[str, Any], folder: Path) -> Path | None:
+    """The floor plan an embodied job reads: its task folder's ``kitchen.yaml`` when no
+    ``executor.layout`` names a scene (the rule of
+    :func:`twostep.embodied.layouts.floor_plan_for_task`); None for a symbolic job, a
+    named scene, or a folder without one (the scene comes with the alfworld wheel)."""
+    executor = config.get("executor")
+    if not isinstance(executor, Mapping) or str(executor.get("name")) != "embodied":
+        return None
+    if executor.get("layout") is not None:
+        return None
+    from twostep.embodied.floorplan import FLOOR_PLAN_FILE
+    from twostep.files import exists
+
+    path = folder / FLOOR_PLAN_FILE
+    return path if exists(path) else None
 
 
 def file_digest(path: Path) -> str:
