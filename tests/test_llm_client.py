@@ -445,3 +445,22 @@ def test_url_credentials_stay_out_of_the_cache(tmp_path: Path, litellm: Any) -> 
     )
     request = LLMClient(settings).request(MESSAGES, seed=0)
     assert request["api_base"] == "https://***@llm.example.org/v1"
+
+
+def test_litellm_lines_are_printed_once_and_info_only_when_asked(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """Issue 39, finding 13: each LiteLLM INFO line was printed twice (its own handler and
+    the application's root handler), for the warm-up call too."""
+    import logging
+
+    from twostep.llm import client
+
+    client._import_litellm()
+    logger = logging.getLogger("LiteLLM")
+    with caplog.at_level(logging.INFO):
+        logger.info("LiteLLM completion() model= gpt-4o; provider = openai")
+        logger.warning("a warning")
+    assert caplog.records == []  # nothing reaches the root logger's handlers
+    assert logger.propagate is False
+    assert not logger.isEnabledFor(logging.INFO) and logger.isEnabledFor(logging.WARNING)

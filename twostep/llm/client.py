@@ -92,6 +92,7 @@ def _import_litellm(model: str = "openai/warm-up") -> Any:
         import litellm
 
         litellm.suppress_debug_info = True
+        _quiet_litellm_logs()
         with contextlib.suppress(Exception):  # a model litellm cannot route: no warm-up
             litellm.completion(
                 model=model, messages=[{"role": "user", "content": "-"}], mock_response="-"
@@ -101,6 +102,21 @@ def _import_litellm(model: str = "openai/warm-up") -> Any:
                 importlib.import_module(name)
         _litellm = litellm
     return _litellm
+
+
+LITELLM_LOGGERS = ("LiteLLM", "LiteLLM Router", "LiteLLM Proxy")
+
+
+def _quiet_litellm_logs() -> None:
+    """litellm's log lines once, by its own handler (they also reached the root logger's
+    handler of the application: every line twice), and only its warnings unless
+    ``LITELLM_LOG`` asks for more (its INFO lines say "completion() model=..." for the
+    warm-up call too, which is not a call to the model)."""
+    for name in LITELLM_LOGGERS:
+        logger = logging.getLogger(name)
+        logger.propagate = False
+        if "LITELLM_LOG" not in os.environ:
+            logger.setLevel(logging.WARNING)
 
 
 class LLMError(Exception):
