@@ -11,6 +11,7 @@ import sqlite3
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -116,7 +117,7 @@ def test_a_closed_stdout_is_no_traceback_and_keeps_the_exit_code(
 
 
 @pytest.fixture
-def small_disk(tmp_path: Path) -> object:
+def small_disk(tmp_path: Path) -> Iterator[Path]:
     """A 5 MB tmpfs (root only: skipped elsewhere)."""
     disk = tmp_path / "disk"
     disk.mkdir()
