@@ -101,21 +101,8 @@ def run_exists(tracking_uri: str, run_id: str, timeout_s: float = 10.0) -> bool:
     SQLite store, a GET to a tracking server (MLflow is not imported). False also when it
     cannot be told cheaply: the caller then logs through the interface, which finds a run
     that exists by its job key (no duplicate)."""
-    database = sqlite_path(tracking_uri)
-    if database is not None:
-        if not database.is_file():
-            return False
-        import sqlite3
-        from contextlib import closing
-
-        try:
-            with closing(sqlite3.connect(f"file:{database}?mode=ro", uri=True, timeout=30.0)) as db:
-                rows = db.execute(
-                    "SELECT lifecycle_stage FROM runs WHERE run_uuid = ?", (run_id,)
-                ).fetchall()
-        except sqlite3.Error:  # no tables (an emptied file), or not a database
-            return False
-        return rows == [("active",)]
+    if sqlite_path(tracking_uri) is not None:
+        return _run_column(tracking_uri, run_id, "lifecycle_stage") == "active"
     if urlparse(tracking_uri).scheme in ("http", "https"):
         url = f"{tracking_uri.rstrip('/')}/api/2.0/mlflow/runs/get?run_id={quote(run_id)}"
         try:
@@ -128,27 +115,33 @@ def run_exists(tracking_uri: str, run_id: str, timeout_s: float = 10.0) -> bool:
     return False
 
 
+def _run_column(tracking_uri: str, run_id: str, column: str) -> object | None:
+    """One column of run ``run_id`` read from a SQLite store, read-only (MLflow is not
+    imported); None without such a store or run (no tables, an emptied file)."""
+    import sqlite3
+    from contextlib import closing
+
+    database = sqlite_path(tracking_uri)
+    if database is None or not database.is_file():
+        return None
+    try:
+        with closing(sqlite3.connect(f"file:{database}?mode=ro", uri=True, timeout=30.0)) as db:
+            rows = db.execute(f"SELECT {column} FROM runs WHERE run_uuid = ?", (run_id,)).fetchall()
+    except sqlite3.Error:
+        return None
+    return rows[0][0] if len(rows) == 1 else None
+
+
 def missing_artifacts(tracking_uri: str, run_id: str) -> str | None:
     """The artifact folder of run ``run_id`` when the store names a local one that is
     gone or empty (``rm -rf outputs/mlruns``); None when it is there, or when that cannot
     be told cheaply (a tracking server, remote artifacts: nothing is claimed)."""
-    database = sqlite_path(tracking_uri)
-    if database is None or not database.is_file():
-        return None
-    import sqlite3
-    from contextlib import closing
     from urllib.request import url2pathname
 
-    try:
-        with closing(sqlite3.connect(f"file:{database}?mode=ro", uri=True, timeout=30.0)) as db:
-            rows = db.execute(
-                "SELECT artifact_uri FROM runs WHERE run_uuid = ?", (run_id,)
-            ).fetchall()
-    except sqlite3.Error:
+    found = _run_column(tracking_uri, run_id, "artifact_uri")
+    if not found:
         return None
-    if len(rows) != 1 or not rows[0][0]:
-        return None
-    uri = str(rows[0][0])
+    uri = str(found)
     parsed = urlparse(uri)
     if parsed.scheme not in ("", "file"):
         return None
