@@ -92,7 +92,6 @@ def _import_litellm(model: str = "openai/warm-up") -> Any:
         import litellm
 
         litellm.suppress_debug_info = True
-        _quiet_litellm_logs()
         with contextlib.suppress(Exception):  # a model litellm cannot route: no warm-up
             litellm.completion(
                 model=model, messages=[{"role": "user", "content": "-"}], mock_response="-"
@@ -101,6 +100,7 @@ def _import_litellm(model: str = "openai/warm-up") -> Any:
             with contextlib.suppress(ImportError):
                 importlib.import_module(name)
         _litellm = litellm
+    _quiet_litellm_logs()  # again on each use: litellm may set its loggers up anew
     return _litellm
 
 
