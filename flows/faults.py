@@ -94,8 +94,21 @@ def _guarded(run_job: Any) -> Any:
     return run_job_guarded
 
 
+def _guarded_ours(run_job: Any) -> Any:
+    """The same for :func:`flows.run_job.run_job` (``hydra_context`` comes first)."""
+
+    def run_job_guarded(hydra_context: Any, task_function: Any, config: Any) -> Any:
+        inner = _guarded(lambda task, cfg: run_job(hydra_context, task, cfg))
+        return inner(task_function, config)
+
+    run_job_guarded.__wrapped__ = run_job  # type: ignore[attr-defined]
+    return run_job_guarded
+
+
 def guard_jobs() -> None:
-    """Wrap Hydra's ``run_job`` where the in-process launchers call it (once)."""
+    """Wrap ``run_job`` where the launchers call it (once): Hydra's (the basic launcher,
+    a single run) and the twostep launcher's (:mod:`flows.launcher`; its workers are
+    forked from this process, wrapped already)."""
     import hydra._internal.core_plugins.basic_launcher as basic
     import hydra._internal.hydra as hydra_main
     import hydra.core.utils as utils
@@ -104,3 +117,8 @@ def guard_jobs() -> None:
         current = getattr(module, "run_job", None)
         if current is not None and not hasattr(current, "__wrapped__"):
             module.run_job = _guarded(current)  # type: ignore[attr-defined]
+    import flows.launcher as launcher
+
+    current = getattr(launcher, "run_job", None)
+    if current is not None and not hasattr(current, "__wrapped__"):
+        launcher.run_job = _guarded_ours(current)  # type: ignore[attr-defined]

@@ -47,13 +47,13 @@ def test_a_run_directory_that_cannot_be_made_is_one_failed_job_and_the_sweep_end
     the same fault for every user (permission bits do not stop root)."""
     out, sweep = tmp_path / "out", tmp_path / "sweep"
     sweep.mkdir()
-    (sweep / "1").write_text("in the way")
+    blocked = sweep / "1_blocksworld_p2_sa_n1_s0"  # job 1's folder (hydra.sweep.subdir)
+    blocked.write_text("in the way")
     done = twostep("-m", "task=1,2,3", "method=sa", f"data.root={data}", f"output.root={out}",
-                   f"hydra.sweep.dir={sweep}", "hydra.sweep.subdir=${hydra.job.num}",
-                   *FAST)  # fmt: skip
+                   f"hydra.sweep.dir={sweep}", *FAST)  # fmt: skip
     assert done.returncode == 1, done.stdout + done.stderr
     assert "Traceback" not in done.stderr, done.stderr
-    assert f"error: blocksworld-p02-sa-n1-s0: cannot write {sweep / '1'} (File exists)" in (
+    assert f"error: blocksworld-p02-sa-n1-s0: cannot write {blocked} (File exists)" in (
         done.stderr.splitlines()
     )
     assert "sweep finished: 3/3 jobs: 2 ok, 1 failed" in done.stdout
