@@ -10,8 +10,21 @@ depth-first walk over the modules in sorted order (so the count is reproducible)
 *private import* names another module's ``_name``. Function length counts every line
 from ``def`` to the function's last line (docstring and comments included).
 
+With ``--layout`` (the default package only) it prints the house's shape as well:
+
+- *root modules*: the modules at the root of the library package besides ``__init__.py``;
+- *config mentions*: string literals in the library (docstrings aside) that name the
+  Hydra job config: a dotted key ``group.field`` of ``conf/``, a Hydra-only group
+  (``hydra``, ``orchestration``, ``mlflow``, ``output``, ``experiment``) or ``.hydra``;
+- *status vocabularies*: the ``*Status`` enums and ``*STATUSES`` constants in the library
+  and ``flows/``, and the comparisons of a value with a bare status string there;
+- *places a method touches*: for each method, the files of the library, ``flows/`` and
+  ``conf/`` that name it (a string literal equal to its name, a ``MethodName`` member of
+  it, a config file named after it, or its own module).
+
     .venv/bin/python bench/bench_structure.py                 # twostep/ of this checkout
     .venv/bin/python bench/bench_structure.py --root /path/to/checkout --package flows
+    .venv/bin/python bench/bench_structure.py --layout        # + root modules, config, ...
 """
 
 from __future__ import annotations
@@ -142,11 +155,154 @@ def back_arrows(graph: Mapping[str, set[str]]) -> list[tuple[str, str]]:
     return found
 
 
+HYDRA_ONLY_GROUPS = ("hydra", "orchestration", "mlflow", "output", "experiment")
+METHODS = ("sa", "ma", "twostep", "plan-deal", "portfolio", "portfolio-lite")
+NEW_METHODS = ("plan-deal", "portfolio", "portfolio-lite")  # the headline: methods added
+# after the paper's (the paper's own are named all over: "twostep" is also the project)
+
+
+def _strings(tree: ast.AST) -> Iterator[ast.Constant]:
+    """The string literals of a module, docstrings aside."""
+    docstrings = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef):
+            body = node.body
+            if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant):
+                docstrings.add(id(body[0].value))
+    for node in ast.walk(tree):
+        is_text = isinstance(node, ast.Constant) and isinstance(node.value, str)
+        if is_text and id(node) not in docstrings:
+            yield node
+
+
+def config_keys(root: Path) -> dict[str, set[str]]:
+    """``group -> fields`` of the job config as ``conf/`` writes it (top-level keys of
+    ``config.yaml`` and of every group's files)."""
+    import yaml
+
+    conf = root / "conf"
+    groups: dict[str, set[str]] = {}
+    main = yaml.safe_load((conf / "config.yaml").read_text()) or {}
+    for key, value in main.items():
+        if key != "defaults":
+            groups.setdefault(key, set()).update(value if isinstance(value, dict) else ())
+    for folder in sorted(p for p in conf.iterdir() if p.is_dir() and p.name != "hydra"):
+        fields = groups.setdefault(folder.name, set())
+        for path in folder.rglob("*.yaml"):
+            data = yaml.safe_load(path.read_text()) or {}
+            inner = data.get(folder.name, data) if isinstance(data, dict) else {}
+            fields.update(k for k in (inner if isinstance(inner, dict) else {}) if k != "defaults")
+            fields.update(k for k in data if isinstance(data, dict) and k not in groups)
+    return groups
+
+
+def config_mentions(root: Path, modules: Mapping[str, Path]) -> list[tuple[str, int, str]]:
+    groups = config_keys(root)
+    found = []
+    for module, path in modules.items():
+        for node in _strings(ast.parse(path.read_text(), str(path))):
+            text = node.value
+            head, _, rest = text.partition(".")
+            field = rest.split(".")[0]
+            if (
+                ".hydra" in text
+                or text in HYDRA_ONLY_GROUPS
+                or (head in groups and field and field in groups[head])
+            ):
+                found.append((module, node.lineno, text))
+    return found
+
+
+def status_vocabularies(root: Path) -> tuple[list[str], list[tuple[str, int, str]]]:
+    """The status vocabularies of the library and ``flows/`` (``module.Name``), and the
+    comparisons with a bare string that is one of their values (module, line, string)."""
+    vocabularies: list[str] = []
+    values: set[str] = set()
+    trees = {}
+    for package in ("twostep", "flows"):
+        for module, path in module_names(root, package).items():
+            tree = ast.parse(path.read_text(), str(path))
+            trees[module] = tree
+            for node in tree.body:
+                if isinstance(node, ast.ClassDef) and node.name.endswith("Status"):
+                    vocabularies.append(f"{module}.{node.name}")
+                    for item in node.body:
+                        if isinstance(item, ast.Assign) and isinstance(item.value, ast.Constant):
+                            values.add(str(item.value.value))
+                targets = (
+                    [node.target] if isinstance(node, ast.AnnAssign)
+                    else node.targets if isinstance(node, ast.Assign) else []
+                )  # fmt: skip
+                for target in targets:
+                    if isinstance(target, ast.Name) and target.id.endswith("STATUSES"):
+                        vocabularies.append(f"{module}.{target.id}")
+    values |= {"success", "failed", "running", "error", "timeout"}
+    bare = []
+    for module, tree in trees.items():
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Compare):
+                for operand in (node.left, *node.comparators):
+                    if isinstance(operand, ast.Constant) and operand.value in values:
+                        bare.append((module, node.lineno, str(operand.value)))
+    return vocabularies, sorted(bare)
+
+
+def method_places(root: Path) -> dict[str, list[str]]:
+    """Method -> the files of twostep/, flows/ and conf/ that name it."""
+    places: dict[str, set[str]] = {m: set() for m in METHODS}
+    for package in ("twostep", "flows"):
+        for path in module_names(root, package).values():
+            shown = path.relative_to(root).as_posix()
+            tree = ast.parse(path.read_text(), str(path))
+            for method in METHODS:
+                if path.stem == method.replace("-", "_") and "methods" in path.parts:
+                    places[method].add(shown)
+            for node in ast.walk(tree):
+                if isinstance(node, ast.Constant) and node.value in places:
+                    places[str(node.value)].add(shown)
+                elif (
+                    isinstance(node, ast.Attribute)
+                    and isinstance(node.value, ast.Name)
+                    and node.value.id == "MethodName"
+                    and node.attr.lower().replace("_", "-") in places
+                ):
+                    places[node.attr.lower().replace("_", "-")].add(shown)
+    for path in (root / "conf").rglob("*.yaml"):
+        if path.stem in places and "hydra" not in path.parts:
+            places[path.stem].add(path.relative_to(root).as_posix())
+    return {m: sorted(found) for m, found in places.items()}
+
+
+def layout(root: Path, package: str, modules: Mapping[str, Path]) -> None:
+    top = sorted(p.name for p in (root / package).glob("*.py") if p.name != "__init__.py")
+    print(f"root modules: {len(top)}")
+    if top:
+        print(f"  {' '.join(top)}")
+    mentions = config_mentions(root, modules)
+    print(f"config mentions in the library: {len(mentions)} "
+          f"in {len({m for m, _, _ in mentions})} modules")  # fmt: skip
+    for module, line, text in mentions:
+        print(f"  {module}:{line} {text!r}")
+    vocabularies, bare = status_vocabularies(root)
+    print(f"status vocabularies: {len(vocabularies)}")
+    for name in vocabularies:
+        print(f"  {name}")
+    print(f"bare status-string comparisons: {len(bare)}")
+    for module, line, text in bare:
+        print(f"  {module}:{line} {text!r}")
+    places = method_places(root)
+    most = max(len(places[m]) for m in NEW_METHODS)
+    print(f"places a new method touches (most of {', '.join(NEW_METHODS)}): {most}")
+    for method, files in places.items():
+        print(f"  {method}: {len(files)}: {' '.join(files)}")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--root", default=str(Path(__file__).resolve().parent.parent))
     parser.add_argument("--package", default="twostep")
     parser.add_argument("--longest", type=int, default=10)
+    parser.add_argument("--layout", action="store_true", help="also the house's shape")
     args = parser.parse_args(argv)
     modules = module_names(Path(args.root), args.package)
     graph: dict[str, set[str]] = {m: set() for m in modules}
@@ -176,6 +332,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{args.longest} longest:")
     for f in every[: args.longest]:
         print(f"  {f.length:4d}  {f.module}.{f.name} (line {f.line})")
+    if args.layout:
+        layout(Path(args.root), args.package, modules)
     return 0
 
 
