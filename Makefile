@@ -81,7 +81,7 @@ local-llm: setup
 # Optional: AlfWorld's own text engine (TextWorld; compiles a Fast Downward, 2-9 min) for
 # the independent semantic check of embodied runs (slow tests, bench/bench_embodied.py).
 # A venv of its own: fast-downward-textworld's `fast_downward` package would replace the
-# one our planner's translator needs (twostep/alfworld_engine.py runs it as a subprocess).
+# one our planner's translator needs (checkers/alfworld_engine.py runs it as a subprocess).
 alfworld-engine: $(ALFWORLD_VENV)/.synced
 
 $(ALFWORLD_VENV)/.synced: | $(UV)

@@ -10,7 +10,7 @@ For every problem of a corpus:
   it (a fresh ``output.root`` per run: nothing reused, the parsed-task cache cold). Loaded?
   (the run got past reading the task), load time (``orchestration.task_load_s`` of
   result.json), solved?, and is the plan valid on the ORIGINAL files by the independent
-  validator (``bench/independent``: unified-planning where its reader accepts the files,
+  validator (``checkers``: unified-planning where its reader accepts the files,
   Fast Downward's translator plus a simulator written apart from twostep everywhere)? Also
   checked: ``sa_length`` is the plan's action count, ``sa_cost`` its cost.
 * with ``--agents FILE`` (YAML: ``domain: [agent predicates]``), for the domains it lists:
@@ -61,8 +61,8 @@ import yaml
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from bench.independent import IndependentValidator, Verdict  # noqa: E402
-from bench.independent import fast_downward as fd  # noqa: E402
+from checkers import IndependentValidator, Verdict  # noqa: E402
+from checkers import fast_downward as fd  # noqa: E402
 
 AGENTS = 2
 PROBLEM_FILE = re.compile(r"^p(\d+)\.pddl$")
@@ -410,7 +410,7 @@ def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
         "",
         "Load s: `orchestration.task_load_s` of the run's result.json (read and ground the "
         "task, in process). Plan valid: the SA plan checked on the original files by the "
-        "independent validator (`bench/independent`); MA valid and plan-deal valid: the "
+        "independent validator (`checkers`); MA valid and plan-deal valid: the "
         "schedule re-validated the same way.",
         "",
         *report(conformance["rows"]).splitlines(),

@@ -20,11 +20,11 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from bench.bench_methods import agent_predicates
-from twostep.benchmark import load_task
 from twostep.dealing import Dealer
 from twostep.methods import MethodRequest
 from twostep.methods.plan_deal import run_plan_deal
 from twostep.planner.results import PlanResult, Status
+from twostep.tasks.benchmark import load_task
 
 REPO = Path(__file__).resolve().parent.parent
 

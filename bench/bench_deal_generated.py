@@ -12,7 +12,7 @@ For each problem (sizes below, ``--seeds`` seeds each): the SA plan (lama-first,
 counted), then plan-deal for N = 2, 3, 4 (``--agents``) with the agent predicates of
 :data:`AGENT_PREDICATES` (agents.yaml's, and the issue's for storage and floortile). Every
 schedule, a fallback to the SA plan included, is re-validated by ``check_run`` and by the
-independent validator on the generated files (``bench/independent``).
+independent validator on the generated files (``checkers``).
 
 One row per problem: SA length, plan-deal length per N, the fallback reasons, both
 verdicts, the dealing CPU seconds per N (plan-deal's own ``deal_seconds``: every phase after
@@ -55,10 +55,10 @@ from bench.bench_deal_ipc import (
     independent_verdict,
     our_verdict,
 )
-from bench.independent import IndependentValidator
-from twostep.benchmark import BenchmarkTask, load_task
+from checkers import IndependentValidator
 from twostep.methods import MethodRequest, run_single_agent
 from twostep.planner import PlannerSettings
+from twostep.tasks.benchmark import BenchmarkTask, load_task
 
 REPO = Path(__file__).resolve().parent.parent
 SAMPLE = REPO.parent / "shared" / "ipc-sample"

@@ -6,7 +6,7 @@ acting object's own state is, none shared with other objects), or given by the s
 ``agents.yaml`` (``--agents-file``), the SA plan (lama-first, ``--time-limit`` s) is dealt
 to N = 2 and 3 agents (``--agents``) by plan-deal. Every schedule, a fallback to the SA plan
 included, is re-validated twice: by ``check_run`` (our simulator) and by the independent
-validator on the original files (``bench/independent``: Fast Downward's grounding run by a
+validator on the original files (``checkers``: Fast Downward's grounding run by a
 simulator of its own, and unified-planning's N-agent formulation where its reader accepts
 the files; the column names the checkers that read them).
 
@@ -42,12 +42,12 @@ from types import FrameType
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 
-from bench.independent import IndependentValidator
-from twostep.benchmark import BenchmarkTask, load_task
-from twostep.files import read_yaml_file
+from checkers import IndependentValidator
 from twostep.methods import MethodRequest, RunResult, check_run, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
 from twostep.planner import PlannerSettings
+from twostep.tasks.benchmark import BenchmarkTask, load_task
+from twostep.util.files import read_yaml_file
 
 REPO = Path(__file__).resolve().parent.parent
 SAMPLE = REPO.parent / "shared" / "ipc-sample"
@@ -255,7 +255,7 @@ def independent_verdict(
     validator: IndependentValidator, run: RunResult, preds: Sequence[str]
 ) -> str:
     """The independent validator's verdict on the schedule, on the original files
-    (``bench/independent``: Fast Downward's grounding with a simulator of its own, and
+    (``checkers``: Fast Downward's grounding with a simulator of its own, and
     unified-planning where its reader accepts the files), and which checkers agreed. One
     validator per task: it reads the files once for all of the task's rows."""
     try:

@@ -27,11 +27,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from bench import record
 from bench.bench_methods import agent_predicates, data_label, task_ids
-from twostep.benchmark import DEFAULT_DATA_ROOT, list_tasks, load_task
 from twostep.dealing import CUTS, ORDERS, Dealer, DealError, Way, ways
 from twostep.generators import DOMAINS
 from twostep.methods import MethodRequest, run_single_agent
 from twostep.planner import PlannerSettings
+from twostep.tasks.benchmark import DEFAULT_DATA_ROOT, list_tasks, load_task
 
 GRID = tuple(Way(c, o, s) for c, o, s in itertools.product(CUTS, ORDERS, (False, True)))
 AGENTS = (2, 3, 4)

@@ -13,7 +13,7 @@ speed   For the four kitchen tasks (``data/alfworld``) and one generated larger 
         translation the process caches (a job's single execution pays it).
         Goal: a 4-agent, 300-step execution in under 0.5 s.
 check   MA and TwoStep (goal-split) on the four tasks, N = 2 and 3, seeds 0..``--seeds``-1:
-        every trace replayed by :mod:`twostep.trace_check` (its own floor-plan and PDDL
+        every trace replayed by :mod:`checkers.trace_check` (its own floor-plan and PDDL
         reading); traces, commands, interactions, interactions out of reach, violations.
 render  The GIF and the timeline of task 1, MA, N = 2, seed 0 (``write_pictures``), the
         first time in the process (matplotlib's import included) and again.
@@ -50,7 +50,7 @@ import yaml
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from bench import record as bench_record
-from twostep.benchmark import BenchmarkTask, load_task
+from checkers.trace_check import TraceReport, check_trace, read_kitchen_file, who_plays
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.embodied import (
     ExecutorSettings,
@@ -74,7 +74,7 @@ from twostep.methods import (
 )
 from twostep.pddl import Problem, parse_problem
 from twostep.planner import PlannerSettings
-from twostep.trace_check import TraceReport, check_trace, read_kitchen_file, who_plays
+from twostep.tasks.benchmark import BenchmarkTask, load_task
 
 ROOT = Path(__file__).resolve().parent.parent
 KITCHEN = ROOT / "data" / "alfworld" / "kitchen.yaml"
@@ -250,8 +250,8 @@ def render(recorded: Rows | None = None) -> None:
 
 
 def real(seeds: int, recorded: Rows | None = None) -> None:
-    from twostep.alfworld_engine import engine_python, replay_trace
-    from twostep.trace_check import alfworld_layouts_folder
+    from checkers.alfworld_engine import engine_python, replay_trace
+    from checkers.trace_check import alfworld_layouts_folder
 
     layouts = alfworld_layouts_folder()
     if layouts is None:
@@ -346,7 +346,7 @@ def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
             "## Trace check",
             "",
             f"MA and TwoStep (goal-split) on the four kitchen tasks, N = 2 and 3, seeds 0-"
-            f"{r['seeds'] - 1}: every trace replayed by `twostep.trace_check` (its own reading "
+            f"{r['seeds'] - 1}: every trace replayed by `checkers.trace_check` (its own reading "
             "of the floor plan and the PDDL).",
             "",
             *bench_record.table(

@@ -15,7 +15,7 @@ by cart), with the classes of interchangeable agents the search exploits (their 
 wall and CPU time, nodes, length, proven lower bound, exact yes/no and the gap. ``--max-nodes`` and
 ``--time-limit`` are the search budget (``none``: no limit).
 
-Measures :func:`twostep.execution.parallel_length` (bit-set states, A* with the pair-
+Measures :func:`twostep.makespan.parallel_length` (bit-set states, A* with the pair-
 projection bound and dominance pruning) against a straightforward implementation: A*
 with the longest-remaining-plan bound over every compatible set of agents, in which each
 joint step is checked with unified-planning's ``SequentialSimulator`` (applicability and
@@ -55,13 +55,13 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from bench import record
-from twostep.execution import ParallelExecution, parallel_length
-from twostep.execution.compiled import compile_task
-from twostep.execution.model import DEFAULT_MAX_NODES, DEFAULT_TIME_LIMIT_S
-from twostep.execution.parallel import _parallel_length
-from twostep.execution.symmetry import Symmetry
+from twostep.makespan import ParallelExecution, parallel_length
+from twostep.makespan.compiled import compile_task
+from twostep.makespan.model import DEFAULT_MAX_NODES, DEFAULT_TIME_LIMIT_S
+from twostep.makespan.parallel import _parallel_length
+from twostep.makespan.symmetry import Symmetry
 from twostep.pddl import Problem, parse_problem
-from twostep.strips import GroundAction, Grounder
+from twostep.plans.simulate import GroundAction, Grounder
 
 AGENTS = 4
 PLAN_LENGTH = 60
@@ -504,7 +504,7 @@ def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
         "## Against a straightforward search",
         "",
         f"N = {comparison.get('agents')} agents; twostep: median of {comparison.get('repeats')} "
-        "runs of `twostep.execution.parallel_length`; plain: the same straightforward search "
+        "runs of `twostep.makespan.parallel_length`; plain: the same straightforward search "
         "on our bit-set states; UP: that search with each joint step checked by "
         "unified-planning's `SequentialSimulator` (one run, stopped past "
         f"{comparison.get('budget_s'):g} s: `-`).",

@@ -368,7 +368,7 @@ def bad_file_cases(root: Path) -> list[Case]:
         data = data_root(tag)
         spoil(data / "blocksworld" / file)
         extra = ["method=twostep", "decomposer=expert"] if file == "expert.yaml" else []
-        # a byte-order mark is read as the file without it (twostep/files.py): a success
+        # a byte-order mark is read as the file without it (twostep/util/files.py): a success
         cases.append(Case(tag, twostep(tag, data, *extra), data / "blocksworld" / file,
                           0 if kind == "bom" else 2))  # fmt: skip
     for role, file in (("domain", "domain.pddl"), ("problem", "p01.pddl"), ("plan", "a.plan")):

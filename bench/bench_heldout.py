@@ -13,7 +13,7 @@ them exactly as on ``data/``:
         --domains barman blocksworld grippers termes tyreworld storage floortile \\
         --agent-predicates bench/heldout_agents.yaml --out outputs/bench/methods_heldout.json
 
-Then every schedule again, checked by the independent validator (``bench/independent``:
+Then every schedule again, checked by the independent validator (``checkers``:
 Fast Downward's translation simulated apart, and unified-planning where it reads the files):
 
     python bench/bench_heldout.py --validate /tmp/llmp \
@@ -58,7 +58,7 @@ from typing import Any
 import yaml
 
 REPO = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(REPO))  # bench.independent, run as a script too
+sys.path.insert(0, str(REPO))  # checkers, run as a script too
 DOMAINS = ("barman", "blocksworld", "grippers", "termes", "tyreworld", "storage", "floortile")
 PROBLEM = re.compile(r"p\d\d\.pddl")
 DOMAIN_NAME = re.compile(r"\(\s*:domain\s+([^\s()]+)\s*\)", re.IGNORECASE)
@@ -132,13 +132,13 @@ def heldout_predicates(domain: str) -> list[str]:
 def validate(root: Path, rows: list[dict[str, Any]], agents: tuple[int, ...]) -> Counter[str]:
     """Deal every stored SA plan of ``root``'s tasks to each of ``agents`` with plan-deal and
     check the schedule with the independent validator; print each one that fails."""
-    from bench.independent import IndependentValidator
-    from bench.independent.constants import move_constants
-    from twostep.benchmark import load_task
+    from checkers import IndependentValidator
+    from checkers.constants import move_constants
     from twostep.methods import MethodRequest
     from twostep.methods.plan_deal import run_plan_deal
     from twostep.planner import PlannerSettings
     from twostep.planner.results import PlanResult, Status
+    from twostep.tasks.benchmark import load_task
 
     counts: Counter[str] = Counter()
     for row in rows:
@@ -169,7 +169,7 @@ CROSS_TIME_LIMIT_S = 60.0
 def without_domain_constants(domain: Path, problem: Path, out_dir: Path) -> Path:
     """A copy of ``problem`` without the objects ``domain`` declares as constants, written
     with the independent checkers' own s-expression code (not twostep's repair)."""
-    from bench.independent.constants import read_sexp, write_sexp
+    from checkers.constants import read_sexp, write_sexp
 
     def part(expr: Any, keyword: str) -> list[Any]:
         found = [p for p in expr if isinstance(p, list) and p and str(p[0]).lower() == keyword]
@@ -197,7 +197,7 @@ def without_domain_constants(domain: Path, problem: Path, out_dir: Path) -> Path
 
 def _simulated(task: Any, plan: list[str]) -> str:
     """'' if twostep's simulator runs ``plan`` to ``task``'s goal, else why not."""
-    from twostep.strips import Grounder, PlanError, simulate
+    from twostep.plans.simulate import Grounder, PlanError, simulate
 
     try:
         state = simulate(task.init, Grounder(task).ground_plan(plan))
@@ -209,8 +209,8 @@ def _simulated(task: Any, plan: list[str]) -> str:
 def cross_check(root: Path, domains: tuple[str, ...], say: Any) -> dict[str, Counter[str]]:
     """Every task of ``root``'s ``domains`` read with our domain and with theirs, planned
     on both, each plan checked on the other task; per domain, the counts (see ``main``)."""
-    from bench.independent import IndependentValidator
-    from bench.independent.constants import move_constants
+    from checkers import IndependentValidator
+    from checkers.constants import move_constants
     from twostep.pddl import PDDLError, load_problem
     from twostep.planner import PlannerSettings, plan
 
@@ -288,7 +288,7 @@ def ours_only(root: Path, domain: str, settings: Any, say: Any) -> Counter[str]:
     """The cross-check of a domain without their domain file: each problem of ``root``'s
     ``domain`` read with our domain, planned, and the plan checked on our domain and the
     problem file as written (twostep's simulator and the independent validator)."""
-    from bench.independent import IndependentValidator
+    from checkers import IndependentValidator
     from twostep.pddl import PDDLError, load_problem
     from twostep.planner import plan
 

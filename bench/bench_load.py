@@ -45,7 +45,7 @@ sys.path.insert(0, str(REPO))
 
 from bench import record  # noqa: E402
 from bench.bench_conformance import ProblemFiles, find_problems  # noqa: E402
-from bench.independent import fast_downward as fd  # noqa: E402
+from checkers import fast_downward as fd  # noqa: E402
 
 ALFWORLD_SHAPE = REPO / "tests" / "fixtures" / "constructs" / "exists_goal"
 EXIT_BAD_INPUT = 2  # twostep-score: the files do not load

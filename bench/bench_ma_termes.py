@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import argparse
 
-from twostep.benchmark import load_task
 from twostep.methods import MethodRequest, run_multi_agent
 from twostep.planner import PlannerSettings
+from twostep.tasks.benchmark import load_task
 
 
 def main() -> None:

@@ -53,7 +53,19 @@ import yaml
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from bench import record
-from twostep.benchmark import (
+from twostep.dealing import PHASES as DEALER_PHASES
+from twostep.dealing.cleanup import clean_plan
+from twostep.decomposers.base import Decomposer
+from twostep.decomposers.goal_split import GoalSplitDecomposer
+from twostep.decomposers.plan_split import PlanSplitDecomposer
+from twostep.generators import DOMAINS as BENCHMARK_DOMAINS
+from twostep.methods import MethodRequest, RunResult, check_run, method_for
+from twostep.methods.registry import TWOSTEP_METHODS
+from twostep.pddl import parse_problem
+from twostep.planner import PlannerSettings
+from twostep.planner.results import PlanResult, Status
+from twostep.plans.simulate import PlanError
+from twostep.tasks.benchmark import (
     DEFAULT_DATA_ROOT,
     BenchmarkError,
     domain_file,
@@ -62,19 +74,7 @@ from twostep.benchmark import (
     load_task,
     task_path,
 )
-from twostep.dealing import PHASES as DEALER_PHASES
-from twostep.dealing.cleanup import clean_plan
-from twostep.decomposers.base import Decomposer
-from twostep.decomposers.goal_split import GoalSplitDecomposer
-from twostep.decomposers.plan_split import PlanSplitDecomposer
-from twostep.files import read_yaml_file
-from twostep.generators import DOMAINS as BENCHMARK_DOMAINS
-from twostep.methods import MethodRequest, RunResult, check_run, method_for
-from twostep.methods.registry import TWOSTEP_METHODS
-from twostep.pddl import parse_problem
-from twostep.planner import PlannerSettings
-from twostep.planner.results import PlanResult, Status
-from twostep.strips import PlanError
+from twostep.util.files import read_yaml_file
 
 REPO = Path(__file__).resolve().parent.parent
 CONF = REPO / "conf"

@@ -29,9 +29,9 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from bench import record
-from twostep.benchmark import DEFAULT_DATA_ROOT, list_domains, list_tasks, load_task
 from twostep.planner import ALIASES, PlannerSettings, Status, driver_path, plan
-from twostep.validation import validate_plan
+from twostep.tasks.benchmark import DEFAULT_DATA_ROOT, list_domains, list_tasks, load_task
+from twostep.verify.validation import validate_plan
 
 
 def direct_driver(domain: Path, problem: Path, alias: str, limit: float) -> float:

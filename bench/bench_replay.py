@@ -4,7 +4,7 @@ job re-validated, and where the sweep's time went.
 For each ``result.json`` below the sweep directories given, the job's task is read from the
 data root of its config (``.hydra/config.yaml``) and its joint schedule (the SA plan as a
 one-agent schedule for SA and for fallbacks) is re-validated twice: by ``check_run`` (our
-simulator) and by the independent validator on the original files (``bench/independent``:
+simulator) and by the independent validator on the original files (``checkers``:
 Fast Downward's grounding run by a simulator of its own, and unified-planning's N-agent
 formulation where its reader accepts the files). Prints, per domain and method, how many
 jobs, how many succeeded, how many schedules each checker accepted, and the job wall times
@@ -28,10 +28,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import yaml
 
-from bench.independent import IndependentValidator
-from twostep.benchmark import load_task
+from checkers import IndependentValidator
 from twostep.methods import check_run
 from twostep.methods.result import RunResult
+from twostep.tasks.benchmark import load_task
 
 
 def _run(result: dict[str, Any]) -> RunResult:

@@ -10,7 +10,7 @@ the process: start-up, imports, reading the PDDL). The first row reads the parse
 outside; CPU is the child's user + system time, which the other jobs on a shared machine
 do not inflate. The ``engines imported`` row imports unified-planning's engine factory
 first (what reading PDDL cost before the lazy environment of
-:mod:`twostep.pddl.environment`).
+:mod:`twostep.verify.up_environment`).
 """
 
 from __future__ import annotations

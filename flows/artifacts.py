@@ -26,7 +26,7 @@ from typing import Any
 
 from flows.console import format_schedule
 from twostep.embodied.run import GIF_NAME, TIMELINE_NAME, TRACE_KEY
-from twostep.files import write_json_atomic
+from twostep.util.files import write_json_atomic
 
 EMBODIED_FOLDER = "embodied"
 

@@ -22,12 +22,10 @@ from typing import TYPE_CHECKING, Any, cast
 
 from flows.checks import JobError, check_values
 from flows.config import TwostepConfig
-from twostep.benchmark import BenchmarkTask, load_task, task_path
 from twostep.decomposers.base import Decomposer
 from twostep.embodied import ExecutorSettings
-from twostep.execution import SearchBudget
-from twostep.files import exists, file_problem, yaml_problem
-from twostep.identity import job_input_files
+from twostep.jobs.identity import job_input_files
+from twostep.makespan import SearchBudget
 from twostep.methods import (
     DIRECT,
     Method,
@@ -42,6 +40,8 @@ from twostep.methods import (
 from twostep.methods.registry import SUBGOAL_SOURCES
 from twostep.pddl.translator import GroundingLimits
 from twostep.planner import PlannerSettings
+from twostep.tasks.benchmark import BenchmarkTask, load_task, task_path
+from twostep.util.files import exists, file_problem, yaml_problem
 
 if TYPE_CHECKING:
     from twostep.llm import LLMSettings
@@ -112,7 +112,7 @@ def executor_settings(cfg: TwostepConfig) -> ExecutorSettings:
 
 def load_job_task(cfg: TwostepConfig) -> BenchmarkTask:
     """The job's task; says so on stderr when the data root's folder has no domain file
-    and the tasks are read with twostep's own (:func:`twostep.benchmark.domain_file`)."""
+    and the tasks are read with twostep's own (:func:`twostep.tasks.benchmark.domain_file`)."""
     cache = Path(cfg.output.root) / "cache" / "tasks"  # parsed PDDL: see load_problem
     task = load_task(
         cfg.domain.name, int(cfg.task), Path(cfg.data.root), cache, grounding_limits(cfg)

@@ -74,7 +74,7 @@ def at_least(low: int, optional: bool = False, hint: str = "") -> Check:
 
 def memory_mb(key: str, value: Any) -> str | None:
     """A memory limit in MB: at least the planner's smallest, or null (its default)."""
-    from twostep.processes import DEFAULT_MEMORY_LIMIT_MB, MIN_MEMORY_LIMIT_MB
+    from twostep.programs.processes import DEFAULT_MEMORY_LIMIT_MB, MIN_MEMORY_LIMIT_MB
 
     if value is None:
         return None
@@ -144,7 +144,7 @@ def _not_a_key(key: str, value: Any) -> str | None:
 
 
 def _score_modes() -> Iterable[str]:
-    from twostep.execution.model import MODES
+    from twostep.makespan.model import MODES
 
     return MODES
 
@@ -276,7 +276,7 @@ def check_values(cfg: Any) -> None:
 def input_problem(cfg: Any) -> str | None:
     """What makes a job's config unable to run, found without reading its task (None:
     nothing): a value out of range, or a data root, domain or task that is not there."""
-    from twostep.benchmark import BenchmarkError, task_path
+    from twostep.tasks.benchmark import BenchmarkError, task_path
 
     problems = value_problems(cfg)
     if problems:
@@ -331,7 +331,7 @@ def sweep_problem(config: Any) -> str | None:
     from omegaconf import OmegaConf
     from omegaconf.errors import OmegaConfBaseException
 
-    from twostep.benchmark import BenchmarkError, task_path
+    from twostep.tasks.benchmark import BenchmarkError, task_path
 
     try:
         values = sweep_values(config)

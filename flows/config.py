@@ -27,11 +27,11 @@ from typing import Any, cast, get_type_hints
 from hydra.core.config_store import ConfigStore
 from omegaconf import OmegaConf
 
-from twostep.benchmark import DEFAULT_DATA_ROOT
 from twostep.embodied import ExecutorSettings
-from twostep.execution import DEFAULT_SEARCH_BUDGET
 from twostep.llm.client import LLMSettings
+from twostep.makespan import DEFAULT_SEARCH_BUDGET
 from twostep.planner import PlannerSettings
+from twostep.tasks.benchmark import DEFAULT_DATA_ROOT
 
 _LLM = LLMSettings()
 _PLANNER = PlannerSettings()
@@ -189,7 +189,7 @@ class TwostepConfig:
     agents: int = 2
     seed: int = 0
     score_mode: str = "exact"
-    # twostep.execution.SearchBudget: the exact scorer's node and time budget (null: none)
+    # twostep.makespan.SearchBudget: the exact scorer's node and time budget (null: none)
     score_max_nodes: int | None = DEFAULT_SEARCH_BUDGET.max_nodes
     score_time_limit_s: float | None = DEFAULT_SEARCH_BUDGET.time_limit_s
     compare_sa: bool = True

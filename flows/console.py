@@ -15,8 +15,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from flows.status import reason_line
-from twostep.identity import job_name
-from twostep.redaction import redact_text
+from twostep.jobs.identity import job_name
+from twostep.util.redaction import redact_text
 
 if TYPE_CHECKING:
     from flows.sweep_state import SweepState
@@ -26,7 +26,7 @@ if TYPE_CHECKING:
 def one_line(error: BaseException, name_type: bool = True, limit: int | None = None) -> str:
     """The error's first non-empty line, after its type's name unless ``name_type`` is
     False (errors whose message is written for the user), cut at ``limit`` characters;
-    credentials inside URLs masked (:mod:`twostep.redaction`)."""
+    credentials inside URLs masked (:mod:`twostep.util.redaction`)."""
     lines = [line for line in redact_text(str(error)).strip().splitlines() if line.strip()]
     # SQLAlchemy's preamble ("(raised as a result of Query-invoked autoflush; ...)"):
     # the line after it says what went wrong (database or disk is full).
@@ -56,7 +56,7 @@ class MaskCredentials(logging.Filter):
 
 def format_summary(result: RunResult | Mapping[str, Any], name: str | None = None) -> str:
     """One line for the terminal (from a result or its result.json dict), starting with
-    the job's name (``name``, else made from the result: :func:`twostep.identity.job_name`)."""
+    the job's name (``name``, else made from the result: :func:`twostep.jobs.identity.job_name`)."""
     r = result if isinstance(result, Mapping) else result.to_dict()
     name = name or job_name(r)
     if r.get("status") == "failed" and "error" in r:

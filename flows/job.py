@@ -54,12 +54,12 @@ from flows.tracking.runs import (
     missing_artifacts,
     run_exists,
 )
-from twostep.benchmark import BenchmarkError
 from twostep.embodied.run import draws_pictures
-from twostep.identity import job_name
+from twostep.jobs.identity import job_name
 from twostep.llm.client import LLMScriptError
 from twostep.pddl import PDDLError
-from twostep.processes import ResourceLimitError
+from twostep.programs.processes import ResourceLimitError
+from twostep.tasks.benchmark import BenchmarkError
 
 RESOURCE_LIMIT = "resource_limit"  # result.json status of a job a limit ended (exit 1)
 
@@ -93,7 +93,7 @@ def failed_result(
     config: dict[str, Any], error: str, status: str = JobStatus.FAILED.value
 ) -> dict[str, Any]:
     """The result of a job that raised (``status``: ``failed``, or ``resource_limit`` for
-    a limit that ended it, :class:`~twostep.processes.ResourceLimitError`)."""
+    a limit that ended it, :class:`~twostep.programs.processes.ResourceLimitError`)."""
     return {
         "domain": config["domain"]["name"],
         "task": config.get("task"),

@@ -46,9 +46,7 @@ import pandas as pd
 from flows.locations import sqlite_path
 from flows.sweep_state import job_records
 from flows.tracking.contents import unsolved_name
-from twostep.benchmark import DEFAULT_DATA_ROOT
 from twostep.cli import console_main
-from twostep.files import NotTextError, read_text_file
 from twostep.report import (
     METRICS,
     Report,
@@ -62,6 +60,8 @@ from twostep.report import (
 )
 from twostep.report.runs import PARAM_PREFIX, params_to_columns
 from twostep.report.table2 import TABLE2_DOMAIN, read_task_titles
+from twostep.tasks.benchmark import DEFAULT_DATA_ROOT
+from twostep.util.files import NotTextError, read_text_file
 
 DEFAULT_TRACKING_URI = "sqlite:///outputs/mlflow.db"
 KIND_TAG = "twostep.kind"

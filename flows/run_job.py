@@ -37,7 +37,7 @@ from hydra.types import HydraContext, TaskFunction
 from omegaconf import DictConfig, OmegaConf, open_dict, read_write
 from omegaconf._utils import get_omega_conf_dumper
 
-from twostep.redaction import redact_text
+from twostep.util.redaction import redact_text
 
 
 def yaml_text(container: Any) -> str:

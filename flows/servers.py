@@ -40,7 +40,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from twostep.files import write_json_atomic
+from twostep.util.files import write_json_atomic
 
 if TYPE_CHECKING:
     from flows.sweep_state import SweepState

@@ -38,7 +38,7 @@ from flows.servers import (
     url_host,
 )
 from twostep.cli import console_main
-from twostep.files import write_json_atomic
+from twostep.util.files import write_json_atomic
 
 RECORD = "services.json"
 # MLflow 3.17's UI shows the GenAI pages (traces) unless its "Model training" switch is on:

@@ -59,8 +59,8 @@ from flows.sweep_state import (
     sweep_overrides,
 )
 from flows.sweep_timing import sweep_timing, timing_line
-from twostep.files import write_json_atomic, write_text_atomic
-from twostep.redaction import redact_text
+from twostep.util.files import write_json_atomic, write_text_atomic
+from twostep.util.redaction import redact_text
 
 
 def _set_hydra_config(config: DictConfig) -> None:

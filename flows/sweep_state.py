@@ -20,9 +20,9 @@ from typing import Any
 
 from omegaconf import DictConfig
 
-from twostep.files import write_json_atomic
-from twostep.identity import is_sweep_identity_key
-from twostep.redaction import redact_text
+from twostep.jobs.identity import is_sweep_identity_key
+from twostep.util.files import write_json_atomic
+from twostep.util.redaction import redact_text
 
 STATE_DIR = ".twostep"
 

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import pytest
 
 if TYPE_CHECKING:
-    from twostep.benchmark import BenchmarkTask
+    from twostep.tasks.benchmark import BenchmarkTask
 
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 os.environ.setdefault("MLFLOW_DISABLE_TELEMETRY", "true")
@@ -45,7 +45,7 @@ BLOCKS_DOMAIN = """
 def own_task(root: Path, name: str, domain: str, problem: str) -> BenchmarkTask:
     """A domain of the test's own (``domain``, its PDDL text) with ``problem`` as task 1, in
     folder ``name`` of ``root``."""
-    from twostep.benchmark import load_task  # after the environment above is set
+    from twostep.tasks.benchmark import load_task  # after the environment above is set
 
     folder = root / name
     folder.mkdir(parents=True)

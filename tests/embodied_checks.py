@@ -1,5 +1,5 @@
 """Test helpers: run the kitchen tasks' methods and replay every trace with the independent
-checker (:mod:`twostep.trace_check`), which reads the floor plan and the PDDL files itself."""
+checker (:mod:`checkers.trace_check`), which reads the floor plan and the PDDL files itself."""
 
 from __future__ import annotations
 
@@ -8,13 +8,13 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from twostep.benchmark import load_task
+from checkers.trace_check import Floor, TraceReport, check_trace, read_kitchen_file
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.embodied import EmbodiedResult, ExecutorSettings, FloorPlan, execute_plans
 from twostep.embodied.run import TRACE_KEY, embodied_fields
 from twostep.methods import MethodRequest, run_multi_agent, run_twostep
 from twostep.planner import PlannerSettings
-from twostep.trace_check import Floor, TraceReport, check_trace, read_kitchen_file
+from twostep.tasks.benchmark import load_task
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 KITCHEN = DATA / "alfworld" / "kitchen.yaml"

@@ -19,9 +19,8 @@ from pathlib import Path
 
 import pytest
 
-from twostep.benchmark import load_task
 from twostep.decomposers.goal_split import GoalSplitDecomposer
-from twostep.execution import parallel_length
+from twostep.makespan import parallel_length
 from twostep.methods import (
     MethodRequest,
     check_run,
@@ -29,11 +28,12 @@ from twostep.methods import (
     run_single_agent,
     run_twostep,
 )
-from twostep.multiagent import compile_multi_agent_problem, split_plan
 from twostep.pddl import PDDLError, parse_goal, parse_problem, planner_input
 from twostep.planner import PlannerSettings, driver_path, plan
-from twostep.progression import progress_state
-from twostep.strips import Grounder, simulate
+from twostep.plans.progression import progress_state
+from twostep.plans.simulate import Grounder, simulate
+from twostep.tasks.benchmark import load_task
+from twostep.tasks.multiagent import compile_multi_agent_problem, split_plan
 
 ROOT = Path(__file__).resolve().parent / "fixtures" / "adl_quirks"
 AGENT_PREDICATES = ("atlocation", "holds", "holdsany")

@@ -211,7 +211,7 @@ SMALL = {
 @pytest.mark.parametrize("domain", list(SMALL))
 def test_a_small_problem_per_domain_is_solvable(domain: str, tmp_path: Path) -> None:
     # lama-first solves it; the plan is valid for the independent validator
-    from bench.independent import IndependentValidator
+    from checkers import IndependentValidator
 
     domain_path = SAMPLE / domain / "domain.pddl"
     text = SMALL[domain].text

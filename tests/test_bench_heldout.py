@@ -17,7 +17,7 @@ import pytest
 
 from bench import bench_methods as bm
 from bench.bench_heldout import heldout_predicates, prepare, validate
-from bench.independent import IndependentValidator, fast_downward
+from checkers import IndependentValidator, fast_downward
 from tests.conftest import DATA
 
 # Two blocks on the table, b1 to go on b2: two steps for any planner (pick up, stack).

@@ -1,4 +1,4 @@
-"""twostep.benchmark: the LLM+P layout, unknown names listed in one line."""
+"""twostep.tasks.benchmark: the LLM+P layout, unknown names listed in one line."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import BLOCKS_DOMAIN, blocks_problem
-from twostep.benchmark import BenchmarkError, list_domains, list_tasks, load_task
+from twostep.tasks.benchmark import BenchmarkError, list_domains, list_tasks, load_task
 
 
 def make_root(tmp_path: Path) -> Path:

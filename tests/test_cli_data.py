@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from twostep.benchmark import load_problem
 from twostep.cli.data import main
 from twostep.embodied import load_floor_plan, task_floor_plan
+from twostep.tasks.benchmark import load_problem
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 

@@ -1,7 +1,7 @@
 """Conformance: twostep reads, plans and validates real PDDL as Fast Downward does.
 
 Checked by things independent of twostep: Fast Downward itself on the original files, the
-independent validator of ``bench/independent`` (unified-planning's validator, and a
+independent validator of ``checkers`` (unified-planning's validator, and a
 simulator of Fast Downward's grounding written apart from twostep), and the values in
 each construct fixture's ``expected.yaml``, derived by hand.
 
@@ -34,8 +34,8 @@ import pytest
 import yaml
 
 from bench.bench_conformance import ProblemFiles, find_problems, loaded, reason_of, run_twostep
-from bench.independent import IndependentValidator, fast_downward, sas, unified
-from bench.independent.constants import move_constants
+from checkers import IndependentValidator, fast_downward, sas, unified
+from checkers.constants import move_constants
 
 REPO = Path(__file__).resolve().parent.parent
 CONSTRUCTS = Path(__file__).resolve().parent / "fixtures" / "constructs"

@@ -13,11 +13,11 @@ from pathlib import Path
 from tests.conftest import own_task
 from tests.test_plan_split import FAST, sa_result
 from tests.test_rebind import _valid
-from twostep.benchmark import BenchmarkTask
 from twostep.dealing import Dealer
 from twostep.dealing.copies import carries_through, piece_copies
 from twostep.methods import MethodRequest
 from twostep.methods.plan_deal import run_plan_deal
+from twostep.tasks.benchmark import BenchmarkTask
 
 GRIPPERS = ["at-robby", "free", "carry"]
 

@@ -23,11 +23,11 @@ import twostep.methods.plan_deal as plan_deal
 from tests.conftest import DATA
 from tests.test_plan_deal import _preds
 from tests.test_plan_split import _check
-from twostep.benchmark import load_task
 from twostep.dealing import Dealer
 from twostep.methods import MethodRequest, RunResult, run_single_agent
 from twostep.methods.plan_deal import deal_budget, run_plan_deal
 from twostep.planner.results import PlanResult, Status
+from twostep.tasks.benchmark import load_task
 
 REPO = Path(__file__).resolve().parent.parent
 BIN = Path(sys.executable).parent

@@ -15,15 +15,15 @@ from pathlib import Path
 
 import pytest
 
-from bench.independent import IndependentValidator
+from checkers import IndependentValidator
 from tests.conftest import own_task
 from tests.test_plan_split import FAST, sa_result
-from twostep.benchmark import BenchmarkTask
 from twostep.dealing import Dealer, DealError, walks
 from twostep.dealing.encoding import FactSpace, Step
 from twostep.methods import MethodRequest, check_run
 from twostep.methods.plan_deal import run_plan_deal
-from twostep.strips import Grounder
+from twostep.plans.simulate import Grounder
+from twostep.tasks.benchmark import BenchmarkTask
 
 DOMAIN = """(define (domain lamplighters)
  (:requirements :strips :typing)

@@ -100,7 +100,7 @@ def as_written(value: Any) -> str:
 
 
 def test_the_config_reference_lists_every_key_with_its_default() -> None:
-    from twostep.benchmark import DEFAULT_DATA_ROOT
+    from twostep.tasks.benchmark import DEFAULT_DATA_ROOT
 
     keys_part = reference.config_page().split("## Config groups")[0]
     rows = {

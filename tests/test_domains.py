@@ -23,9 +23,9 @@ from typing import NamedTuple
 
 import pytest
 
-from twostep.benchmark import load_task
 from twostep.generators import DOMAINS, benchmark_task, domain_model, example_task
 from twostep.pddl import Atom, Domain, load_problem
+from twostep.tasks.benchmark import load_task
 
 
 class Schema(NamedTuple):

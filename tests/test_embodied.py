@@ -5,7 +5,7 @@ rules (agents act one after another in every step; breadth-first paths around fu
 and the other agents' current cells; a wait when a precondition does not hold or the way
 is blocked). The four kitchen tasks run end to end, and a trace is replayed independently
 through unified-planning's sequential simulator. Every execution here is also replayed by
-the independent trace checker (:mod:`twostep.trace_check`), from the test's own floor
+the independent trace checker (:mod:`checkers.trace_check`), from the test's own floor
 plan literals and PDDL text.
 """
 
@@ -16,8 +16,8 @@ from pathlib import Path
 
 import pytest
 
+from checkers.trace_check import Floor, read_kitchen, read_kitchen_file
 from tests.embodied_checks import replay
-from twostep.benchmark import BenchmarkTask, load_task
 from twostep.embodied import (
     EmbodiedResult,
     ExecutorSettings,
@@ -38,8 +38,8 @@ from twostep.embodied import execute as execute_unchecked
 from twostep.embodied.navigation import reachable_cells, shortest_path
 from twostep.pddl import Problem, parse_problem
 from twostep.planner import PlannerSettings, plan
-from twostep.trace_check import Floor, read_kitchen, read_kitchen_file
-from twostep.validation import validate_plan
+from twostep.tasks.benchmark import BenchmarkTask, load_task
+from twostep.verify.validation import validate_plan
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 DOMAIN = (DATA / "alfworld" / "domain.pddl").read_text()

@@ -10,14 +10,14 @@ from random import Random
 import pytest
 import yaml
 
-from twostep.benchmark import load_task, task_titles
 from twostep.decomposers.expert import load_expert_subgoals
 from twostep.embodied import ExecutorSettings, execute, floor_plan_from_dict, load_floor_plan
 from twostep.generators.alfworld import PAPER_TASKS, data_files, scaled_task
 from twostep.pddl import parse_goal, parse_problem
 from twostep.planner import PlannerSettings, plan
-from twostep.strips import read_plan
-from twostep.validation import validate_plan
+from twostep.plans.simulate import read_plan
+from twostep.tasks.benchmark import load_task, task_titles
+from twostep.verify.validation import validate_plan
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 FOLDER = DATA / "alfworld"

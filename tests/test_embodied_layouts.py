@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from twostep.benchmark import BenchmarkTask, load_task
+from checkers.trace_check import alfworld_layouts_folder, check_trace
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.embodied import (
     ExecutorSettings,
@@ -37,7 +37,7 @@ from twostep.methods import (
 )
 from twostep.methods.plan_deal import run_plan_deal
 from twostep.planner import PlannerSettings
-from twostep.trace_check import alfworld_layouts_folder, check_trace
+from twostep.tasks.benchmark import BenchmarkTask, load_task
 
 FIXTURE = Path(__file__).resolve().parent / "fixtures" / "alfred_scene" / "alfred" / "p01.pddl"
 AGENT_PREDICATES = ("atlocation", "holds", "holdsany", "holdsanyreceptacleobject")
@@ -192,8 +192,8 @@ def test_alfworlds_own_engine_accepts_the_plans_and_traces(task: BenchmarkTask) 
     """The SA plan and every trace's actions in step order are played in AlfWorld's own
     game (TextWorld's PDDL engine with alfred.pddl and alfred.twl2): every step applicable,
     the goal won; a plan with two steps swapped is refused."""
-    from twostep.alfworld_engine import engine_python, replay, replay_trace
-    from twostep.trace_check import who_plays
+    from checkers.alfworld_engine import engine_python, replay, replay_trace
+    from checkers.trace_check import who_plays
 
     if engine_python() is None:
         pytest.skip("AlfWorld's engine is not installed (make alfworld-engine)")

@@ -100,8 +100,8 @@ def test_domain_alfred_runs_a_real_problem_on_its_scene(
     method through the command's front end (no domain.* overrides needed), executed on the
     scene's layout; the trace checker, which reads the layout and the PDDL itself, replays
     the trace: no violation, no interaction out of reach."""
+    from checkers.trace_check import alfworld_layouts_folder, check_trace
     from tests.test_embodied_layouts import alfred_root
-    from twostep.trace_check import alfworld_layouts_folder, check_trace
 
     if alfworld_layouts_folder() is None:
         pytest.skip("the alfworld wheel (extra 'embodied') is missing")
@@ -161,8 +161,8 @@ def test_executor_layout_chooses_the_scene(tmp_path: Path) -> None:
     """``executor.layout``: the problem's own scene is found without it; a scene that does
     not hold the problem's locations is refused with their names; ``open`` places them on
     an open grid."""
+    from checkers.trace_check import alfworld_layouts_folder
     from tests.test_embodied_layouts import alfred_root
-    from twostep.trace_check import alfworld_layouts_folder
 
     if alfworld_layouts_folder() is None:
         pytest.skip("the alfworld wheel (extra 'embodied') is missing")

@@ -1,4 +1,4 @@
-"""Every embodied trace replayed by the independent checker (:mod:`twostep.trace_check`).
+"""Every embodied trace replayed by the independent checker (:mod:`checkers.trace_check`).
 
 The checker is first shown to reject broken traces (a jump, a collision, furniture, an
 interaction from a distance, a swapped pair of actions, a wrong length), so that its
@@ -15,11 +15,11 @@ from typing import Any
 
 import pytest
 
+from checkers.trace_check import check_trace, read_kitchen_file, read_sexpr
 from tests.embodied_checks import DATA, KITCHEN, method_plans, run_and_check
-from twostep.benchmark import load_task
 from twostep.embodied import ExecutorSettings, FloorPlan, execute_plans, load_floor_plan
 from twostep.embodied.run import TRACE_KEY, embodied_fields
-from twostep.trace_check import check_trace, read_kitchen_file, read_sexpr
+from twostep.tasks.benchmark import load_task
 
 
 @pytest.fixture(scope="module")

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
-from twostep.benchmark import BenchmarkTask, load_task
 from twostep.english import translate_english
 from twostep.generators.describe import NOUNS, describe_problem
 from twostep.pddl import parse_goal
+from twostep.tasks.benchmark import BenchmarkTask, load_task
 
 
 def task(root: Path, domain: str, number: int = 1) -> BenchmarkTask:

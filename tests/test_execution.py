@@ -1,4 +1,4 @@
-"""Tests for twostep.execution: parallel execution length of per-agent plans."""
+"""Tests for twostep.makespan: parallel execution length of per-agent plans."""
 
 from __future__ import annotations
 
@@ -10,16 +10,16 @@ from collections.abc import Sequence
 
 import pytest
 
-from twostep.execution import (
+from twostep.makespan import (
     ParallelExecution,
     ScheduleError,
     check_schedule,
     parallel_length,
     split_state,
 )
-from twostep.execution.check import EnvironmentPart, may_interfere
+from twostep.makespan.check import EnvironmentPart, may_interfere
 from twostep.pddl import Fact, Goal, Problem, parse_goal, parse_problem
-from twostep.strips import GroundAction, Grounder
+from twostep.plans.simulate import GroundAction, Grounder
 
 BLOCKSWORLD = """
 (define (domain blocksworld)

@@ -20,7 +20,7 @@ from flows.config import register, typed
 from tests.test_execution import TRACKS, problem
 from tests.test_execution_scaling import STAGGERED, two_hub_tracks, two_hub_tracks_text
 from tests.test_independent_checks import _brute_force, cases
-from twostep.execution import (
+from twostep.makespan import (
     DEFAULT_SEARCH_BUDGET,
     ParallelExecution,
     SearchBudget,

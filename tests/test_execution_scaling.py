@@ -28,18 +28,18 @@ from tests.test_execution import (
     tracks_problem,
 )
 from tests.test_independent_checks import _brute_force, cases
-from twostep.execution import ScheduleError, check_schedule, parallel_length
-from twostep.execution.bounds import (
+from twostep.makespan import ScheduleError, check_schedule, parallel_length
+from twostep.makespan.bounds import (
     ContentionBound,
     LowerBound,
     PairProjection,
     interacting_pairs,
 )
-from twostep.execution.compiled import compile_task
-from twostep.execution.search import advance, astar, bound_dive, greedy_schedule
-from twostep.execution.symmetry import Symmetry, relabel
+from twostep.makespan.compiled import compile_task
+from twostep.makespan.search import advance, astar, bound_dive, greedy_schedule
+from twostep.makespan.symmetry import Symmetry, relabel
 from twostep.pddl import Goal
-from twostep.strips import GroundAction
+from twostep.plans.simulate import GroundAction
 
 ROOMS = """
 (define (domain rooms)

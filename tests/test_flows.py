@@ -37,7 +37,7 @@ from flows.tracking.contents import config_tags, job_metrics, job_params
 from flows.tracking.runs import TrackingError
 from tests.conftest import blocks_problem
 from tests.test_prompts import make_blocksworld_data
-from twostep.identity import job_name
+from twostep.jobs.identity import job_name
 
 REPO = Path(__file__).resolve().parent.parent
 CONF = REPO / "conf"
@@ -275,7 +275,7 @@ def test_planner_input_is_the_same_text_in_every_process(tmp_path: Path) -> None
     """The plan cache key hashes this text: it must not depend on set iteration order."""
     make_data(tmp_path)
     code = (
-        "import hashlib,sys; from twostep.benchmark import load_task; "
+        "import hashlib,sys; from twostep.tasks.benchmark import load_task; "
         "from twostep.planner import planner_input; "
         f"t=load_task('blocksworld', 2, {str(tmp_path)!r}); "
         "print(hashlib.sha256(''.join(planner_input(t.problem)).encode()).hexdigest())"

@@ -27,7 +27,7 @@ from twostep.generators.describe import DESCRIBERS, describe_generic, describe_p
 from twostep.generators.sizes import BENCHMARK_SIZES
 from twostep.generators.spec import TaskSpec
 from twostep.pddl import Domain, load_problem, parse_goal, parse_problem
-from twostep.strips import Grounder, read_plan, simulate
+from twostep.plans.simulate import Grounder, read_plan, simulate
 
 EXPERT_DOMAINS = ("blocksworld", "grippers", "termes", "tyreworld")
 EXPERT_TASKS = ["p01", "p06", "p11", "p16"]

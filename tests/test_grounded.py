@@ -21,11 +21,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from twostep.execution import ScheduleError, check_schedule, parallel_length
+from twostep.makespan import ScheduleError, check_schedule, parallel_length
 from twostep.pddl import Fact, Goal, PDDLError, Problem, parse_goal, parse_problem
 from twostep.planner import PlannerSettings, plan
-from twostep.progression import progress_state
-from twostep.strips import GroundAction, Grounder, simulate
+from twostep.plans.progression import progress_state
+from twostep.plans.simulate import GroundAction, Grounder, simulate
 
 OPTIMAL = PlannerSettings(alias="astar-blind", search_time_limit_s=30)
 

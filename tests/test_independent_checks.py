@@ -19,9 +19,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from twostep.benchmark import load_task
 from twostep.decomposers.goal_split import GoalSplitDecomposer
-from twostep.execution import ScheduleError, parallel_length
+from twostep.makespan import ScheduleError, parallel_length
 from twostep.methods import (
     MethodRequest,
     RunResult,
@@ -29,11 +28,12 @@ from twostep.methods import (
     run_single_agent,
     run_twostep,
 )
-from twostep.multiagent import compile_multi_agent_problem
 from twostep.pddl import Fact, Goal
 from twostep.planner import PlannerSettings
-from twostep.strips import GroundAction
-from twostep.validation import to_up_problem, validate_plan
+from twostep.plans.simulate import GroundAction
+from twostep.tasks.benchmark import load_task
+from twostep.tasks.multiagent import compile_multi_agent_problem
+from twostep.verify.validation import to_up_problem, validate_plan
 
 FAST = PlannerSettings("lama-first", 20)
 AGENT_FACTS = {

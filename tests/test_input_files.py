@@ -28,7 +28,8 @@ import pytest
 
 from tests.conftest import DATA
 from twostep.embodied import FloorPlanError, floor_plan_from_dict
-from twostep.files import (
+from twostep.jobs.identity import file_digest
+from twostep.util.files import (
     MAX_YAML_NODES,
     FileFormatError,
     NotAFileError,
@@ -37,7 +38,6 @@ from twostep.files import (
     read_input_bytes,
     read_yaml_file,
 )
-from twostep.identity import file_digest
 
 BIN = Path(sys.executable).parent
 # 9 levels of 9 aliases: 9**9 (387 million) strings once expanded, in under 500 bytes.

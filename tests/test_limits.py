@@ -26,11 +26,11 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import DATA
-from twostep.identity import job_key
+from twostep.jobs.identity import job_key
 from twostep.pddl import load_problem
 from twostep.pddl.translator import GroundingLimits
 from twostep.planner import PlannerSettings, plan_pddl
-from twostep.processes import ResourceLimitError
+from twostep.programs.processes import ResourceLimitError
 
 BIN = Path(sys.executable).parent
 BOOM_DOMAIN = """(define (domain boom) (:requirements :strips)

@@ -21,13 +21,13 @@ from pathlib import Path
 
 import pytest
 
+from checkers.trace_check import alfworld_layouts_folder
 from tests.conftest import DATA
 from twostep.pddl import PDDLError
 from twostep.pddl.lifted import read_domain, read_problem
 from twostep.pddl.lint import check_kinds, lint_domain, lint_problem
 from twostep.pddl.reader import parse_problem, read_pddl_file
 from twostep.pddl.repairs import repair_task
-from twostep.trace_check import alfworld_layouts_folder
 
 REPO = Path(__file__).resolve().parent.parent
 SAMPLE = REPO.parent / "shared" / "ipc-sample"

@@ -11,7 +11,6 @@ from pathlib import Path
 import pytest
 
 from tests.test_prompts import make_blocksworld_data
-from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.base import Decomposer, DecompositionRequest, SubgoalProposal
 from twostep.decomposers.llm import NONE_REASON, LLMDecomposer, generate_subgoal, translate_subgoal
 from twostep.llm.client import (
@@ -23,6 +22,7 @@ from twostep.llm.client import (
     LLMSettings,
 )
 from twostep.llm.client import Message as ClientMessage
+from twostep.tasks.benchmark import BenchmarkTask, load_task
 
 # task p01: b on c, a and c on the table; goal (on a b) (on c a)
 GEN_B = (

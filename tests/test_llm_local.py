@@ -13,11 +13,11 @@ from pathlib import Path
 import pytest
 
 from tests.test_prompts import make_blocksworld_data
-from twostep.benchmark import load_task
 from twostep.decomposers.base import DecompositionRequest
 from twostep.decomposers.llm import LLMDecomposer
 from twostep.llm import LLMClient, LLMSettings, open_client
 from twostep.llm.local import LocalModelError, smollm2_gguf, xllamacpp_available
+from twostep.tasks.benchmark import load_task
 
 pytestmark = pytest.mark.slow
 

@@ -12,7 +12,7 @@ from twostep.llm.parsing import (
     parse_pddl_subgoal,
 )
 from twostep.pddl import Goal, Problem, parse_goal, parse_problem
-from twostep.subgoals import goal_conflict
+from twostep.plans.subgoals import goal_conflict
 
 INIT = "(arm-empty) (on-table a) (on-table c) (on b c) (clear a) (clear b)"
 

@@ -20,11 +20,11 @@ from hydra import compose, initialize_config_dir
 
 from flows.build import run_config
 from flows.config import register
-from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.llm import LLMDecomposer
 from twostep.llm import LLMClient, LLMSettings
 from twostep.methods import MethodRequest, RunResult, check_run, run_twostep
 from twostep.planner import PlannerSettings
+from twostep.tasks.benchmark import BenchmarkTask, load_task
 
 REPO = Path(__file__).resolve().parent.parent
 BW = ["arm-empty", "holding"]

@@ -1,4 +1,4 @@
-"""twostep.multiagent: the N-agent compilation and plan splitting."""
+"""twostep.tasks.multiagent: the N-agent compilation and plan splitting."""
 
 from __future__ import annotations
 
@@ -7,10 +7,10 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import BLOCKS_DOMAIN, blocks_problem
-from twostep.multiagent import compile_multi_agent_problem, split_plan
 from twostep.pddl import domain_to_pddl, parse_problem, problem_to_pddl
 from twostep.planner import PlannerSettings, plan
-from twostep.strips import Grounder
+from twostep.plans.simulate import Grounder
+from twostep.tasks.multiagent import compile_multi_agent_problem, split_plan
 
 AGENT_PREDICATES = ["arm-empty", "holding"]
 
@@ -85,7 +85,7 @@ SHELF_PROBLEM = """
 
 
 def test_agent_argument_reaches_quantifiers_conditions_and_derived_predicates() -> None:
-    from twostep.execution import check_schedule, parallel_length
+    from twostep.makespan import check_schedule, parallel_length
     from twostep.pddl import planner_input
     from twostep.planner import plan as run_planner
 
@@ -128,10 +128,10 @@ def test_costs_from_functions_survive_the_compilation() -> None:
 
 @pytest.mark.parametrize("decomposer", ["plan-deal", "plan-split", "goal-split"])
 def test_offline_methods_on_axioms_and_conditional_effects(decomposer: str, tmp_path: Path) -> None:
-    from twostep.benchmark import load_task
     from twostep.decomposers.goal_split import GoalSplitDecomposer
     from twostep.decomposers.plan_split import PlanSplitDecomposer
     from twostep.methods import MethodRequest, check_run, method_for
+    from twostep.tasks.benchmark import load_task
 
     folder = tmp_path / "shelf"
     folder.mkdir()

@@ -15,12 +15,12 @@ from pathlib import Path
 import pytest
 
 from tests.test_plan_split import BW, FAST, _blocks, _check, sa_result
-from twostep.benchmark import load_task
 from twostep.dealing import Dealer, DealError
 from twostep.dealing.improve import search_owners
 from twostep.dealing.timeline import JointSteps
 from twostep.methods import MethodRequest, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
+from twostep.tasks.benchmark import load_task
 
 LENGTHS = (3, 3, 2, 2)  # the model's pieces: how many steps each takes
 

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from bench.independent import IndependentValidator
+from checkers import IndependentValidator
 from twostep.pddl import load_problem
 from twostep.planner import PlannerSettings, plan
 
@@ -181,14 +181,14 @@ def test_a_data_root_whose_folder_has_tasks_but_no_domain_file_reads_them_with_o
     # The paper's blocksworld folder ships problems only. A data root in that shape lists
     # the domain, loads its tasks with twostep's own domain file, and a job's inputs name
     # that file; a folder of a domain twostep does not ship stays unknown.
-    from twostep.benchmark import (
+    from twostep.jobs.identity import job_input_files
+    from twostep.tasks.benchmark import (
         DEFAULT_DATA_ROOT,
         BenchmarkError,
         domain_file,
         list_domains,
         load_task,
     )
-    from twostep.identity import job_input_files
 
     (tmp_path / "blocksworld").mkdir()
     (tmp_path / "blocksworld" / "p01.pddl").write_text(BLOCKSWORLD)

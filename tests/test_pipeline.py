@@ -6,7 +6,6 @@ from pathlib import Path
 
 from tests.conftest import blocks_problem
 from tests.test_benchmark import make_root
-from twostep.benchmark import load_task
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.methods import (
@@ -17,7 +16,8 @@ from twostep.methods import (
     run_twostep,
 )
 from twostep.planner import PlannerSettings
-from twostep.validation import validate_plan
+from twostep.tasks.benchmark import load_task
+from twostep.verify.validation import validate_plan
 
 BW = ["arm-empty", "holding"]
 FAST = PlannerSettings("lama-first", 20)

@@ -27,7 +27,6 @@ from tests.test_plan_split import (
     _copy_task,
     sa_result,
 )
-from twostep.benchmark import BenchmarkTask, load_task
 from twostep.dealing import (
     Dealer,
     DealError,
@@ -37,14 +36,15 @@ from twostep.dealing import (
     walks,
 )
 from twostep.dealing.replay import Replay
-from twostep.execution import ScheduleError
+from twostep.makespan import ScheduleError
 from twostep.methods import MethodRequest, check_run, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
 from twostep.methods.portfolio import Portfolio, run_portfolio
 from twostep.pddl import Problem
 from twostep.planner import PlannerSettings
-from twostep.strips import GroundAction, Grounder
-from twostep.validation import validate_plan
+from twostep.plans.simulate import GroundAction, Grounder
+from twostep.tasks.benchmark import BenchmarkTask, load_task
+from twostep.verify.validation import validate_plan
 
 
 def test_two_towers_dealt_to_two_and_four_agents(tmp_path: Path) -> None:
@@ -283,7 +283,7 @@ def test_the_deal_does_not_depend_on_the_hash_seed(data_root: Path, tmp_path: Pa
     script = (
         "import json, sys\n"
         "from pathlib import Path\n"
-        "from twostep.benchmark import load_task\n"
+        "from twostep.tasks.benchmark import load_task\n"
         "from twostep.dealing import deal_plan\n"
         "task = load_task('termes', 2, Path(sys.argv[1]))\n"
         "plan = json.loads(Path(sys.argv[2]).read_text())\n"
@@ -670,7 +670,7 @@ def test_ipc_sample_domains_deal_to_two_agents(tmp_path: Path) -> None:
     # a simulator of its own, and unified-planning in an N-agent formulation of its own).
     import yaml
 
-    from bench.independent import IndependentValidator
+    from checkers import IndependentValidator
 
     cases = dict(yaml.safe_load((SAMPLE / "agents.yaml").read_text()))
     cases["floortile-sat11-strips"] = ["robot-at", "robot-has"]
@@ -706,7 +706,7 @@ def test_a_deal_stuck_in_every_replay_is_offloaded() -> None:
     # plan's own run to the second agent, one at a time where the run stays valid and gets
     # shorter, deals it. The schedule is shorter than the cleaned SA plan and valid for
     # the independent checkers on the original files.
-    from bench.independent import IndependentValidator
+    from checkers import IndependentValidator
 
     preds = ["stacks-avail"]
     task = load_task("openstacks-sat08-adl", 1, SAMPLE)
@@ -803,7 +803,7 @@ def test_a_walk_inside_another_piece_is_offloaded_in_plan_order(tmp_path: Path) 
     # two agents deal it, shorter than SA, and the schedule re-validates (check_run, and
     # the independent validator on the files).
     from bench.bench_deal_generated import gen_storage
-    from bench.independent import IndependentValidator
+    from checkers import IndependentValidator
 
     folder = tmp_path / "storage"
     folder.mkdir()

@@ -16,13 +16,13 @@ import pytest
 
 from tests.conftest import blocks_problem
 from tests.test_benchmark import make_root
-from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.base import DecompositionRequest
 from twostep.decomposers.plan_split import PlanSplitDecomposer, split_plan
 from twostep.methods import MethodRequest, RunResult, check_run, run_single_agent, run_twostep
 from twostep.pddl import Goal, Problem, parse_goal
 from twostep.planner import PlannerSettings, PlanResult, Status
-from twostep.validation import validate_schedule
+from twostep.tasks.benchmark import BenchmarkTask, load_task
+from twostep.verify.validation import validate_schedule
 
 BW = ["arm-empty", "holding"]
 BARMAN = ["handempty", "holding"]

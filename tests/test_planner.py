@@ -9,7 +9,6 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import BLOCKS_DOMAIN, blocks_problem
-from twostep.benchmark import load_task
 from twostep.pddl import parse_problem
 from twostep.planner import (
     PlannerSettings,
@@ -21,8 +20,9 @@ from twostep.planner import (
     returncodes,
 )
 from twostep.planner import driver as planner_driver
-from twostep.strips import Grounder, simulate
-from twostep.validation import validate_plan
+from twostep.plans.simulate import Grounder, simulate
+from twostep.tasks.benchmark import load_task
+from twostep.verify.validation import validate_plan
 
 TOWER = blocks_problem(
     "(on-table a) (on b a) (on c b) (clear c) (on-table d) (clear d) (arm-empty)",

@@ -24,7 +24,6 @@ from tests.test_plan_split import (
     _check,
     sa_result,
 )
-from twostep.benchmark import BenchmarkTask, load_task
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.methods import MethodRequest
@@ -32,6 +31,7 @@ from twostep.methods.portfolio import Portfolio, run_portfolio
 from twostep.methods.steps import Steps
 from twostep.pddl import Problem
 from twostep.planner import PlannerSettings, PlanResult, Status
+from twostep.tasks.benchmark import BenchmarkTask, load_task
 
 
 class Scripted:
@@ -253,7 +253,7 @@ def test_portfolio_lite_runs_two_members_with_n_agents_beside_plan_deal(data_roo
     # shortest candidate's, never longer than plan-deal's own run (a candidate), and here
     # shorter: the re-planned glasses deal into more than one chain. Checked by check_run,
     # unified-planning, and the independent validator on the original files.
-    from bench.independent import IndependentValidator
+    from checkers import IndependentValidator
     from twostep.methods import run_single_agent
     from twostep.methods.plan_deal import run_plan_deal
     from twostep.methods.registry import method_for

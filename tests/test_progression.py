@@ -1,11 +1,11 @@
-"""twostep.progression: environment facts carry over, agent facts stay with the agent."""
+"""twostep.plans.progression: environment facts carry over, agent facts stay with the agent."""
 
 from __future__ import annotations
 
 from tests.conftest import BLOCKS_DOMAIN, blocks_problem
 from twostep.pddl import Goal, parse_problem
-from twostep.progression import handoff_problem, progress_state
-from twostep.strips import Grounder
+from twostep.plans.progression import handoff_problem, progress_state
+from twostep.plans.simulate import Grounder
 
 BW = ["arm-empty", "holding"]
 

@@ -8,11 +8,11 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import BLOCKS_DOMAIN, REPO, blocks_problem
-from twostep.benchmark import BenchmarkTask, load_task
 from twostep.cli.prompts import main as prompts_main
 from twostep.llm.prompts import TEMPLATES, generator_messages, template, translator_messages
 from twostep.pddl import load_problem, parse_goal
-from twostep.strips import Grounder, simulate
+from twostep.plans.simulate import Grounder, simulate
+from twostep.tasks.benchmark import BenchmarkTask, load_task
 
 DOMAIN_NL = "Blocks sit on a table or on each other; one arm picks up and stacks clear blocks."
 TASK_NL = (

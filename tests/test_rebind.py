@@ -13,14 +13,14 @@ from pathlib import Path
 
 import pytest
 
-from bench.independent import IndependentValidator
+from checkers import IndependentValidator
 from tests.conftest import own_task
 from tests.test_plan_split import FAST, sa_result
 from tests.test_portfolio import CUPS, CUPS_DOMAIN, CUPS_SA_PLAN, CUPS_TASK, _cups
-from twostep.benchmark import BenchmarkTask, load_task
 from twostep.dealing.rebind import handling_predicates, rebind
 from twostep.methods import MethodRequest, RunResult, check_run, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
+from twostep.tasks.benchmark import BenchmarkTask, load_task
 
 
 def _valid(task: BenchmarkTask, run: RunResult, predicates: list[str]) -> None:

@@ -1,11 +1,11 @@
-"""twostep/redaction.py: credentials inside URLs, keys given as variable names, known
+"""twostep/util/redaction.py: credentials inside URLs, keys given as variable names, known
 secrets, on hand-written inputs."""
 
 from __future__ import annotations
 
 import pytest
 
-from twostep.redaction import looks_like_a_key, redact_config, redact_text
+from twostep.util.redaction import looks_like_a_key, redact_config, redact_text
 
 
 @pytest.mark.parametrize(
@@ -92,6 +92,6 @@ def test_query_string_keys_and_tokens_are_masked(text: str, masked: str) -> None
     ],
 )
 def test_a_key_inside_a_model_name_is_recognised(model: str, holds: bool) -> None:
-    from twostep.redaction import holds_a_key
+    from twostep.util.redaction import holds_a_key
 
     assert holds_a_key(model) is holds

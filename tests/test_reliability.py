@@ -484,7 +484,7 @@ def test_an_unquoted_on_in_a_yaml_domain_config_is_named_with_the_fix() -> None:
     from omegaconf import OmegaConf
 
     from flows.build import JobError, check_task
-    from twostep.benchmark import load_task
+    from twostep.tasks.benchmark import load_task
 
     task = load_task("blocksworld", 1, REPO / "data")
     cfg = _compose("domain=blocksworld")

@@ -14,10 +14,10 @@ from pathlib import Path
 
 import pytest
 
-from bench.independent import IndependentValidator
+from checkers import IndependentValidator
 from twostep.pddl import PDDLError, load_problem, parse_problem
 from twostep.planner import PlannerSettings, plan
-from twostep.strips import Grounder, simulate
+from twostep.plans.simulate import Grounder, simulate
 
 DOMAIN = """; a robot fetches the key of the house and opens the cellar door with it
 (define (domain cellar)

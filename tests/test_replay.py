@@ -15,7 +15,6 @@ from pathlib import Path
 import pytest
 
 from tests.replay_logs import SEPARATOR, block
-from twostep.benchmark import load_task
 from twostep.cli.data import main as data_main
 from twostep.decomposers.llm import LLMDecomposer, generate_subgoal, translate_subgoal
 from twostep.llm import LLMBundleMiss, LLMClient, LLMSettings
@@ -25,6 +24,7 @@ from twostep.replay import BUNDLE_FILE, BundleMiss, load_bundle
 from twostep.replay.check import DIFFERS, MATCH, UNTRANSLATED, check_entry, summarise
 from twostep.replay.grid import replay_jobs
 from twostep.replay.importer import AnswerImportError, import_logs
+from twostep.tasks.benchmark import load_task
 
 BLOCKS = ["arm-empty", "holding"]
 # data/blocksworld/p01: b1 on b2, b3 on b1, b2 on the table (goal: b1 on b2, b2 on b3);
@@ -419,7 +419,7 @@ def test_the_grid_is_what_the_bundle_answers(two_runs: Path) -> None:
 def test_the_new_llm_keys_keep_stored_jobs_keys_and_the_bundle_is_an_input(tmp_path: Path) -> None:
     """llm.bundle and llm.translator at the values that compute what jobs computed before
     them leave the job key as it was; a bundle's content is one of the job's inputs."""
-    from twostep.identity import job_input_files, job_key
+    from twostep.jobs.identity import job_input_files, job_key
 
     before = {"domain": {"name": "blocksworld"}, "task": 1, "agents": 2, "seed": 0,
               "method": {"name": "twostep"}, "decomposer": {"name": "llm"},

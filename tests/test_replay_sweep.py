@@ -17,11 +17,11 @@ from typing import Any
 
 import pytest
 
-from bench.independent import IndependentValidator
+from checkers import IndependentValidator
 from tests.replay_logs import block
-from twostep.benchmark import load_task
 from twostep.methods import check_run
 from twostep.methods.result import RunResult
+from twostep.tasks.benchmark import load_task
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 BIN = Path(sys.executable).parent

@@ -26,7 +26,7 @@ os.environ.setdefault("MLFLOW_DISABLE_TELEMETRY", "true")
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 
 from flows.report_cli import load_runs_from_mlflow, main
-from twostep.params import flatten_config
+from twostep.jobs.params import flatten_config
 from twostep.report import (
     ReportInputError,
     build_report,

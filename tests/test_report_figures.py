@@ -22,10 +22,10 @@ from matplotlib.lines import Line2D
 from matplotlib.text import Text
 
 from flows.report_cli import main
-from twostep.benchmark import DEFAULT_DATA_ROOT
 from twostep.report import build_report, format_console, load_runs_from_csv, write_report
 from twostep.report.plots import domain_figure, normalised_figure, overview_figure
 from twostep.report.table2 import read_task_titles
+from twostep.tasks.benchmark import DEFAULT_DATA_ROOT
 
 #: Length of each task for SA; MA and TwoStep take fixed fractions of it.
 TASK_LENGTH = {1: 10.0, 2: 20.0, 3: 30.0, 4: 80.0}

@@ -1,4 +1,4 @@
-"""twostep.subgoals: the one subgoal checker, on cases derived by hand.
+"""twostep.plans.subgoals: the one subgoal checker, on cases derived by hand.
 
 The task: blocks a, b, c; b is on c, a and c on the table, the arm is empty.
 Goal: (on a b) (on c a), i.e. the tower c-a-b from the top.
@@ -13,7 +13,7 @@ import pytest
 from tests.conftest import BLOCKS_DOMAIN, blocks_problem
 from twostep.decomposers.base import SubgoalProposal
 from twostep.pddl import Problem, parse_problem
-from twostep.subgoals import SubgoalError, SubgoalStatus, check_subgoal
+from twostep.plans.subgoals import SubgoalError, SubgoalStatus, check_subgoal
 
 INIT = "(arm-empty) (on-table a) (on-table c) (on b c) (clear a) (clear b)"
 

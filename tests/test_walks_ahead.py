@@ -17,11 +17,11 @@ from tests.conftest import own_task
 from tests.test_plan_deal import SAMPLE, STORAGE_PROBLEM, _storage_init, needs_sample
 from tests.test_plan_split import FAST, sa_result
 from tests.test_rebind import _valid
-from twostep.benchmark import BenchmarkTask, load_task
 from twostep.dealing import Dealer, ways
 from twostep.dealing.timeline import Timeline
 from twostep.methods import MethodRequest, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
+from twostep.tasks.benchmark import BenchmarkTask, load_task
 
 TERMES = ["at", "has-block"]
 

@@ -241,7 +241,7 @@ def _plain(value: Any) -> Any:
 def show(value: Any) -> str:
     """A value as YAML writes it on a command line (``null``, ``true``, ``[a, b]``), the
     package's own data folder by name rather than by this machine's path."""
-    from twostep.benchmark import DEFAULT_DATA_ROOT
+    from twostep.tasks.benchmark import DEFAULT_DATA_ROOT
 
     if value == str(DEFAULT_DATA_ROOT):
         return "<the data installed with twostep>"

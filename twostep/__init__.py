@@ -5,24 +5,24 @@ One module per step of the paper's pipeline:
 
 - :mod:`twostep.pddl`         read domains and problems as Fast Downward does: the lifted
                               model, its grounding (Fast Downward's translator), writing
-- :mod:`twostep.strips`       plans over the grounded model: lookup, simulation
+- :mod:`twostep.plans.simulate`       plans over the grounded model: lookup, simulation
 - :mod:`twostep.planner`      Fast Downward (the up-fast-downward wheel's driver): named exit
                               codes, checked plan files, costs, statuses
-- :mod:`twostep.validation`   independent plan validation (unified-planning)
-- :mod:`twostep.multiagent`   the MA-PDDL baseline compilation
-- :mod:`twostep.progression`  hand-off of the environment state between agents
-- :mod:`twostep.execution`    parallel execution length (A*) and joint schedule check
+- :mod:`twostep.verify.validation`   independent plan validation (unified-planning)
+- :mod:`twostep.tasks.multiagent`   the MA-PDDL baseline compilation
+- :mod:`twostep.plans.progression`  hand-off of the environment state between agents
+- :mod:`twostep.makespan`    parallel execution length (A*) and joint schedule check
 - :mod:`twostep.decomposers`  where helper subgoals come from (goal-split, plan-split,
                               expert, llm)
 - :mod:`twostep.llm`          LLM access (litellm), prompts and answer parsing
 - :mod:`twostep.methods`      the methods side by side (SA, MA, TwoStep, plan-deal,
                               portfolio), one request in, one result out; the registry
 - :mod:`twostep.dealing`      plan-deal's algorithm: the SA plan's pieces dealt to N agents
-- :mod:`twostep.benchmark`    tasks on disk in the LLM+P layout
+- :mod:`twostep.tasks.benchmark`    tasks on disk in the LLM+P layout
 
 Quick start::
 
-    from twostep.benchmark import load_task
+    from twostep.tasks.benchmark import load_task
     from twostep.decomposers.goal_split import GoalSplitDecomposer
     from twostep.methods import MethodRequest, run_twostep
     from twostep.planner import PlannerSettings

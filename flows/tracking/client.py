@@ -42,7 +42,7 @@ from flows.tracking.contents import (
     metric_points,
 )
 from flows.tracking.template import quiet_mlflow_logging, seed_store
-from twostep.redaction import redact_text
+from twostep.util.redaction import redact_text
 
 T = TypeVar("T")
 

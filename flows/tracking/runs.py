@@ -41,7 +41,7 @@ from flows.tracking.contents import (
     job_record,
 )
 from flows.tracking.worker import TrackingWorker
-from twostep.files import write_json_atomic
+from twostep.util.files import write_json_atomic
 
 if TYPE_CHECKING:
     from flows.sweep_state import SweepState

@@ -21,9 +21,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from twostep.benchmark import DEFAULT_DATA_ROOT
 from twostep.cli import console_main
-from twostep.files import file_problem, read_input_bytes, write_text_atomic
 from twostep.generators import (
     DOMAINS,
     GENERATORS,
@@ -34,6 +32,8 @@ from twostep.generators import (
     static_file,
 )
 from twostep.pddl import parse_problem
+from twostep.tasks.benchmark import DEFAULT_DATA_ROOT
+from twostep.util.files import file_problem, read_input_bytes, write_text_atomic
 
 EXAMPLE_ALIAS = "seq-opt-lmcut"  # shortest plans make the clearest in-context examples
 # The benchmark domains, then the embodied kitchen (its own generator: tasks + floor plan).
@@ -184,7 +184,7 @@ def _agent_predicates(domains: Sequence[str], given: str | None) -> dict[str, li
     installed ``conf/domain/<domain>.yaml`` (the Hydra config's own)."""
     from importlib import resources
 
-    from twostep.files import read_yaml_file
+    from twostep.util.files import read_yaml_file
 
     table: dict[str, list[str]] = {}
     if given:
@@ -203,11 +203,11 @@ def _agent_predicates(domains: Sequence[str], given: str | None) -> dict[str, li
 
 
 def _check_answers(args: argparse.Namespace) -> int:
-    from twostep.benchmark import BenchmarkError, load_task
-    from twostep.files import write_json_atomic
     from twostep.planner import PlannerSettings
     from twostep.replay import BundleError, load_bundle
     from twostep.replay.check import check_entry, settings_text, summarise
+    from twostep.tasks.benchmark import BenchmarkError, load_task
+    from twostep.util.files import write_json_atomic
 
     try:
         bundle = load_bundle(args.bundle)

@@ -15,7 +15,6 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from twostep.benchmark import DEFAULT_DATA_ROOT, BenchmarkError, load_task
 from twostep.cli import console_main
 from twostep.llm.prompts import (
     Message,
@@ -24,7 +23,8 @@ from twostep.llm.prompts import (
     translator_messages,
 )
 from twostep.pddl import PDDLError
-from twostep.processes import ResourceLimitError
+from twostep.programs.processes import ResourceLimitError
+from twostep.tasks.benchmark import DEFAULT_DATA_ROOT, BenchmarkError, load_task
 
 PLACEHOLDER = "<the subgoal generated for agent{}>"
 

@@ -28,13 +28,13 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from twostep.benchmark import load_pddl_files
 from twostep.cli import console_main
-from twostep.execution import DEFAULT_SEARCH_BUDGET, MODES, ScheduleError, parallel_length
-from twostep.files import NotTextError, read_text_file
+from twostep.makespan import DEFAULT_SEARCH_BUDGET, MODES, ScheduleError, parallel_length
 from twostep.pddl import PDDLError
-from twostep.processes import ResourceLimitError
-from twostep.strips import Grounder, PlanError, read_plan
+from twostep.plans.simulate import Grounder, PlanError, read_plan
+from twostep.programs.processes import ResourceLimitError
+from twostep.tasks.benchmark import load_pddl_files
+from twostep.util.files import NotTextError, read_text_file
 
 EXIT_VALID = 0
 EXIT_INVALID_PLANS = 1

@@ -20,7 +20,7 @@ from collections.abc import Collection, Sequence
 
 from twostep.dealing.encoding import FactSpace, GoalBits, Owns, Step
 from twostep.pddl import Problem
-from twostep.strips import GroundAction, Grounder, PlanError
+from twostep.plans.simulate import GroundAction, Grounder, PlanError
 
 JointRun = list[tuple[int, Step]]  # (agent, step), in the order they run
 

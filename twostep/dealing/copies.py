@@ -34,7 +34,7 @@ from twostep.dealing.encoding import FactSpace, Step
 from twostep.dealing.rebind import matching, movers, rename_action
 from twostep.decomposers.goal_split import positional_predicates
 from twostep.pddl import Fact, Problem
-from twostep.strips import GroundAction, Grounder, PlanError
+from twostep.plans.simulate import GroundAction, Grounder, PlanError
 
 COPIES = 8
 """Copies made of one piece, at most."""

@@ -36,7 +36,7 @@ from twostep.decomposers.plan_split import (
     topological_pieces,
 )
 from twostep.pddl import Problem
-from twostep.strips import GroundAction, Grounder, effects_along
+from twostep.plans.simulate import GroundAction, Grounder, effects_along
 
 CUTS = ("free", "holding", "mover")
 """Where the plan is cut into pieces: at free agent states, by what the agent holds, or

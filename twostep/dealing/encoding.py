@@ -4,7 +4,7 @@ operations (the dealing steps simulate the same few hundred actions thousands of
 
 Environment facts and an agent's own facts are numbered apart: every agent's copy of its
 facts uses the same numbers, in its own int. :class:`FactSpace` numbers facts as it meets
-them and is where plan-deal turns a :class:`~twostep.strips.GroundAction`'s sets into bits
+them and is where plan-deal turns a :class:`~twostep.plans.simulate.GroundAction`'s sets into bits
 (:mod:`~twostep.dealing.walks` reads them too, to pick the task's moves).
 
 Only basic facts are bits. A STRIPS action that reads no derived fact is *exact* as bits:
@@ -22,7 +22,7 @@ from collections.abc import Collection, Iterable, Sequence
 from dataclasses import dataclass, field
 
 from twostep.pddl import Fact, Problem
-from twostep.strips import GroundAction
+from twostep.plans.simulate import GroundAction
 
 Owns = tuple[int, ...]
 """Per agent: the bits of its own facts."""

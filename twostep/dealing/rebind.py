@@ -58,7 +58,7 @@ from typing import TypeVar
 
 from twostep.decomposers.goal_split import positional_predicates
 from twostep.pddl import Fact, Problem
-from twostep.strips import GroundAction, Grounder, PlanError, effects_along
+from twostep.plans.simulate import GroundAction, Grounder, PlanError, effects_along
 
 T = TypeVar("T")
 

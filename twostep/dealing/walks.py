@@ -22,7 +22,7 @@ from twostep.dealing.model import DealError, cpu_seconds
 from twostep.decomposers.goal_split import positional_predicates
 from twostep.pddl import Domain, Fact, Problem
 from twostep.pddl.model import ActionSchema
-from twostep.strips import GroundAction, Grounder
+from twostep.plans.simulate import GroundAction, Grounder
 
 WALK_LIMIT = 20_000
 """States the walking search may visit for one action before the deal gives up."""
@@ -408,7 +408,7 @@ def stitch(
     agents each start from the initial agent facts: a helper's robot ends in another room
     than the main agent's starts from). Plans that apply one after the other come back
     unchanged. Raise :class:`DealError` where no walk helps (an agent still holding
-    something), :class:`~twostep.strips.PlanError` for an action the task does not have."""
+    something), :class:`~twostep.plans.simulate.PlanError` for an action the task does not have."""
     space = walking_space(problem, agent_predicates)
     grounder = Grounder(problem)
     plans_grounded = [grounder.ground_plan(plan) for plan in plans]

@@ -3,7 +3,7 @@
 A decomposer proposes, for N agents, up to N-1 helper subgoals. Each proposal carries the
 PDDL goal text (and, for the LLM, the English subgoal and every prompt and answer). The
 TwoStep method (:mod:`twostep.methods.twostep`) then checks every proposal against the
-task (:mod:`twostep.subgoals`) and plans the accepted ones; a decomposer never plans.
+task (:mod:`twostep.plans.subgoals`) and plans the accepted ones; a decomposer never plans.
 
 A decomposer that cannot propose at all (its LLM calls failed) raises
 :class:`DecomposerError`; the run then fails with the error's status instead of falling
@@ -16,8 +16,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from twostep.benchmark import BenchmarkTask
-from twostep.subgoals import SubgoalStatus
+from twostep.plans.subgoals import SubgoalStatus
+from twostep.tasks.benchmark import BenchmarkTask
 
 
 @dataclass

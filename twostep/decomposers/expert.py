@@ -15,9 +15,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from twostep.benchmark import BenchmarkError
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
-from twostep.files import FileFormatError, NotTextError, exists, read_yaml_file
+from twostep.tasks.benchmark import BenchmarkError
+from twostep.util.files import FileFormatError, NotTextError, exists, read_yaml_file
 
 
 def load_expert_subgoals(path: Path) -> dict[str, dict[int, list[str]]]:

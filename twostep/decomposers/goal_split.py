@@ -32,7 +32,7 @@ from collections.abc import Collection
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.pddl import Domain, Fact, Goal, Problem
 from twostep.pddl.lifted import EffectAtom, effect_parts
-from twostep.progression import agent_part, environment_part
+from twostep.plans.progression import agent_part, environment_part
 
 
 def positional_predicates(domain: Domain) -> set[str]:

@@ -2,7 +2,7 @@
 
 For helpers 1..N-1: :func:`generate_subgoal` asks for the helper's English subgoal (the
 answer "none" ends the loop), :func:`translate_subgoal` turns it into a PDDL goal and
-checks it against the task (:mod:`twostep.subgoals`, the rules that need no state). With
+checks it against the task (:mod:`twostep.plans.subgoals`, the rules that need no state). With
 ``llm.translator=rules`` the translation is the model-free grammar's
 (:mod:`twostep.english`): a sentence it cannot read is a discarded proposal whose reason
 starts with :data:`TRANSLATION_FAILED`. Answers replayed from a bundle (``llm.mode=bundle``)
@@ -27,7 +27,6 @@ import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
-from twostep.benchmark import BenchmarkTask
 from twostep.decomposers.base import (
     DecomposerError,
     DecompositionRequest,
@@ -39,7 +38,8 @@ from twostep.llm.client import LLMCallError, LLMClient, LLMResponse
 from twostep.llm.parsing import parse_english_subgoal, parse_pddl_subgoal
 from twostep.llm.prompts import Message, generator_messages, translator_messages
 from twostep.pddl import parse_goal
-from twostep.subgoals import SubgoalError, SubgoalStatus, goal_conflict
+from twostep.plans.subgoals import SubgoalError, SubgoalStatus, goal_conflict
+from twostep.tasks.benchmark import BenchmarkTask
 
 # The run status of a decomposition whose LLM call failed (result.json ``status``).
 LLM_ERROR = "llm_error"

@@ -61,8 +61,8 @@ from dataclasses import dataclass, field
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import positional_predicates, release_literals
 from twostep.pddl import Fact, Goal, Problem
-from twostep.progression import agent_part, environment_part
-from twostep.strips import GroundAction, Grounder, effects_along, simulate
+from twostep.plans.progression import agent_part, environment_part
+from twostep.plans.simulate import GroundAction, Grounder, effects_along, simulate
 
 
 @dataclass(frozen=True)

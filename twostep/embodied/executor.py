@@ -18,7 +18,7 @@ binary that cannot run here):
 - a step budget turns an execution that can never finish into a recorded failure.
 
 Every interaction, and every navigation action when the agent arrives, is applied to one
-shared grounded STRIPS state (:class:`twostep.strips.Grounder`): an action runs only when
+shared grounded STRIPS state (:class:`twostep.plans.simulate.Grounder`): an action runs only when
 its preconditions hold, so the trace is a valid sequential plan of the task with one
 agent object per body. Execution length = environment steps until every agent is done.
 
@@ -39,7 +39,7 @@ from twostep.embodied.floorplan import Cell, FloorPlan
 from twostep.embodied.navigation import reachable_cells, shortest_path
 from twostep.embodied.scene import Scene, scene_of
 from twostep.pddl import Fact, Goal, Problem
-from twostep.strips import GroundAction, Grounder, PlanError, parse_action
+from twostep.plans.simulate import GroundAction, Grounder, PlanError, parse_action
 
 AGENT_TYPE = "agent"
 LOCATION_TYPE = "location"

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from twostep.files import FileFormatError, NotTextError, read_yaml_file
+from twostep.util.files import FileFormatError, NotTextError, read_yaml_file
 
 Cell = tuple[int, int]
 Rect = tuple[int, int, int, int]

@@ -39,7 +39,7 @@ from twostep.embodied.floorplan import (
     load_floor_plan,
     unmangle,
 )
-from twostep.files import NotTextError, exists, read_text_file
+from twostep.util.files import NotTextError, exists, read_text_file
 
 OPEN_GRID = "open"  # layout value: made-up coordinates on an open grid, no scene
 GRID_M = 0.25  # AI2-THOR's navigation grid, metres

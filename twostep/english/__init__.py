@@ -7,7 +7,7 @@ the phrases are the ones each domain's own describer uses for its predicates
 (:mod:`twostep.english.lexicon`). It works on any English subgoal (a model's, an
 expert's). What it cannot read, or reads two ways, is a failed :class:`Translation` with
 the reason: it never guesses. The goal it gives then goes through the same subgoal checks
-as a model's (:mod:`twostep.subgoals`).
+as a model's (:mod:`twostep.plans.subgoals`).
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ def goal_text(reading: Reading) -> str:
 def _written_in_pddl(problem: Problem, text: str) -> str | None:
     """The goal, when the "English" subgoal is a PDDL goal of the task already."""
     from twostep.llm.parsing import extract_pddl_goal
-    from twostep.subgoals import SubgoalError, parse_subgoal
+    from twostep.plans.subgoals import SubgoalError, parse_subgoal
 
     if "(" not in text:
         return None

@@ -46,8 +46,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from twostep.files import FileFormatError, NotTextError, read_yaml_file, write_json_atomic
-from twostep.redaction import holds_a_key, looks_like_a_key, redact_text
+from twostep.util.files import FileFormatError, NotTextError, read_yaml_file, write_json_atomic
+from twostep.util.redaction import holds_a_key, looks_like_a_key, redact_text
 
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 
@@ -233,7 +233,7 @@ def key_env_problem(name: str | None) -> str | None:
 
 def model_problem(model: str | None) -> str | None:
     """Why ``model`` cannot be ``llm.model`` (None: it can): it holds something shaped
-    like a key (:func:`~twostep.redaction.holds_a_key`). The value is never repeated."""
+    like a key (:func:`~twostep.util.redaction.holds_a_key`). The value is never repeated."""
     if model is None or not holds_a_key(model):
         return None
     return (

@@ -6,10 +6,10 @@
 * :func:`extract_pddl_goal` finds the goal in the translator's answer, tolerating code
   fences, prose around it, a missing ``(:goal`` wrapper and unbalanced trailing parens.
 * :func:`parse_pddl_subgoal` parses it as a goal of the task
-  (:func:`twostep.subgoals.parse_subgoal`: unknown predicate, wrong arity, unknown object).
+  (:func:`twostep.plans.subgoals.parse_subgoal`: unknown predicate, wrong arity, unknown object).
 
-The rules a parsed subgoal must then meet live in :mod:`twostep.subgoals`. Every failure
-is a :class:`~twostep.subgoals.SubgoalError` whose message is the reason for a discard.
+The rules a parsed subgoal must then meet live in :mod:`twostep.plans.subgoals`. Every failure
+is a :class:`~twostep.plans.subgoals.SubgoalError` whose message is the reason for a discard.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ import re
 from dataclasses import dataclass
 
 from twostep.pddl import Goal, Problem
-from twostep.subgoals import SubgoalError, parse_subgoal
+from twostep.plans.subgoals import SubgoalError, parse_subgoal
 
 
 @dataclass(frozen=True)

@@ -21,8 +21,8 @@ from collections.abc import Sequence
 from importlib import resources
 from string import Template
 
-from twostep.benchmark import BenchmarkTask
 from twostep.pddl import Goal, Problem, fact_to_pddl
+from twostep.tasks.benchmark import BenchmarkTask
 
 Message = dict[str, str]
 

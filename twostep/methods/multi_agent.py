@@ -15,7 +15,7 @@ from twostep.methods.result import (
     new_run,
 )
 from twostep.methods.steps import PlanCall
-from twostep.multiagent import compile_multi_agent_problem, split_plan
+from twostep.tasks.multiagent import compile_multi_agent_problem, split_plan
 
 
 def run_multi_agent(request: MethodRequest) -> RunResult:

@@ -25,7 +25,7 @@ from typing import Any
 from twostep.dealing import CUTS, Deal, Dealer, DealError, Way, ways
 from twostep.dealing.model import SearchKey, cpu_seconds
 from twostep.dealing.rebind import Rebinder
-from twostep.execution import ParallelExecution, ScheduleError, check_schedule
+from twostep.makespan import ParallelExecution, ScheduleError, check_schedule
 from twostep.methods.request import MethodRequest
 from twostep.methods.result import (
     AgentPlan,
@@ -42,7 +42,7 @@ from twostep.methods.result import (
     solved_steps,
 )
 from twostep.methods.single_agent import single_agent_plan
-from twostep.strips import Grounder, PlanError
+from twostep.plans.simulate import Grounder, PlanError
 
 SCORED_UP_TO = 40
 """Deals of at most this many actions in all are scored by the parallel scorer, which

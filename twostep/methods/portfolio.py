@@ -62,8 +62,8 @@ from twostep.methods.result import (
 from twostep.methods.single_agent import single_agent_plan
 from twostep.methods.twostep import propose, run_twostep
 from twostep.planner import PlanResult, Status
-from twostep.strips import PlanError
-from twostep.subgoals import SubgoalStatus
+from twostep.plans.simulate import PlanError
+from twostep.plans.subgoals import SubgoalStatus
 
 
 @dataclass(frozen=True)

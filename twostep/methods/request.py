@@ -11,12 +11,12 @@ from __future__ import annotations
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
 
-from twostep.benchmark import BenchmarkTask
 from twostep.decomposers.base import Decomposer
-from twostep.execution import DEFAULT_SEARCH_BUDGET, ParallelExecution, SearchBudget
+from twostep.makespan import DEFAULT_SEARCH_BUDGET, ParallelExecution, SearchBudget
 from twostep.methods.steps import DIRECT, SA_CALL, PlanCall, Steps
 from twostep.pddl import Problem
 from twostep.planner import PlannerSettings, PlanResult
+from twostep.tasks.benchmark import BenchmarkTask
 
 
 @dataclass(frozen=True)

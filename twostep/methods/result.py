@@ -29,11 +29,11 @@ from typing import Any
 
 from twostep.decomposers.base import SubgoalProposal
 from twostep.embodied.run import embodied_failure
-from twostep.execution import ParallelExecution, check_schedule
+from twostep.makespan import ParallelExecution, check_schedule
 from twostep.methods.request import MethodRequest
 from twostep.pddl import Problem
 from twostep.planner import PlanResult, Status
-from twostep.strips import Grounder
+from twostep.plans.simulate import Grounder
 
 
 class MethodName(StrEnum):
@@ -292,7 +292,7 @@ def record_proposals(run: RunResult, proposals: Sequence[SubgoalProposal]) -> No
 def check_run(problem: Problem, run: RunResult, agent_predicates: Collection[str]) -> None:
     """Re-validate a run's joint schedule against the original ``problem`` by simulation.
 
-    Raises :class:`~twostep.execution.ScheduleError` (or :class:`PlanError` for a plan
+    Raises :class:`~twostep.makespan.ScheduleError` (or :class:`PlanError` for a plan
     step the task does not know) when the schedule does not reach the goal.
     """
     grounder = Grounder(problem)

@@ -15,7 +15,7 @@ from typing import Protocol
 
 from twostep.decomposers.base import LLMStep
 from twostep.decomposers.llm import generate_subgoal, translate_subgoal
-from twostep.execution import (
+from twostep.makespan import (
     DEFAULT_SEARCH_BUDGET,
     ParallelExecution,
     SearchBudget,
@@ -23,8 +23,8 @@ from twostep.execution import (
 )
 from twostep.pddl import Fact, Problem
 from twostep.planner import PlannerSettings, PlanResult, plan
-from twostep.progression import progress_state
-from twostep.strips import Grounder
+from twostep.plans.progression import progress_state
+from twostep.plans.simulate import Grounder
 
 
 def score(

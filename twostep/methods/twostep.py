@@ -9,7 +9,7 @@
 Every call goes through the request's :class:`~twostep.methods.steps.Steps` (the Prefect
 flow passes task-wrapped ones); the LLM decomposer's two calls are ``generate`` and
 ``translate``, handed to it in the :class:`~twostep.decomposers.base.DecompositionRequest`.
-The subgoal rules are :mod:`twostep.subgoals`. A decomposer that cannot propose (an LLM
+The subgoal rules are :mod:`twostep.plans.subgoals`. A decomposer that cannot propose (an LLM
 call failed after its retries) fails the run with status ``llm_error``; only unusable
 subgoals lead to the single-agent fallback.
 """
@@ -27,7 +27,7 @@ from twostep.decomposers.base import (
     SubgoalProposal,
     reads_sa_plan,
 )
-from twostep.execution import ParallelExecution, ScheduleError
+from twostep.makespan import ParallelExecution, ScheduleError
 from twostep.methods.request import MethodRequest
 from twostep.methods.result import (
     AgentPlan,
@@ -48,9 +48,9 @@ from twostep.methods.single_agent import single_agent_plan
 from twostep.methods.steps import PlanCall
 from twostep.pddl import Fact, Goal, Problem
 from twostep.planner import PlannerSettings, PlanResult, Status
-from twostep.progression import environment_part, handoff_problem
-from twostep.strips import PlanError
-from twostep.subgoals import SubgoalError, SubgoalStatus, check_subgoal
+from twostep.plans.progression import environment_part, handoff_problem
+from twostep.plans.simulate import PlanError
+from twostep.plans.subgoals import SubgoalError, SubgoalStatus, check_subgoal
 
 # Why a helper's subgoal is discarded when its planner call finds no plan
 HELPER_FAILURES: Mapping[Status, str] = {
@@ -192,7 +192,7 @@ def check_proposal(
     agent_predicates: Collection[str],
     earlier: Mapping[int, Goal],
 ) -> Goal | None:
-    """Step 3: the proposal's goal if :func:`twostep.subgoals.check_subgoal` accepts it
+    """Step 3: the proposal's goal if :func:`twostep.plans.subgoals.check_subgoal` accepts it
     from the helper's start (``environment`` plus its own agent facts); else it is marked
     discarded."""
     if proposal.status != SubgoalStatus.PROPOSED:  # discarded or stopped by the decomposer

@@ -33,7 +33,7 @@ Possible effects (the interference rule's input)
     for a derived fact among them, every basic fact it is derived from. Two actions may
     share a time step only when neither possibly writes what the other reads, possibly
     deletes what the other needs or possibly adds, or possibly adds what the other needs
-    false (see :mod:`twostep.execution`): a conservative rule, exact for STRIPS actions.
+    false (see :mod:`twostep.makespan`): a conservative rule, exact for STRIPS actions.
 
 Axioms (derived facts, evaluated as Fast Downward evaluates them)
     Derived facts are false by default. Rules come in layers; layer by layer, a rule

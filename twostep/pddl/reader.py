@@ -20,7 +20,6 @@ from dataclasses import replace
 from importlib import metadata
 from pathlib import Path
 
-from twostep.files import NotAFileError, file_problem, read_input_bytes, write_bytes_atomic
 from twostep.pddl.errors import PDDLError
 from twostep.pddl.goals import ground_goal
 from twostep.pddl.grounded import Fact, GroundTask, fact_to_pddl
@@ -32,7 +31,8 @@ from twostep.pddl.sas import read_sas
 from twostep.pddl.sexp import read_sexp, write_sexp
 from twostep.pddl.translator import GroundingLimits, grounding_limits, translate
 from twostep.pddl.writer import planner_input, pretty_define, problem_to_pddl
-from twostep.processes import ResourceLimitError
+from twostep.programs.processes import ResourceLimitError
+from twostep.util.files import NotAFileError, file_problem, read_input_bytes, write_bytes_atomic
 
 UNREACHABLE_GOAL: Fact = ("@unreachable-goal",)
 """The fact a goal formula stands for when the translator finds it unreachable: no state
@@ -137,7 +137,7 @@ def _without_goal(task: GroundTask) -> GroundTask:
 
 
 def read_pddl_file(path: Path) -> str:
-    """A PDDL file's text, read by the checked reader (:func:`twostep.files.
+    """A PDDL file's text, read by the checked reader (:func:`twostep.util.files.
     read_input_bytes`); a file that is no regular file of bounded size, or not UTF-8 text,
     is a :class:`PDDLError` naming it."""
     try:

@@ -2,7 +2,7 @@
 
 One semantics with the planner: what twostep plans, progresses and scores is the task
 Fast Downward grounds from the same files, so the grounding is the planner's own. The
-translator ships with the up-fast-downward wheel (:mod:`twostep.downward`); it is GPL-3
+translator ships with the up-fast-downward wheel (:mod:`twostep.programs.downward`); it is GPL-3
 like the planner, so it runs at arm's length, as a subprocess writing ``output.sas``,
 which :mod:`twostep.pddl.sas` reads (0.1-0.6 s per IPC task here, start-up included).
 
@@ -23,10 +23,10 @@ empty, unsolvable task; the grounding is then redone with an empty goal, so that
 actions are still there (a hand-off problem or a subgoal may well be solvable).
 
 Grounding is bounded (:class:`GroundingLimits`): the translator runs under the guard of
-:mod:`twostep.processes` with a memory limit (``planner.memory_limit_mb``, default 4 GiB)
+:mod:`twostep.programs.processes` with a memory limit (``planner.memory_limit_mb``, default 4 GiB)
 and a CPU-time limit (``planner.grounding_time_limit_s``, default the planner's time
 limit), and never outlives the job; a limit it hits is a
-:class:`~twostep.processes.ResourceLimitError` naming the limit and its key. The limits
+:class:`~twostep.programs.processes.ResourceLimitError` naming the limit and its key. The limits
 are set per job (:func:`grounding_limits`) and read by every grounding in the process.
 """
 
@@ -42,9 +42,9 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from twostep.downward import translator_path
 from twostep.pddl.errors import PDDLError
-from twostep.processes import (
+from twostep.programs.downward import translator_path
+from twostep.programs.processes import (
     GROUNDING_TIME_KEY,
     MEMORY_KEY,
     ResourceLimitError,
@@ -75,7 +75,7 @@ _UNREACHABLE_GOAL = "No relaxed solution"
 @dataclass(frozen=True)
 class GroundingLimits:
     """What one grounding may use: ``memory_mb`` of address space (None:
-    :data:`~twostep.processes.DEFAULT_MEMORY_LIMIT_MB`) and ``time_s`` of CPU time."""
+    :data:`~twostep.programs.processes.DEFAULT_MEMORY_LIMIT_MB`) and ``time_s`` of CPU time."""
 
     memory_mb: int | None = None
     time_s: float = DEFAULT_GROUNDING_TIME_S

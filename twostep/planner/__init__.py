@@ -15,13 +15,13 @@ One job per module, as in Fast Downward's ``driver/``:
 - :mod:`twostep.planner.driver`       running the driver; :func:`plan`, :func:`plan_pddl`
 """
 
-from twostep.downward import driver_path
 from twostep.pddl import planner_input
 from twostep.planner.aliases import ALIASES, ANYTIME_ALIASES
 from twostep.planner.driver import plan, plan_pddl, run_driver
 from twostep.planner.plan_files import PlanFile, read_plan_file
 from twostep.planner.results import PlanResult, Status
 from twostep.planner.settings import WALL_GUARD_FACTOR, WALL_GUARD_OFFSET_S, PlannerSettings
+from twostep.programs.downward import driver_path
 
 __all__ = [
     "ALIASES",

@@ -2,7 +2,7 @@
 
 It writes the problem as PDDL into a private temporary folder, runs the driver with a CPU
 search time limit, a memory limit for its translator and search (``planner.memory_limit_mb``,
-default 4 GiB) and a wall-clock guard, under the guard process of :mod:`twostep.processes`
+default 4 GiB) and a wall-clock guard, under the guard process of :mod:`twostep.programs.processes`
 (nothing of it outlives the job), reads the last complete plan file and turns the
 exit code into a :class:`~twostep.planner.results.Status`. The planner's own limit ends a
 search (its exit code says so); the guard is a safety net whose stops are flagged apart
@@ -17,14 +17,14 @@ import tempfile
 import time
 from pathlib import Path
 
-from twostep.downward import driver_path
 from twostep.pddl import Problem, planner_input
 from twostep.planner import returncodes
 from twostep.planner.aliases import ALIASES
 from twostep.planner.plan_files import PlanFile, complete_plans, plan_files
 from twostep.planner.results import PlanResult, Status
 from twostep.planner.settings import PlannerSettings
-from twostep.processes import MEMORY_KEY, memory_limit_mb, run_guarded
+from twostep.programs.downward import driver_path
+from twostep.programs.processes import MEMORY_KEY, memory_limit_mb, run_guarded
 
 _PLANNER_TIME = re.compile(r"Planner time: ([0-9.]+)s")
 
@@ -80,7 +80,7 @@ def run_driver(
     ]
     command += ["--plan-file", "plan", str(domain_file), str(problem_file), *search_options]
     start = time.perf_counter()
-    # Under the guard (twostep.processes): the driver, its translator and its search end
+    # Under the guard (twostep.programs.processes): the driver, its translator and its search end
     # with the job, and the wall-clock guard stops them together.
     done = run_guarded(command, workdir, settings.wall_guard(), temporary=temporary)
     output, code = done.output, done.code

@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from twostep.files import NotTextError, read_input_bytes, read_text_file, write_json_atomic
+from twostep.util.files import NotTextError, read_input_bytes, read_text_file, write_json_atomic
 
 BUNDLE_FILE = "bundle.json"
 BUNDLE_FORMAT = "twostep-replay-bundle"

@@ -32,15 +32,15 @@ from collections.abc import Callable, Collection, Iterable
 from dataclasses import asdict, dataclass
 from typing import Any
 
-from twostep.benchmark import BenchmarkTask
 from twostep.english import translate_english
 from twostep.llm.parsing import continuation, extract_pddl_goal, parse_english_subgoal
 from twostep.pddl import Goal
 from twostep.planner import PlannerSettings, PlanResult, plan
-from twostep.progression import environment_part, handoff_problem, progress_state
+from twostep.plans.progression import environment_part, handoff_problem, progress_state
+from twostep.plans.simulate import Grounder
+from twostep.plans.subgoals import SubgoalError, check_subgoal, parse_subgoal
 from twostep.replay.bundle import Answer, Entry
-from twostep.strips import Grounder
-from twostep.subgoals import SubgoalError, check_subgoal, parse_subgoal
+from twostep.tasks.benchmark import BenchmarkTask
 
 # Known causes of a cost other than the log's
 CONTINUED = "continued"  # the answer went on to another helper's subgoal (translated whole)

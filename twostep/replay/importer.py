@@ -14,7 +14,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from twostep.files import NotTextError, read_input_bytes, read_text_file
 from twostep.replay.bundle import (
     BUNDLE_FILE,
     Bundle,
@@ -25,6 +24,7 @@ from twostep.replay.bundle import (
     task_name,
 )
 from twostep.replay.official import FORMAT, LogFormatError, ParsedLog, parse_log
+from twostep.util.files import NotTextError, read_input_bytes, read_text_file
 
 FORMATS = (FORMAT,)
 

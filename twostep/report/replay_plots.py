@@ -16,7 +16,6 @@ from typing import Any
 
 from matplotlib.figure import Figure
 
-from twostep.files import write_text_atomic
 from twostep.report.plots import _new_figure, paper_style, save_figure
 from twostep.report.replay import (
     LABELS,
@@ -27,6 +26,7 @@ from twostep.report.replay import (
     table_markdown,
 )
 from twostep.report.style import COLUMN_WIDTH_IN, OKABE_ITO, TEXT_WIDTH_IN
+from twostep.util.files import write_text_atomic
 
 COLOURS = {
     "official": (OKABE_ITO["sky blue"], "s", "--"),

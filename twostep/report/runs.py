@@ -40,9 +40,9 @@ from typing import Any
 
 import pandas as pd
 
-from twostep.files import FileFormatError, read_yaml_file
-from twostep.params import flatten_config
+from twostep.jobs.params import flatten_config
 from twostep.planner.limits import guard_stops, planner_limit_hits
+from twostep.util.files import FileFormatError, read_yaml_file
 
 
 class ReportInputError(Exception):

@@ -12,7 +12,7 @@ A spread is shown only where runs differ, so a report must know which runs are t
   use that run alone, the lowest seed's (its planner calls were the ones measured), with
   n = 1 and no spread; the other seeds are still counted as runs (a timed-out task times
   out in every seed). Runs that differ by seed (the LLM decomposer's answers, the
-  embodied executor's start cells: :func:`twostep.identity.seed_matters`) are averaged
+  embodied executor's start cells: :func:`twostep.jobs.identity.seed_matters`) are averaged
   over their n seeds, with the sample std (:func:`measured_runs`).
 """
 
@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import pandas as pd
 
-from twostep.identity import seed_matters
+from twostep.jobs.identity import seed_matters
 from twostep.report.model import CELL_COLUMNS
 from twostep.report.runs import PARAM_PREFIX
 

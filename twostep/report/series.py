@@ -1,7 +1,7 @@
 """Series: which runs form one line of Fig. 3, and which config params split them.
 
 Which config params are not part of a job's identity, and which a method never reads, is
-decided by :mod:`twostep.identity` (the one owner, shared with the job store and sweeps);
+decided by :mod:`twostep.jobs.identity` (the one owner, shared with the job store and sweeps);
 :func:`is_bookkeeping_param` and :func:`param_applies` are the report's names for it.
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pandas as pd
 
-from twostep.identity import is_identity_key, is_relevant
+from twostep.jobs.identity import is_identity_key, is_relevant
 from twostep.report.model import SERIES_COLUMNS
 from twostep.report.runs import KEY_COLUMNS, PARAM_PREFIX
 

@@ -26,10 +26,10 @@ from typing import Any
 
 import pandas as pd
 
-from twostep.benchmark import TITLES_FILE, BenchmarkError, parse_task_titles
-from twostep.files import FileFormatError, NotTextError, read_yaml_file
 from twostep.report.aggregation import sample_std
 from twostep.report.seeds import distinct_label
+from twostep.tasks.benchmark import TITLES_FILE, BenchmarkError, parse_task_titles
+from twostep.util.files import FileFormatError, NotTextError, read_yaml_file
 
 TABLE2_DOMAIN = "alfworld"
 TABLE2_TASKS: tuple[int, ...] = (1, 2, 3, 4)
@@ -162,7 +162,7 @@ def table_two(
 
 def read_task_titles(domain_dir: Path) -> dict[int, str]:
     """Task number -> short description from ``<domain_dir>/titles.yaml``
-    (:func:`twostep.benchmark.parse_task_titles` reads its lines); empty when the file is
+    (:func:`twostep.tasks.benchmark.parse_task_titles` reads its lines); empty when the file is
     absent or not such a mapping."""
     path = domain_dir / TITLES_FILE
     if not path.is_file():

@@ -20,9 +20,9 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
-from twostep.files import NotTextError, exists, file_problem, read_text_file, read_yaml_file
 from twostep.pddl import PDDLError, Problem, load_problem
 from twostep.pddl.translator import GroundingLimits
+from twostep.util.files import NotTextError, exists, file_problem, read_text_file, read_yaml_file
 
 
 def _installed_data_root() -> Path:
@@ -31,7 +31,7 @@ def _installed_data_root() -> Path:
     try:
         return Path(str(resources.files("twostep.data")))
     except ModuleNotFoundError:  # a source tree on sys.path that was never installed
-        return Path(__file__).resolve().parent.parent / "data"
+        return Path(__file__).resolve().parents[2] / "data"
 
 
 DEFAULT_DATA_ROOT = _installed_data_root()

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from twostep.execution.compiled import CompiledTask, Node
+from twostep.makespan.compiled import CompiledTask, Node
 
 Permutation = tuple[int, ...]
 """``permutation[agent]``: the agent's label in the canonical node."""

@@ -1,6 +1,6 @@
 """Independent plan validation with unified-planning's sequential plan validator.
 
-Our own simulator (:mod:`twostep.strips`) is what the pipeline runs; this module checks a
+Our own simulator (:mod:`twostep.plans.simulate`) is what the pipeline runs; this module checks a
 plan a second way, against the problem as unified-planning reads it from our PDDL text,
 so a bug in our grounding cannot silently accept a wrong plan.
 """
@@ -12,9 +12,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from twostep.multiagent import compile_multi_agent_problem
 from twostep.pddl import Problem, planner_input
-from twostep.strips import parse_action
+from twostep.plans.simulate import parse_action
+from twostep.tasks.multiagent import compile_multi_agent_problem
 
 
 @dataclass(frozen=True)
@@ -27,7 +27,7 @@ def to_up_problem(problem: Problem) -> Any:
     """The unified-planning problem for ``problem`` (read back from our PDDL text)."""
     from unified_planning.io import PDDLReader
 
-    from twostep.pddl.environment import up_environment
+    from twostep.verify.up_environment import up_environment
 
     up_environment()
     with warnings.catch_warnings():

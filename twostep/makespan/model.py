@@ -24,7 +24,7 @@ class SearchBudget:
     """How much search the exact scorer may spend once it has a schedule in hand.
 
     Past either limit it returns the best schedule found with ``exact=False`` and a
-    proven ``lower_bound`` (see :func:`~twostep.execution.parallel_length`); None: no
+    proven ``lower_bound`` (see :func:`~twostep.makespan.parallel_length`); None: no
     limit. Both defaults keep a pipeline run from hanging on a hard schedule.
     """
 

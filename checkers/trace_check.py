@@ -2,7 +2,7 @@
 own files and the task's own PDDL files.
 
 It shares no code with the executor (:mod:`twostep.embodied`) nor with the project's
-STRIPS model (:mod:`twostep.strips`, :mod:`twostep.pddl`): it reads ``kitchen.yaml`` (or
+STRIPS model (:mod:`twostep.plans.simulate`, :mod:`twostep.pddl`): it reads ``kitchen.yaml`` (or
 an AI2-THOR layout of the ``alfworld`` wheel) itself, reads the domain and problem files
 with its own small s-expression reader, gives every body a copy of the facts of the task
 agent it plays (the contract of embodied execution), and replays every applied action in
@@ -34,7 +34,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from twostep.files import read_yaml_file
+import yaml
 
 Cell = tuple[int, int]
 SExpr = str | list["SExpr"]
@@ -333,7 +333,7 @@ class Floor:
 
 def read_kitchen_file(path: str | Path) -> Floor:
     """A ``kitchen.yaml`` floor plan file."""
-    return read_kitchen(read_yaml_file(Path(path)))
+    return read_kitchen(yaml.safe_load(Path(path).read_text()))
 
 
 def read_kitchen(data: Mapping[str, Any]) -> Floor:

@@ -1,21 +1,21 @@
-"""The entry point: the shortest joint schedule of per-agent plans (see :mod:`twostep.execution`)."""
+"""The entry point: the shortest joint schedule of per-agent plans (see :mod:`twostep.makespan`)."""
 
 from __future__ import annotations
 
 from collections.abc import Collection, Sequence
 
-from twostep.execution.check import check_schedule
-from twostep.execution.compiled import compile_task, is_simple
-from twostep.execution.diagnosis import check_agent_copies, diagnose
-from twostep.execution.model import (
+from twostep.makespan.check import check_schedule
+from twostep.makespan.compiled import compile_task, is_simple
+from twostep.makespan.diagnosis import check_agent_copies, diagnose
+from twostep.makespan.model import (
     DEFAULT_MAX_NODES,
     DEFAULT_TIME_LIMIT_S,
     MODES,
     ParallelExecution,
 )
-from twostep.execution.search import search
+from twostep.makespan.search import search
 from twostep.pddl import Fact, Goal
-from twostep.strips import GroundAction
+from twostep.plans.simulate import GroundAction
 
 
 def _parallel_length(
@@ -72,7 +72,7 @@ def parallel_length(
     The search expands at most ``max_nodes`` nodes and runs at most ``time_limit_s``
     seconds (None: no limit) once it has a schedule in hand; past either it returns the
     best schedule found with ``exact=False`` and a proven ``lower_bound`` (see
-    :func:`~twostep.execution.search.search`). The schedule is re-validated by
+    :func:`~twostep.makespan.search.search`). The schedule is re-validated by
     :func:`check_schedule` in every case.
     """
     return _parallel_length(

@@ -2,7 +2,7 @@
 
 Every run of the translator (grounding, :mod:`twostep.pddl.translator`) and of the
 planner's driver (:mod:`twostep.planner.driver`) goes through :func:`run_guarded`: the
-program runs under a small guard process (``twostep/_guard.py``) that
+program runs under a small guard process (``twostep/programs/_guard.py``) that
 
 - limits its address space (the memory limit) and its CPU time (the time limit);
 - ends its whole process group and removes its temporary folder when twostep is gone:

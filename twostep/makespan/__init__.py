@@ -15,7 +15,7 @@ Model
     only through its own actions in a way fixed in advance, so its content after k actions
     is known and the search state is (plan indices, environment state). With conditional
     effects or derived facts an agent's effect on its copy may depend on the environment:
-    the copies then join the search state (:mod:`twostep.execution.compiled`), and the
+    the copies then join the search state (:mod:`twostep.makespan.compiled`), and the
     bounds that assume STRIPS steps (pairs, contention) and the symmetry reduction are left
     out.
 
@@ -40,7 +40,7 @@ Search
     Both modes run A* over (plan indices, environment state) with unit step cost. The bound
     h is the largest of the longest remaining plan, the contention bound below and, for
     every pair of agents whose plans interact, the exact makespan of those two plans with
-    the other agents abstracted away (:class:`~twostep.execution.bounds.PairProjection`,
+    the other agents abstracted away (:class:`~twostep.makespan.bounds.PairProjection`,
     solved once up front, then a dict lookup per node). Every part is admissible, so the
     first goal node popped is optimal (a node reached again with a smaller g is expanded
     again, which keeps this true over canonical nodes); a pair that cannot reach its goal
@@ -50,14 +50,14 @@ Search
     cases without contention go straight down.
 
     A greedy list schedule (longest remaining plan first) gives an upper bound first; a
-    contention bound (:class:`~twostep.execution.bounds.ContentionBound`: agents that
+    contention bound (:class:`~twostep.makespan.bounds.ContentionBound`: agents that
     consume the same exclusive fact, such as a free cell, take turns) often meets it at
     the start, and then no search runs (N carts queueing at one hub). Otherwise A* stops
     when f reaches the greedy length, or at its budget (:class:`SearchBudget`: ``max_nodes``
     expanded nodes, ``time_limit_s`` seconds): then the greedy schedule comes back with
     ``exact=False`` and the proven ``lower_bound``.
 
-    Interchangeable agents (:class:`~twostep.execution.symmetry.Symmetry`: plans of the
+    Interchangeable agents (:class:`~twostep.makespan.symmetry.Symmetry`: plans of the
     same shape up to their private facts, like carts driving their own tracks through
     the same hubs) make many nodes equivalent; A* visits one canonical node per
     relabelling of them, and pairs of agents the relabelling maps onto each other share
@@ -67,7 +67,7 @@ Search
       that still have actions together. Its memoised recursion computes the shortest path in
       exactly this graph, which A* finds without visiting every index tuple.
     * ``exact`` -- any non-empty set of applicable, pairwise non-interfering agents. One
-      dominance rule keeps it fast; see :func:`~twostep.execution.search.free_agents` for
+      dominance rule keeps it fast; see :func:`~twostep.makespan.search.free_agents` for
       why it is safe.
 
 Facts are numbered and states are Python ints used as bit sets, so a joint step is a few
@@ -76,19 +76,19 @@ independently of the search, and :func:`parallel_length` runs it on every result
 
 One job per module:
 
-- :mod:`twostep.execution.model`      :class:`ParallelExecution`, :class:`ScheduleError`, modes,
+- :mod:`twostep.makespan.model`      :class:`ParallelExecution`, :class:`ScheduleError`, modes,
   :class:`SearchBudget`
-- :mod:`twostep.execution.diagnosis`  why no schedule exists (agent copies, hand-off run)
-- :mod:`twostep.execution.compiled`   plans as bit sets over numbered facts
-- :mod:`twostep.execution.bounds`     the A* lower bound (remaining plans, contention, pairs)
-- :mod:`twostep.execution.symmetry`   interchangeable agents and canonical nodes
-- :mod:`twostep.execution.search`     greedy upper bound, budgeted A* with each mode's successors
-- :mod:`twostep.execution.check`      :func:`check_schedule`, the independent re-validation
-- :mod:`twostep.execution.parallel`   :func:`parallel_length`, which ties them together
+- :mod:`twostep.makespan.diagnosis`  why no schedule exists (agent copies, hand-off run)
+- :mod:`twostep.makespan.compiled`   plans as bit sets over numbered facts
+- :mod:`twostep.makespan.bounds`     the A* lower bound (remaining plans, contention, pairs)
+- :mod:`twostep.makespan.symmetry`   interchangeable agents and canonical nodes
+- :mod:`twostep.makespan.search`     greedy upper bound, budgeted A* with each mode's successors
+- :mod:`twostep.makespan.check`      :func:`check_schedule`, the independent re-validation
+- :mod:`twostep.makespan.parallel`   :func:`parallel_length`, which ties them together
 """
 
-from twostep.execution.check import check_schedule
-from twostep.execution.model import (
+from twostep.makespan.check import check_schedule
+from twostep.makespan.model import (
     DEFAULT_SEARCH_BUDGET,
     MODES,
     ParallelExecution,
@@ -97,7 +97,7 @@ from twostep.execution.model import (
     SearchBudget,
     split_state,
 )
-from twostep.execution.parallel import parallel_length
+from twostep.makespan.parallel import parallel_length
 
 __all__ = [
     "DEFAULT_SEARCH_BUDGET",

@@ -3,7 +3,7 @@ order, in TextWorld's PDDL game (the engine AlfWorld's text games run on).
 
 The game is AlfWorld's: the ``alfworld`` wheel's ``alfred.pddl`` and ``alfred.twl2``
 grammar with the problem as it is (a trace's bodies replace the task's agent, as in
-:mod:`twostep.trace_check`). Each step is looked up among the ground actions the engine
+:mod:`checkers.trace_check`). Each step is looked up among the ground actions the engine
 itself finds applicable in its current state and applied there (its text commands name no
 agent, so they cannot tell two agents apart); the engine says whether the goal is won.
 
@@ -109,8 +109,8 @@ def replay_trace(
     record: Mapping[str, Any], problem_text: str, plays: Mapping[str, str]
 ) -> EngineReplay:
     """Replay an embodied trace's actions in the game of its bodies (``plays``: body ->
-    the task agent it plays, :func:`twostep.trace_check.who_plays`)."""
-    from twostep.trace_check import body_problem
+    the task agent it plays, :func:`checkers.trace_check.who_plays`)."""
+    from checkers.trace_check import body_problem
 
     files = game_files()
     if files is None:

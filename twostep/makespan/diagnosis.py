@@ -5,10 +5,10 @@ from __future__ import annotations
 
 from collections.abc import Collection, Sequence
 
-from twostep.execution.model import ScheduleError, split_state
+from twostep.makespan.model import ScheduleError, split_state
 from twostep.pddl import Fact, Goal, fact_to_pddl
 from twostep.pddl.grounded import Axioms
-from twostep.strips import GroundAction
+from twostep.plans.simulate import GroundAction
 
 
 def missing_literal(

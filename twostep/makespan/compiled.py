@@ -5,7 +5,7 @@ A joint step is then a few integer operations. Two encodings, one per kind of ta
 - *STRIPS* (every action a precondition, adds and deletes; no axioms): only environment
   facts are numbered; each agent's private copy of the agent-specific facts changes only
   through its own actions, so its content is fixed by its plan index and is checked apart
-  (:mod:`twostep.execution.diagnosis`). This is the fast path of the search.
+  (:mod:`twostep.makespan.diagnosis`). This is the fast path of the search.
 - *General* (conditional effects, precondition variants or derived facts): an agent's
   effect on its own facts may depend on the shared state, so the copies are numbered too,
   one bit per agent and agent-specific fact, and live in the state. Derived facts are
@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 from twostep.pddl import Fact, Goal
 from twostep.pddl.grounded import Axioms
-from twostep.strips import GroundAction
+from twostep.plans.simulate import GroundAction
 
 Node = tuple[tuple[int, ...], int]
 """A search node: each agent's next plan index and the state."""
@@ -101,7 +101,7 @@ class CompiledStep:
         return add, delete
 
     def interferes(self, other: CompiledStep) -> bool:
-        """Whether the two steps may not share a time step (see :mod:`twostep.execution`)."""
+        """Whether the two steps may not share a time step (see :mod:`twostep.makespan`)."""
         clash = (
             self.possible_delete & (other.pre_positive | other.possible_add)
             | self.possible_add & (other.pre_negative | other.possible_delete)

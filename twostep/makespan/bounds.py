@@ -6,8 +6,8 @@ import itertools
 import time
 from collections.abc import Sequence
 
-from twostep.execution.compiled import CompiledStep, CompiledTask
-from twostep.execution.symmetry import Symmetry
+from twostep.makespan.compiled import CompiledStep, CompiledTask
+from twostep.makespan.symmetry import Symmetry
 
 
 class PairProjection:

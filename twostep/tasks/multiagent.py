@@ -8,7 +8,7 @@ task: the agent argument goes everywhere an agent-specific predicate occurs, ins
 quantifiers, disjunctions and conditional effects included. A derived predicate whose
 rules use an agent-specific predicate is agent-specific too (it gets the agent argument
 as well). Agent-specific goal literals must hold for every agent (as in
-:mod:`twostep.execution`); inside a goal formula an agent-specific atom reads "for every
+:mod:`twostep.makespan`); inside a goal formula an agent-specific atom reads "for every
 agent" where it is asserted and "for some agent" where it is denied, so that its negation
 too holds for every agent. Numeric initial values (costs) are kept as they are. A
 sequential plan of the compiled task is split per agent and written back in the
@@ -29,7 +29,7 @@ from twostep.pddl import Domain, Fact, Goal, Problem
 from twostep.pddl.lifted import condition_atoms
 from twostep.pddl.model import Atom, DerivedPredicate
 from twostep.pddl.sexp import SExp
-from twostep.strips import parse_action
+from twostep.plans.simulate import parse_action
 
 AGENT_TYPE = "agent"
 AGENT_VARIABLE = "?agent"

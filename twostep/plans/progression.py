@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Collection, Sequence
 
 from twostep.pddl import Fact, Goal, Problem
-from twostep.strips import GroundAction, simulate
+from twostep.plans.simulate import GroundAction, simulate
 
 
 def environment_part(state: frozenset[Fact], agent_predicates: Collection[str]) -> frozenset[Fact]:

@@ -18,7 +18,7 @@ grouping of runs (``twostep/report``) all ask this module.
   reused only when it is a whole, consistent result (:func:`result_problem`).
 
 Plain data in, plain data out; the only I/O is reading the input files' bytes (through
-:func:`twostep.files.read_input_bytes`).
+:func:`twostep.util.files.read_input_bytes`).
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-from twostep.files import NotTextError, read_input_bytes
+from twostep.util.files import NotTextError, read_input_bytes
 
 # Bump when a change to the pipeline makes stored results stale.
 # job-3: the methods moved into twostep/methods (one request, enums, typed SA time)
@@ -59,7 +59,7 @@ UNFINISHED_STATUSES: frozenset[str] = frozenset({"error", "llm_error", "failed",
 # What every result has (``RunResult.to_dict``): a stored entry without them is no result.
 RESULT_KEYS: frozenset[str] = frozenset({"domain", "task", "method", "agents", "success", "status"})
 
-_PROMPTS = Path(__file__).resolve().parent / "prompts"
+_PROMPTS = Path(__file__).resolve().parents[1] / "prompts"
 
 
 def is_identity_key(name: str) -> bool:
@@ -129,7 +129,7 @@ def job_input_files(config: Mapping[str, Any], problem_path: Path | None) -> dic
 
     ``problem_path`` is the task's problem file (``None``: unknown, e.g. no such task).
     """
-    from twostep.benchmark import domain_file  # the rule of which domain file a task reads
+    from twostep.tasks.benchmark import domain_file  # the rule of which domain file a task reads
 
     method, decomposer = _method_of(config)
     data = config.get("data")
@@ -175,7 +175,7 @@ def _kitchen_file(config: Mapping[str, Any], folder: Path) -> Path | None:
     if executor.get("layout") is not None:
         return None
     from twostep.embodied.floorplan import FLOOR_PLAN_FILE
-    from twostep.files import exists
+    from twostep.util.files import exists
 
     path = folder / FLOOR_PLAN_FILE
     return path if exists(path) else None
@@ -183,7 +183,7 @@ def _kitchen_file(config: Mapping[str, Any], folder: Path) -> Path | None:
 
 def file_digest(path: Path) -> str:
     """SHA-256 of a file's bytes, read by the one checked reader of input files
-    (:func:`twostep.files.read_input_bytes`: a FIFO is never waited on, ``/dev/zero``
+    (:func:`twostep.util.files.read_input_bytes`: a FIFO is never waited on, ``/dev/zero``
     never read); ``"missing"`` for a file that cannot be read (the job's check before any
     work names it)."""
     try:

@@ -7,10 +7,10 @@ from collections import Counter
 from collections.abc import Callable, Collection, Sequence
 from typing import NamedTuple
 
-from twostep.execution.diagnosis import check_goal, precondition_error
-from twostep.execution.model import ScheduleError, split_state
+from twostep.makespan.diagnosis import check_goal, precondition_error
+from twostep.makespan.model import ScheduleError, split_state
 from twostep.pddl import Fact, Goal, fact_to_pddl
-from twostep.strips import GroundAction, PlanError, parse_action
+from twostep.plans.simulate import GroundAction, PlanError, parse_action
 
 
 def interference(
@@ -18,7 +18,7 @@ def interference(
 ) -> str | None:
     """The environment fact through which two actions interfere, as a phrase, or None.
 
-    The rule of :mod:`twostep.execution` on possible effects: one possibly deletes what the
+    The rule of :mod:`twostep.makespan` on possible effects: one possibly deletes what the
     other needs or possibly adds, possibly adds what the other requires false, or possibly
     changes a fact the other's outcome depends on (effect conditions, derived facts).
     """

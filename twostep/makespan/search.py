@@ -7,10 +7,10 @@ import itertools
 import time
 from dataclasses import dataclass
 
-from twostep.execution.bounds import LowerBound
-from twostep.execution.compiled import CompiledTask, Node
-from twostep.execution.model import DEFAULT_MAX_NODES, DEFAULT_TIME_LIMIT_S
-from twostep.execution.symmetry import Permutation, Symmetry, relabel
+from twostep.makespan.bounds import LowerBound
+from twostep.makespan.compiled import CompiledTask, Node
+from twostep.makespan.model import DEFAULT_MAX_NODES, DEFAULT_TIME_LIMIT_S
+from twostep.makespan.symmetry import Permutation, Symmetry, relabel
 
 
 def free_agents(task: CompiledTask, indices: tuple[int, ...], movable: list[int]) -> list[int]:
@@ -212,7 +212,7 @@ def search(
     not proven optimal) gives an upper bound; when the cheap bounds (longest remaining
     plan, contention) already meet it at the start, it is optimal and no search runs.
     Otherwise A* runs with the pair projections too, over canonical nodes
-    (:class:`~twostep.execution.symmetry.Symmetry`: one node per relabelling of
+    (:class:`~twostep.makespan.symmetry.Symmetry`: one node per relabelling of
     interchangeable agents), and stops at the first goal node (optimal), when the smallest
     f on the frontier reaches the greedy length (the greedy schedule is optimal), or after
     ``max_nodes`` expansions or ``time_limit_s`` seconds (None: no limit): then the greedy

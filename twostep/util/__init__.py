@@ -1,0 +1,2 @@
+"""Small shared rules: the checked file reader and atomic writer (:mod:`.files`), secrets
+kept out of what is stored or printed (:mod:`.redaction`)."""
