@@ -1,24 +1,31 @@
 """twostep: multi-agent task planning with classical planners and LLMs.
 
 The library behind the ``twostep`` commands; importable without Prefect, MLflow or Hydra.
-One module per step of the paper's pipeline:
+Every module sits in a package that names its job (tests/test_layout.py checks this map
+against the packages):
 
 - :mod:`twostep.pddl`         read domains and problems as Fast Downward does: the lifted
                               model, its grounding (Fast Downward's translator), writing
-- :mod:`twostep.plans.simulate`       plans over the grounded model: lookup, simulation
-- :mod:`twostep.planner`      Fast Downward (the up-fast-downward wheel's driver): named exit
-                              codes, checked plan files, costs, statuses
-- :mod:`twostep.verify.validation`   independent plan validation (unified-planning)
-- :mod:`twostep.tasks.multiagent`   the MA-PDDL baseline compilation
-- :mod:`twostep.plans.progression`  hand-off of the environment state between agents
-- :mod:`twostep.makespan`    parallel execution length (A*) and joint schedule check
+- :mod:`twostep.plans`        plans over the grounded model: lookup, simulation, the
+                              hand-off between agents, the rules of helper subgoals
+- :mod:`twostep.tasks`        tasks on disk in the LLM+P layout; the MA-PDDL compilation
+- :mod:`twostep.generators`   seeded task generators per domain
+- :mod:`twostep.programs`     Fast Downward's programs: where they live, the guard they run under
+- :mod:`twostep.planner`      Fast Downward's driver: named exit codes, checked plan files,
+                              costs, statuses
+- :mod:`twostep.verify`       independent plan validation (unified-planning)
+- :mod:`twostep.execution`    parallel execution length (A*) and joint schedule check
 - :mod:`twostep.decomposers`  where helper subgoals come from (goal-split, plan-split,
                               expert, llm)
 - :mod:`twostep.llm`          LLM access (litellm), prompts and answer parsing
 - :mod:`twostep.methods`      the methods side by side (SA, MA, TwoStep, plan-deal,
                               portfolio), one request in, one result out; the registry
 - :mod:`twostep.dealing`      plan-deal's algorithm: the SA plan's pieces dealt to N agents
-- :mod:`twostep.tasks.benchmark`    tasks on disk in the LLM+P layout
+- :mod:`twostep.embodied`     the grid-kitchen executor and its pictures
+- :mod:`twostep.jobs`         a job's identity (key, name, input files) and flat params
+- :mod:`twostep.report`       the report: run table, series, tables and figures
+- :mod:`twostep.cli`          twostep-score, twostep-data, twostep-prompts
+- :mod:`twostep.util`         the checked file reader and atomic writer; secrets masked
 
 Quick start::
 

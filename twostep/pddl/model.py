@@ -314,7 +314,17 @@ class Problem:
         )
 
 
-def _ground(problem: Problem) -> GroundTask:
-    from twostep.pddl.reader import ground_problem
+_grounder: list[Callable[[Problem], GroundTask]] = []
 
-    return ground_problem(problem)
+
+def set_grounder(ground: Callable[[Problem], GroundTask]) -> None:
+    """Who grounds a problem on first use of :attr:`Problem.grounded`: the loader,
+    :func:`twostep.pddl.reader.ground_problem` (Fast Downward's translator), sets itself when
+    it is imported (``twostep.pddl`` imports it), so the data model imports no reader."""
+    _grounder[:] = [ground]
+
+
+def _ground(problem: Problem) -> GroundTask:
+    if not _grounder:
+        raise RuntimeError("no grounder set: import twostep.pddl (its reader grounds problems)")
+    return _grounder[0](problem)

@@ -25,7 +25,7 @@ from twostep.pddl.goals import ground_goal
 from twostep.pddl.grounded import Fact, GroundTask, fact_to_pddl
 from twostep.pddl.lifted import conjunction_literals, read_domain, read_problem
 from twostep.pddl.lint import check_kinds, lint_domain, lint_problem
-from twostep.pddl.model import Goal, Problem
+from twostep.pddl.model import Goal, Problem, set_grounder
 from twostep.pddl.repairs import repair_task
 from twostep.pddl.sas import read_sas
 from twostep.pddl.sexp import read_sexp, write_sexp
@@ -130,6 +130,9 @@ def ground_problem(problem: Problem) -> GroundTask:
     if translation.goal_unreachable or problem.goal.formula is None:
         task = _without_goal(task)  # a conjunction's literals are the lifted goal's own
     return task.prune_axioms(problem.goal.positive | problem.goal.negative)
+
+
+set_grounder(ground_problem)  # the data model grounds through the loader, never imports it
 
 
 def _without_goal(task: GroundTask) -> GroundTask:
