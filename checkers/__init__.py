@@ -1,7 +1,13 @@
-"""An independent validator: plans and joint schedules checked against the ORIGINAL PDDL
-files by code that shares nothing with ``twostep``.
+"""The independent checkers: code that shares nothing with ``twostep`` (imports nothing from
+it; tests/test_layout.py checks) and is not part of its wheel.
 
-Two checkers, each reading the files with its own parser:
+* :mod:`checkers.trace_check`: embodied traces replayed on its own reading of the floor
+  plan and the PDDL; :mod:`checkers.alfworld_engine`: AlfWorld's own engine (TextWorld)
+  replaying plans and traces;
+* this package: an independent validator, plans and joint schedules checked against the
+  ORIGINAL PDDL files.
+
+The validator has two checkers, each reading the files with its own parser:
 
 * **unified-planning** (:mod:`.unified`): its PDDL reader and sequential plan validator,
   where the reader accepts the files (it rejects some valid PDDL: derived predicates,

@@ -22,7 +22,6 @@ One job per module:
 - :mod:`twostep.pddl.goals`       quantified subgoals grounded by static facts
 - :mod:`twostep.pddl.reader`      ``parse_problem``, ``load_problem`` (cached), ``parse_goal``
 - :mod:`twostep.pddl.writer`      the PDDL the planner receives
-- :mod:`twostep.verify.up_environment` unified-planning's environment, for the plan validator
 """
 
 from twostep.pddl.errors import PDDLError

@@ -1,0 +1,112 @@
+"""The house's layout: nothing at the root of ``twostep/`` but ``__init__.py``, whose package
+map (and the README's Layout) name exactly the packages on disk; no import cycle among the
+library's modules; the independent checkers import nothing from ``twostep``.
+
+The import graph is read here with :mod:`ast` (every import: module level, under
+``TYPE_CHECKING`` and inside functions), not with the bench's code."""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+import twostep
+
+ROOT = Path(__file__).resolve().parent.parent
+LIBRARY = ROOT / "twostep"
+
+
+def _packages() -> set[str]:
+    return {p.parent.name for p in LIBRARY.glob("*/__init__.py")}
+
+
+def test_nothing_at_the_root_of_the_library_but_its_init() -> None:
+    assert sorted(p.name for p in LIBRARY.glob("*.py")) == ["__init__.py"]
+
+
+def test_the_package_map_names_every_package_once() -> None:
+    named = re.findall(r"^- :mod:`twostep\.(\w+)`", twostep.__doc__ or "", re.M)
+    assert len(named) == len(set(named)), named
+    assert set(named) == _packages()
+
+
+def test_the_readme_layout_names_every_package() -> None:
+    readme = (ROOT / "README.md").read_text()
+    layout = readme[readme.index("\n## Layout") :]
+    tree = layout[layout.index("\ntwostep/\n") + 1 :]
+    tree = tree[: re.search(r"\n(?=\S)", tree).start()]  # type: ignore[union-attr]
+    named = set(re.findall(r"^  (\w+)/ ", tree, re.M))
+    assert named == _packages()
+    assert not re.findall(r"^  \w+\.py ", tree, re.M)  # no module at the root
+
+
+def _module_names(package: Path) -> dict[str, Path]:
+    found = {}
+    for path in package.rglob("*.py"):
+        parts = list(path.relative_to(package.parent).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts.pop()
+        found[".".join(parts)] = path
+    return found
+
+
+def _imported(module: str, path: Path, modules: set[str] | None = None) -> set[str]:
+    """Every module name an import statement of the file names (``from a import b``:
+    module ``a.b`` if it is one of ``modules``, else ``a``; relative imports made absolute)."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
+            if node.level:
+                base = base[: len(base) - node.level + 1]
+                source = ".".join([*base, node.module] if node.module else base)
+            else:
+                source = node.module or ""
+            for alias in node.names:
+                target = f"{source}.{alias.name}"
+                names.add(target if modules is not None and target in modules else source)
+    return names
+
+
+def test_no_import_cycle_among_the_library_modules() -> None:
+    modules = _module_names(LIBRARY)
+    names = set(modules)
+    graph = {m: _imported(m, p, names) & names - {m} for m, p in modules.items()}
+    done: set[str] = set()
+
+    def visit(node: str, path: list[str]) -> None:
+        if node in path:
+            raise AssertionError("import cycle: " + " -> ".join([*path[path.index(node) :], node]))
+        if node in done:
+            return
+        for child in sorted(graph[node]):
+            visit(child, [*path, node])
+        done.add(node)
+
+    for module in sorted(graph):
+        visit(module, [])
+
+
+def test_the_cycle_finder_finds_a_cycle(tmp_path: Path) -> None:
+    """The reading above sees a relative import closing a loop (so the test can fail)."""
+    package = tmp_path / "pkg"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "a.py").write_text("from .b import x\n")
+    (package / "b.py").write_text("def f():\n    from pkg import a\n")
+    modules = _module_names(package)
+    names = set(modules)
+    assert _imported("pkg.a", modules["pkg.a"], names) & names == {"pkg.b"}
+    assert _imported("pkg.b", modules["pkg.b"], names) & names == {"pkg.a"}
+
+
+def test_the_checkers_import_nothing_from_twostep() -> None:
+    checkers = ROOT / "checkers"
+    modules = _module_names(checkers)
+    assert {"checkers", "checkers.trace_check", "checkers.alfworld_engine"} <= modules.keys()
+    for module, path in modules.items():
+        imported = _imported(module, path)
+        assert not {n for n in imported if n == "twostep" or n.startswith("twostep.")}, module
