@@ -25,20 +25,16 @@ from bench.bench_deal_generated import (
     gen_termes,
     gen_visitall,
 )
+from tests.support.skips import IPC_SAMPLE, needs_ipc_sample
 from twostep.pddl import Problem, parse_problem
 from twostep.pddl.translator import translate
 from twostep.planner import PlannerSettings, plan_pddl
-
-SAMPLE = Path(__file__).resolve().parents[2] / "shared" / "ipc-sample"
-needs_sample = pytest.mark.skipif(
-    not SAMPLE.is_dir(), reason=f"the IPC sample is not at {SAMPLE} (external test input)"
-)
 
 
 def _read(domain: str, text: str) -> Problem:
     """The problem read by twostep's reader, and by Fast Downward's translator, which must
     find its goal reachable (under the delete relaxation) and ground some actions."""
-    domain_text = (SAMPLE / domain / "domain.pddl").read_text()
+    domain_text = (IPC_SAMPLE / domain / "domain.pddl").read_text()
     problem = parse_problem(domain_text, text)
     translation = translate(domain_text, text)
     assert not translation.goal_unreachable
@@ -54,7 +50,7 @@ def _facts(problem: Problem, predicate: str) -> list[tuple[str, ...]]:
     return sorted(f for f in problem.init if f[0].lower() == predicate.lower())
 
 
-@needs_sample
+@needs_ipc_sample
 @pytest.mark.parametrize("domain", list(SIZES))
 def test_every_size_parses_and_is_reproducible(domain: str) -> None:
     # every size of the bench, two seeds: both readers accept the file; a seed gives the
@@ -71,7 +67,7 @@ def test_every_size_parses_and_is_reproducible(domain: str) -> None:
             assert problem.goal.positive and not problem.goal.holds(problem.init)
 
 
-@needs_sample
+@needs_ipc_sample
 def test_blocks_and_gripper_counts() -> None:
     for n in (4, 9, 14):
         problem = _read("blocks", gen_blocks(n, 3).text)
@@ -103,7 +99,7 @@ def _grid_connected(cells: set[str], links: set[tuple[str, str]]) -> bool:
     return seen == cells
 
 
-@needs_sample
+@needs_ipc_sample
 @pytest.mark.parametrize(
     ("side", "holes", "half"), [(3, False, False), (5, True, True), (8, True, False)]
 )
@@ -121,7 +117,7 @@ def test_visitall_grid(side: int, holes: bool, half: bool) -> None:
     assert ("visited", robot[1]) in problem.init
 
 
-@needs_sample
+@needs_ipc_sample
 @pytest.mark.parametrize(("cocktails", "shakers"), [(3, 1), (4, 2), (6, 3)])
 def test_barman_counts_and_costs(cocktails: int, shakers: int) -> None:
     problem = _read("barman-sat11-strips", gen_barman(cocktails, shakers, 5).text)
@@ -141,7 +137,7 @@ def test_barman_counts_and_costs(cocktails: int, shakers: int) -> None:
         assert len(parts) == 2 and parts[0] != parts[1]
 
 
-@needs_sample
+@needs_ipc_sample
 @pytest.mark.parametrize(
     ("rows", "cols", "towers", "height"), [(3, 3, 1, 1), (4, 4, 2, 3), (5, 4, 3, 3)]
 )
@@ -163,7 +159,7 @@ def test_termes_board(rows: int, cols: int, towers: int, height: int) -> None:
     assert all(f[2] == "n0" for f in _facts(problem, "height"))  # a flat board
 
 
-@needs_sample
+@needs_ipc_sample
 @pytest.mark.parametrize(("depots", "crates", "hoists"), [(1, 2, 1), (2, 4, 2), (2, 6, 3)])
 def test_storage_counts(depots: int, crates: int, hoists: int) -> None:
     problem = _read("storage", gen_storage(depots, crates, hoists, 7).text)
@@ -182,7 +178,7 @@ def test_storage_counts(depots: int, crates: int, hoists: int) -> None:
     }
 
 
-@needs_sample
+@needs_ipc_sample
 @pytest.mark.parametrize(("rows", "cols"), [(3, 3), (4, 5)])
 def test_floortile_grid(rows: int, cols: int) -> None:
     problem = _read("floortile-sat11-strips", gen_floortile(rows, cols, 8).text)
@@ -207,13 +203,13 @@ SMALL = {
 }
 
 
-@needs_sample
+@needs_ipc_sample
 @pytest.mark.parametrize("domain", list(SMALL))
 def test_a_small_problem_per_domain_is_solvable(domain: str, tmp_path: Path) -> None:
     # lama-first solves it; the plan is valid for the independent validator
     from checkers import IndependentValidator
 
-    domain_path = SAMPLE / domain / "domain.pddl"
+    domain_path = IPC_SAMPLE / domain / "domain.pddl"
     text = SMALL[domain].text
     result = plan_pddl(domain_path.read_text(), text, PlannerSettings("lama-first", 30))
     assert result.plan is not None and len(result.plan) > 0, result

@@ -36,10 +36,10 @@ import yaml
 from bench.bench_conformance import ProblemFiles, find_problems, loaded, reason_of, run_twostep
 from checkers import IndependentValidator, fast_downward, sas, unified
 from checkers.constants import move_constants
+from tests.support.skips import IPC_SAMPLE, needs_ipc_sample
 
 REPO = Path(__file__).resolve().parent.parent
 CONSTRUCTS = Path(__file__).resolve().parent / "fixtures" / "constructs"
-SAMPLE = REPO.parent / "shared" / "ipc-sample"
 TIME_LIMIT_S = 30
 RUN_TIMEOUT_S = 300
 
@@ -309,9 +309,6 @@ def test_twostep_schedules_on_construct(name: str, method: list[str]) -> None:
 
 # ------------------------------------------------------------ the IPC sample, when present
 
-needs_sample = pytest.mark.skipif(
-    not SAMPLE.is_dir(), reason=f"the IPC sample is not at {SAMPLE} (external test input)"
-)
 
 # A handful covering the constructs: conditional effects (airport-adl), costs from
 # functions (elevators), axioms (psr), a variable glued to a name (zenotravel), and plain
@@ -320,11 +317,11 @@ SAMPLE_SUBSET = ("airport-adl", "elevators-sat08-strips", "psr-middle", "zenotra
 
 
 def sample_files(domain: str) -> ProblemFiles:
-    (files,) = [p for p in find_problems(SAMPLE) if p.domain_name == domain]
+    (files,) = [p for p in find_problems(IPC_SAMPLE) if p.domain_name == domain]
     return files
 
 
-@needs_sample
+@needs_ipc_sample
 @pytest.mark.parametrize("domain", SAMPLE_SUBSET)
 def test_twostep_single_agent_on_ipc_sample(domain: str) -> None:
     files = sample_files(domain)
@@ -337,9 +334,9 @@ def test_twostep_single_agent_on_ipc_sample(domain: str) -> None:
     assert result["sa_length"] == len(plan) and result["sa_cost"] == verdict.cost
 
 
-@needs_sample
+@needs_ipc_sample
 def test_twostep_schedules_on_ipc_sample() -> None:
-    agents = yaml.safe_load((SAMPLE / "agents.yaml").read_text())
+    agents = yaml.safe_load((IPC_SAMPLE / "agents.yaml").read_text())
     files = sample_files("blocks")
     check = IndependentValidator(files.domain, files.problem)
     for method in (["method=ma"], ["method=twostep", "decomposer=plan-deal"]):
@@ -354,7 +351,7 @@ def test_twostep_schedules_on_ipc_sample() -> None:
         assert verdict.valid, (method, verdict.reason)
 
 
-@needs_sample
+@needs_ipc_sample
 @pytest.mark.slow
 @pytest.mark.timeout(3600)
 def test_simulator_agrees_with_unified_planning_on_mutated_plans() -> None:
@@ -363,7 +360,7 @@ def test_simulator_agrees_with_unified_planning_on_mutated_plans() -> None:
     verdict from both checkers."""
     rng = random.Random(0)
     compared = 0
-    for files in find_problems(SAMPLE):
+    for files in find_problems(IPC_SAMPLE):
         check = IndependentValidator(files.domain, files.problem)
         if check.up_problem is None or check.translation is None:
             continue

@@ -25,7 +25,8 @@ from pathlib import Path
 import pytest
 
 from flows.servers import free_port
-from tests.browser import Browser, chromium_binary, poll
+from tests.browser import Browser, poll
+from tests.support.skips import skip_without_chromium
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -65,9 +66,7 @@ def served(folder: Path) -> Iterator[str]:
 
 @pytest.mark.slow
 def test_the_built_site_renders_its_pages_and_figures(tmp_path: Path) -> None:
-    binary = chromium_binary()
-    if binary is None:
-        pytest.skip("Chromium is not installed (apt-get install -y chromium)")
+    binary = skip_without_chromium()
     site = tmp_path / "site"
     env = {**os.environ, "NO_MKDOCS_2_WARNING": "1"}
     mkdocs = Path(sys.executable).with_name("mkdocs")

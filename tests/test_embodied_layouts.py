@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from checkers.trace_check import alfworld_layouts_folder, check_trace
+from tests.support.skips import needs_alfworld, skip_without_alfworld_engine
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.embodied import (
     ExecutorSettings,
@@ -43,9 +44,7 @@ FIXTURE = Path(__file__).resolve().parent / "fixtures" / "alfred_scene" / "alfre
 AGENT_PREDICATES = ("atlocation", "holds", "holdsany", "holdsanyreceptacleobject")
 FAST = PlannerSettings(alias="lama-first", search_time_limit_s=60)
 
-pytestmark = pytest.mark.skipif(
-    alfworld_layouts_folder() is None, reason="the alfworld wheel (extra 'embodied') is missing"
-)
+pytestmark = needs_alfworld
 
 
 def alfred_root(tmp: Path, problem_text: str | None = None) -> Path:
@@ -192,11 +191,10 @@ def test_alfworlds_own_engine_accepts_the_plans_and_traces(task: BenchmarkTask) 
     """The SA plan and every trace's actions in step order are played in AlfWorld's own
     game (TextWorld's PDDL engine with alfred.pddl and alfred.twl2): every step applicable,
     the goal won; a plan with two steps swapped is refused."""
-    from checkers.alfworld_engine import engine_python, replay, replay_trace
+    from checkers.alfworld_engine import replay, replay_trace
     from checkers.trace_check import who_plays
 
-    if engine_python() is None:
-        pytest.skip("AlfWorld's engine is not installed (make alfworld-engine)")
+    skip_without_alfworld_engine()
     problem = task.problem_path.read_text()
     runs = _runs(task)
     (sa_plan,) = runs["sa"].plans.values()

@@ -22,6 +22,7 @@ from flows.build import run_config
 from flows.checks import JobError
 from flows.config import register, typed
 from tests.conftest import BLOCKS_DOMAIN, FIXTURES, blocks_problem
+from tests.support.skips import needs_alfworld
 from tests.test_cli import REPO, run_cli
 
 OUTPUT: list[Path] = []  # the module's output.root (set by the fixture below)
@@ -93,6 +94,7 @@ def test_executor_config_alfworld_embodied_by_default() -> None:
 @pytest.mark.parametrize(
     ("method", "agents"), [("sa", 1), ("ma", 2), ("ma", 3), ("twostep", 2), ("twostep", 3)]
 )
+@needs_alfworld
 def test_domain_alfred_runs_a_real_problem_on_its_scene(
     tmp_path: Path, method: str, agents: int
 ) -> None:
@@ -100,11 +102,9 @@ def test_domain_alfred_runs_a_real_problem_on_its_scene(
     method through the command's front end (no domain.* overrides needed), executed on the
     scene's layout; the trace checker, which reads the layout and the PDDL itself, replays
     the trace: no violation, no interaction out of reach."""
-    from checkers.trace_check import alfworld_layouts_folder, check_trace
+    from checkers.trace_check import check_trace
     from tests.test_embodied_layouts import alfred_root
 
-    if alfworld_layouts_folder() is None:
-        pytest.skip("the alfworld wheel (extra 'embodied') is missing")
     root = alfred_root(tmp_path)
     cfg = make(f"data.root={root}", "domain=alfred", "task=1", f"method={method}",
                f"agents={agents}", "executor.render=false")  # fmt: skip
@@ -157,15 +157,13 @@ def test_pictures_in_single_runs_and_for_a_sweeps_seed_0(tmp_path: Path) -> None
         assert pictures == expected, (seed, in_sweep, render)
 
 
+@needs_alfworld
 def test_executor_layout_chooses_the_scene(tmp_path: Path) -> None:
     """``executor.layout``: the problem's own scene is found without it; a scene that does
     not hold the problem's locations is refused with their names; ``open`` places them on
     an open grid."""
-    from checkers.trace_check import alfworld_layouts_folder
     from tests.test_embodied_layouts import alfred_root
 
-    if alfworld_layouts_folder() is None:
-        pytest.skip("the alfworld wheel (extra 'embodied') is missing")
     root = alfred_root(tmp_path)
     base = [f"data.root={root}", "domain=alfred", "task=1", "method=sa"]
     found = run_config(typed(make(*base))).to_dict()["embodied_trace"]["floor_plan"]

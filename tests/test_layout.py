@@ -110,3 +110,16 @@ def test_the_checkers_import_nothing_from_twostep() -> None:
     for module, path in modules.items():
         imported = _imported(module, path)
         assert not {n for n in imported if n == "twostep" or n.startswith("twostep.")}, module
+
+
+def test_skip_conditions_are_declared_once() -> None:
+    """The IPC sample's place, Chromium's lookup and the alfworld checks are written in
+    tests/support/skips.py only."""
+    owner = ROOT / "tests" / "support" / "skips.py"
+    patterns = ('"ipc-sample"', "= chromium_binary()", "alfworld_layouts_folder() is None",
+                "engine_python() is None")  # fmt: skip
+    for path in sorted((ROOT / "tests").rglob("*.py")):
+        if path in (owner, Path(__file__)):
+            continue
+        text = path.read_text()
+        assert not [p for p in patterns if p in text], path.name

@@ -23,6 +23,7 @@ import pytest
 
 from checkers.trace_check import alfworld_layouts_folder
 from tests.conftest import DATA
+from tests.support.skips import IPC_SAMPLE, needs_ipc_sample
 from twostep.pddl import PDDLError
 from twostep.pddl.lifted import read_domain, read_problem
 from twostep.pddl.lint import check_kinds, lint_domain, lint_problem
@@ -30,7 +31,6 @@ from twostep.pddl.reader import parse_problem, read_pddl_file
 from twostep.pddl.repairs import repair_task
 
 REPO = Path(__file__).resolve().parent.parent
-SAMPLE = REPO.parent / "shared" / "ipc-sample"
 FIXTURES = Path(__file__).resolve().parent / "fixtures"
 BIN = Path(sys.executable).parent
 
@@ -133,7 +133,7 @@ def test_a_type_typo_is_an_input_error_not_unsolvable(tmp_path: Path) -> None:
 
 def corpus() -> list[tuple[Path, Path]]:
     """Every (domain, problem) pair of the IPC sample, the data and the fixtures."""
-    domains = sorted(SAMPLE.glob("*/domain.pddl")) + sorted(DATA.glob("**/domain.pddl"))
+    domains = sorted(IPC_SAMPLE.glob("*/domain.pddl")) + sorted(DATA.glob("**/domain.pddl"))
     domains += sorted(FIXTURES.glob("**/domain.pddl"))
     pairs = [(d, p) for d in domains for p in sorted(d.parent.glob("*.pddl")) if p != d]
     layouts = alfworld_layouts_folder()  # None without the embodied extra
@@ -163,6 +163,6 @@ def test_the_lint_finds_nothing_in_valid_files() -> None:
     assert findings == []
 
 
-@pytest.mark.skipif(not SAMPLE.is_dir(), reason="no ../shared/ipc-sample")
+@needs_ipc_sample
 def test_the_ipc_sample_is_in_the_corpus() -> None:
-    assert sum(1 for d, _ in corpus() if SAMPLE in d.parents) >= 30
+    assert sum(1 for d, _ in corpus() if IPC_SAMPLE in d.parents) >= 30

@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import own_task
+from tests.support.skips import IPC_SAMPLE, needs_ipc_sample
 from tests.test_plan_split import (
     BW,
     FAST,
@@ -629,10 +630,6 @@ def test_never_longer_with_more_agents_on_all_100_tasks(data_root: Path) -> None
 
 # ---------------------------------------------- real domains the generators never saw
 
-SAMPLE = Path(__file__).resolve().parents[2] / "shared" / "ipc-sample"
-needs_sample = pytest.mark.skipif(
-    not SAMPLE.is_dir(), reason=f"the IPC sample is not at {SAMPLE} (external test input)"
-)
 # Storage with four crates (our own problem for the sample's domain, whose own p01 has a
 # single crate: three actions in a chain, nothing to deal): six depot areas in two rows,
 # four container areas, one load area joining both; the hoist starts in the depot.
@@ -659,7 +656,7 @@ def _storage_init() -> str:
     return " ".join([*facts, "(at hoist0 depot0-1-1)", "(available hoist0)"])
 
 
-@needs_sample
+@needs_ipc_sample
 @pytest.mark.slow
 def test_ipc_sample_domains_deal_to_two_agents(tmp_path: Path) -> None:
     # Every sample domain with one acting agent (agents.yaml), storage (agent facts: at,
@@ -672,12 +669,12 @@ def test_ipc_sample_domains_deal_to_two_agents(tmp_path: Path) -> None:
 
     from checkers import IndependentValidator
 
-    cases = dict(yaml.safe_load((SAMPLE / "agents.yaml").read_text()))
+    cases = dict(yaml.safe_load((IPC_SAMPLE / "agents.yaml").read_text()))
     cases["floortile-sat11-strips"] = ["robot-at", "robot-has"]
     (tmp_path / "storage").mkdir()
-    shutil.copy(SAMPLE / "storage" / "domain.pddl", tmp_path / "storage" / "domain.pddl")
+    shutil.copy(IPC_SAMPLE / "storage" / "domain.pddl", tmp_path / "storage" / "domain.pddl")
     (tmp_path / "storage" / "p01.pddl").write_text(STORAGE_PROBLEM % _storage_init())
-    tasks = {name: load_task(name, 1, SAMPLE) for name in cases}
+    tasks = {name: load_task(name, 1, IPC_SAMPLE) for name in cases}
     tasks["storage"] = load_task("storage", 1, tmp_path)
     cases["storage"] = ["at", "available", "lifting"]
     for name, task in tasks.items():
@@ -699,7 +696,7 @@ def test_ipc_sample_domains_deal_to_two_agents(tmp_path: Path) -> None:
         assert verdict.checkers.startswith(readers), (name, verdict.checkers)
 
 
-@needs_sample
+@needs_ipc_sample
 def test_a_deal_stuck_in_every_replay_is_offloaded() -> None:
     # openstacks p01 with two agents (agent facts: stacks-avail): every way's replay gets
     # stuck (no agent can walk to where a piece applies); offloading pieces from the SA
@@ -709,7 +706,7 @@ def test_a_deal_stuck_in_every_replay_is_offloaded() -> None:
     from checkers import IndependentValidator
 
     preds = ["stacks-avail"]
-    task = load_task("openstacks-sat08-adl", 1, SAMPLE)
+    task = load_task("openstacks-sat08-adl", 1, IPC_SAMPLE)
     sa = run_single_agent(MethodRequest(task, planner=FAST))
     run = run_plan_deal(MethodRequest(task, 2, FAST, preds, sa_plan=sa.planner_calls[0].result))
     (chosen,) = [row for row in run.extra["deal"] if row.get("chosen")]
@@ -737,11 +734,11 @@ BEYOND_YAML = {
 GOAL_BY_WALKS = {"zenotravel": ["fuel-level", "in"], "tpp": ["at", "loaded"]}
 
 
-@needs_sample
+@needs_ipc_sample
 @pytest.mark.slow
 def test_ipc_sample_domains_beyond_agents_yaml_deal() -> None:
     for name, preds in {**BEYOND_YAML, **GOAL_BY_WALKS}.items():
-        task = load_task(name, 1, SAMPLE)
+        task = load_task(name, 1, IPC_SAMPLE)
         sa = run_single_agent(MethodRequest(task, planner=FAST))
         assert sa.exec_length is not None, name
         for agents in (2, 3):
@@ -792,7 +789,7 @@ def test_bits_agree_with_the_grounded_model_on_axioms_and_conditional_effects() 
     assert len(seen) > 8  # objects on the shelf, held, in the bin: many states were checked
 
 
-@needs_sample
+@needs_ipc_sample
 def test_a_walk_inside_another_piece_is_offloaded_in_plan_order(tmp_path: Path) -> None:
     # storage, one depot, 8 crates, 3 hoists (bench/bench_deal_generated.py, seed 1): the
     # SA plan has hoist1 lift a crate out of hoist0's way, hoist0 pass, and hoist1 put the
@@ -807,7 +804,7 @@ def test_a_walk_inside_another_piece_is_offloaded_in_plan_order(tmp_path: Path) 
 
     folder = tmp_path / "storage"
     folder.mkdir()
-    shutil.copy(SAMPLE / "storage" / "domain.pddl", folder / "domain.pddl")
+    shutil.copy(IPC_SAMPLE / "storage" / "domain.pddl", folder / "domain.pddl")
     (folder / "p01.pddl").write_text(gen_storage(1, 8, 3, 1).text)
     task = load_task("storage", 1, tmp_path)
     preds = ["at", "available", "lifting"]

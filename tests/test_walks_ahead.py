@@ -14,7 +14,8 @@ from itertools import pairwise
 from pathlib import Path
 
 from tests.conftest import own_task
-from tests.test_plan_deal import SAMPLE, STORAGE_PROBLEM, _storage_init, needs_sample
+from tests.support.skips import IPC_SAMPLE, needs_ipc_sample
+from tests.test_plan_deal import STORAGE_PROBLEM, _storage_init
 from tests.test_plan_split import FAST, sa_result
 from tests.test_rebind import _valid
 from twostep.dealing import Dealer, ways
@@ -88,13 +89,13 @@ def test_two_agents_reach_the_shortest_schedule_either_way(tmp_path: Path, data_
         assert lengths == {10}
 
 
-@needs_sample
+@needs_ipc_sample
 def test_no_walking_ahead_where_moves_change_shared_facts(tmp_path: Path, data_root: Path) -> None:
     # A storage hoist that moves frees the area it leaves and takes the one it enters
     # (``clear``, a shared fact): one walking ahead would stand in another's way. termes
     # moves change the robot's own ``at`` alone.
     (tmp_path / "storage").mkdir()
-    shutil.copy(SAMPLE / "storage" / "domain.pddl", tmp_path / "storage" / "domain.pddl")
+    shutil.copy(IPC_SAMPLE / "storage" / "domain.pddl", tmp_path / "storage" / "domain.pddl")
     (tmp_path / "storage" / "p01.pddl").write_text(STORAGE_PROBLEM % _storage_init())
     storage = load_task("storage", 1, tmp_path)
     sa = run_single_agent(MethodRequest(storage, planner=FAST)).planner_calls[0].result

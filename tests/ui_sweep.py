@@ -12,12 +12,10 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-import pytest
-
 from flows import services
 from flows.sweep_state import SweepState
 from flows.tracking.runs import sweep_run_ids
-from tests.browser import chromium_binary
+from tests.support.skips import skip_without_chromium
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -35,9 +33,7 @@ class UiSweep:
 
 @contextmanager
 def ui_sweep(tmp_path: Path, overrides: Sequence[str], timeout_s: float) -> Iterator[UiSweep]:
-    binary = chromium_binary()
-    if binary is None:
-        pytest.skip("no Chromium here: apt-get install -y chromium (the UI test needs a browser)")
+    binary = skip_without_chromium()
     shots = Path(os.environ.get("TWOSTEP_UI_SCREENSHOTS") or tmp_path)
     shots.mkdir(parents=True, exist_ok=True)
     root = tmp_path / "out"
