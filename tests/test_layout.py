@@ -11,6 +11,8 @@ import ast
 import re
 from pathlib import Path
 
+import pytest
+
 import twostep
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -123,3 +125,16 @@ def test_skip_conditions_are_declared_once() -> None:
             continue
         text = path.read_text()
         assert not [p for p in patterns if p in text], path.name
+
+
+def test_a_moved_module_still_imports_under_its_old_name_with_a_warning() -> None:
+    import importlib
+    import sys
+
+    for old, new in twostep.MOVED_MODULES.items():
+        assert not (ROOT / f"{old.replace('.', '/')}.py").exists()
+        sys.modules.pop(old, None)
+        with pytest.warns(DeprecationWarning, match=f"{old} is now {new}"):
+            moved = importlib.import_module(old)
+        assert moved is importlib.import_module(new)
+        sys.modules.pop(old, None)

@@ -43,7 +43,55 @@ Quick start::
     print(result.exec_length, result.schedule)
 """
 
-from importlib import metadata
+import importlib
+import sys
+import warnings
+from collections.abc import Sequence
+from importlib import abc, machinery, metadata
+from types import ModuleType
+
+MOVED_MODULES = {
+    "twostep.strips": "twostep.plans.simulate",
+    "twostep.progression": "twostep.plans.progression",
+    "twostep.subgoals": "twostep.plans.subgoals",
+    "twostep.benchmark": "twostep.tasks.benchmark",
+    "twostep.multiagent": "twostep.tasks.multiagent",
+    "twostep.downward": "twostep.programs.downward",
+    "twostep.processes": "twostep.programs.processes",
+    "twostep.files": "twostep.util.files",
+    "twostep.redaction": "twostep.util.redaction",
+    "twostep.identity": "twostep.jobs.identity",
+    "twostep.params": "twostep.jobs.params",
+    "twostep.validation": "twostep.verify.validation",
+    "twostep.pddl.environment": "twostep.verify.up_environment",
+    "twostep.pipeline": "twostep.methods",
+}
+"""Old module name -> where it lives now: the old names still import, with a
+DeprecationWarning, for one release."""
+
+
+class _MovedModules(abc.MetaPathFinder, abc.Loader):
+    """Imports a moved module's old name as the module it moved to."""
+
+    def find_spec(
+        self, fullname: str, path: Sequence[str] | None, target: ModuleType | None = None
+    ) -> machinery.ModuleSpec | None:
+        return machinery.ModuleSpec(fullname, self) if fullname in MOVED_MODULES else None
+
+    def create_module(self, spec: machinery.ModuleSpec) -> None:
+        return None
+
+    def exec_module(self, module: ModuleType) -> None:
+        new = MOVED_MODULES[module.__name__]
+        warnings.warn(
+            f"{module.__name__} is now {new}; the old name goes in the next release",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        sys.modules[module.__name__] = importlib.import_module(new)
+
+
+sys.meta_path.append(_MovedModules())
 
 try:  # the installed version (from the git tag, pyproject's [tool.setuptools_scm])
     __version__ = metadata.version("twostep")
