@@ -133,8 +133,18 @@ def test_a_moved_module_still_imports_under_its_old_name_with_a_warning() -> Non
 
     for old, new in twostep.MOVED_MODULES.items():
         assert not (ROOT / f"{old.replace('.', '/')}.py").exists()
+        assert not (ROOT / old.replace(".", "/")).exists()
         sys.modules.pop(old, None)
         with pytest.warns(DeprecationWarning, match=f"{old} is now {new}"):
             moved = importlib.import_module(old)
         assert moved is importlib.import_module(new)
         sys.modules.pop(old, None)
+    for name in ("twostep.execution", "twostep.execution.parallel"):
+        sys.modules.pop(name, None)
+    with pytest.warns(DeprecationWarning, match="twostep.execution.parallel is now"):
+        from twostep.execution.parallel import parallel_length  # type: ignore[import-not-found]
+    from twostep.makespan.parallel import parallel_length as moved
+
+    assert parallel_length is moved  # the module itself, not a second copy of its file
+    for name in ("twostep.execution", "twostep.execution.parallel"):
+        sys.modules.pop(name, None)

@@ -14,7 +14,7 @@ against the packages):
 - :mod:`twostep.planner`      Fast Downward's driver: named exit codes, checked plan files,
                               costs, statuses
 - :mod:`twostep.verify`       independent plan validation (unified-planning)
-- :mod:`twostep.execution`    parallel execution length (A*) and joint schedule check
+- :mod:`twostep.makespan`     scoring: parallel execution length (A*), joint schedule check
 - :mod:`twostep.decomposers`  where helper subgoals come from (goal-split, plan-split,
                               expert, llm)
 - :mod:`twostep.llm`          LLM access (litellm), prompts and answer parsing
@@ -65,9 +65,18 @@ MOVED_MODULES = {
     "twostep.validation": "twostep.verify.validation",
     "twostep.pddl.environment": "twostep.verify.up_environment",
     "twostep.pipeline": "twostep.methods",
+    "twostep.execution": "twostep.makespan",  # and each of its modules
 }
-"""Old module name -> where it lives now: the old names still import, with a
-DeprecationWarning, for one release."""
+"""Old module name -> where it lives now (a package's modules moved with it): the old names
+still import, with a DeprecationWarning, for one release."""
+
+
+def _moved(name: str) -> str | None:
+    """Where the module ``name`` lives now, if it moved."""
+    for old, new in MOVED_MODULES.items():
+        if name == old or name.startswith(f"{old}."):
+            return new + name[len(old) :]
+    return None
 
 
 class _MovedModules(abc.MetaPathFinder, abc.Loader):
@@ -76,13 +85,14 @@ class _MovedModules(abc.MetaPathFinder, abc.Loader):
     def find_spec(
         self, fullname: str, path: Sequence[str] | None, target: ModuleType | None = None
     ) -> machinery.ModuleSpec | None:
-        return machinery.ModuleSpec(fullname, self) if fullname in MOVED_MODULES else None
+        return machinery.ModuleSpec(fullname, self) if _moved(fullname) else None
 
     def create_module(self, spec: machinery.ModuleSpec) -> None:
         return None
 
     def exec_module(self, module: ModuleType) -> None:
-        new = MOVED_MODULES[module.__name__]
+        new = _moved(module.__name__)
+        assert new is not None
         warnings.warn(
             f"{module.__name__} is now {new}; the old name goes in the next release",
             DeprecationWarning,
@@ -91,7 +101,7 @@ class _MovedModules(abc.MetaPathFinder, abc.Loader):
         sys.modules[module.__name__] = importlib.import_module(new)
 
 
-sys.meta_path.append(_MovedModules())
+sys.meta_path.insert(0, _MovedModules())  # before the path finder: one module per file
 
 try:  # the installed version (from the git tag, pyproject's [tool.setuptools_scm])
     __version__ = metadata.version("twostep")
