@@ -175,6 +175,7 @@ BENCH_FILES: tuple[BenchFile, ...] = (
     BenchFile("execution_scaling.txt", "python bench/bench_execution.py --scaling", "printed output of an earlier run (cited by the README; the page: execution_scaling.json)"),
     BenchFile("faithful_cross.txt", "python bench/bench_heldout.py --cross /tmp/llmp", "the paper's problem files read with our domains and theirs, plans checked both ways (cited by the README)"),
     BenchFile("faults.txt", "python bench/bench_faults.py --save docs/bench/faults.txt", "printed table of an earlier run (cited by the README; the page: faults.json)"),
+    BenchFile("faults_round4.txt", "python bench/bench_faults.py --only bad-files,hostile-inputs --save docs/bench/faults_round4.txt", "bad files and hostile inputs with issue 39's probes (cited by the README)"),
     BenchFile("faults_hostile.txt", "python bench/bench_faults.py --only hostile-inputs,orphans --save docs/bench/faults_hostile.txt", "inputs that used to hang or run away, and kills during grounding (cited by the README)"),
     BenchFile("load.txt", "python bench/bench_load.py --corpus ../shared/ipc-sample --repeats 3 --out docs/bench/load.json", "the printed output of load.json (cited by the README)"),
     BenchFile("methods_deal.txt", "python bench/bench_methods.py --report docs/bench/methods_deal.json", "the printed report of methods_deal.json (cited by the README)"),
