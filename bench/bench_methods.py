@@ -800,6 +800,28 @@ def page_methods(records: Sequence[Mapping[str, Any]], figure: Figure) -> list[s
     return _page(legacy or rows, figure, "macro")
 
 
+def headline(records: Sequence[Mapping[str, Any]]) -> list[str]:
+    """The README's headline table: each method's macro exec length / SA length on the 100
+    tasks at N = 2..4 (the mean over the five domains of the per-task ratio, as the methods
+    page's overview) and its macro planning time at the largest N, the offline default
+    starred."""
+    rows = [r for r in _rows_of_records(records) if row_data(r) == LEGACY["data"]]
+    ns = [n for n in _ns(rows) if n > 1]
+    present = [m for m in METHODS if any(r["method"] == m for r in rows)]
+    table = summarise(rows, present, ns)
+    default = offline_default()
+    head = ["method", *(f"exec / SA, N = {n}" for n in ns), f"planning time s, N = {ns[-1]}"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    lines.append("| " + " | ".join(["sa", *("1.000" for _ in ns),
+                                    _f(macro_time(table, "sa", ns[-1]), 2)]) + " |")  # fmt: skip
+    for m in present:
+        name = f"twostep ({m})" if m in DECOMPOSERS else m
+        name += " *" if m == default else ""
+        cells = [_f(macro_ratio(table, m, n), 3) for n in ns]
+        lines.append("| " + " | ".join([name, *cells, _f(macro_time(table, m, ns[-1]), 2)]) + " |")
+    return lines
+
+
 def page_heldout(records: Sequence[Mapping[str, Any]], figure: Figure) -> list[str]:
     """The held-out page: the paper's five domains, then the others apart (with their own
     macro: the paper reports only the five)."""

@@ -152,7 +152,7 @@ PAGES: tuple[Page, ...] = (
 @dataclass(frozen=True)
 class BenchFile:
     """A file of ``docs/bench/`` that no results page is made from: what it is, and why it
-    stays (the README or a test still cites it; phase 2 moves those citations to pages)."""
+    stays (a page, a test or the CHANGELOG cites it)."""
 
     name: str
     command: str
@@ -162,41 +162,36 @@ class BenchFile:
 # Every other file kept in docs/bench/ (tests/test_results_pages.py: each file there is a
 # page's source, one of these, or the index itself).
 BENCH_FILES: tuple[BenchFile, ...] = (
-    BenchFile("conformance.txt", "python bench/bench_conformance.py --corpus ../shared/ipc-sample --agents ../shared/ipc-sample/agents.yaml --out docs/bench/conformance.json", "the printed table of conformance.json (cited by the README)"),
-    BenchFile("conformance_extra.txt", "python bench/bench_conformance.py --corpus DIR ...", "a second batch of real domains (not in the sample), printed output (cited by the README)"),
-    BenchFile("conformance_extra3.txt", "python bench/bench_conformance.py --corpus DIR3 ...", "a third batch of 11 real domains, printed output (cited by the README)"),
-    BenchFile("deal_budget.txt", "python bench/bench_deal_budget.py --agents 4 16 1000 --tasks blocksworld:1 blocksworld:20 barman:20 termes:20 tyreworld:20 --save docs/bench/deal_budget.txt", "plan-deal at N = 4, 16 and 1000: pieces, work budget, CPU time (cited by the README)"),
-    BenchFile("deal_generated.txt", "python bench/bench_deal_generated.py --seeds 5", "plan-deal on generated problems of seven IPC domains (cited by the README)"),
-    BenchFile("deal_ipc.txt", "python bench/bench_deal_ipc.py", "plan-deal on real IPC domains, p01 (cited by the README)"),
-    BenchFile("deal_ipc_extra.txt", "python bench/bench_deal_ipc.py --sample DIR --domains ... --no-own", "plan-deal on further real domains (cited by the README)"),
-    BenchFile("deal_ipc_more.txt", "python bench/bench_deal_ipc.py --sample DIR --domains storage termes-sat18-strips --agents 2 3 4 --no-own --every-problem", "plan-deal on every storage and termes problem (cited by the README)"),
-    BenchFile("dealing_ways.txt", "python bench/bench_dealing.py --rows docs/bench/methods_deal.json", "the eight ways to deal, alone and in sets (cited by the README)"),
-    BenchFile("embodied.txt", "python bench/bench_embodied.py", "printed output of an earlier run, with AlfWorld's engine (cited by the README; the page: embodied.json)"),
-    BenchFile("execution_scaling.txt", "python bench/bench_execution.py --scaling", "printed output of an earlier run (cited by the README; the page: execution_scaling.json)"),
-    BenchFile("faithful_cross.txt", "python bench/bench_heldout.py --cross /tmp/llmp", "the paper's problem files read with our domains and theirs, plans checked both ways (cited by the README)"),
-    BenchFile("faults.txt", "python bench/bench_faults.py --save docs/bench/faults.txt", "printed table of an earlier run (cited by the README; the page: faults.json)"),
+    BenchFile("conformance_extra.txt", "python bench/bench_conformance.py --corpus DIR ...", "a second batch of real domains (not in the sample), printed output"),
+    BenchFile("conformance_extra3.txt", "python bench/bench_conformance.py --corpus DIR3 ...", "a third batch of 11 real domains, printed output"),
+    BenchFile("deal_budget.txt", "python bench/bench_deal_budget.py --agents 4 16 1000 --tasks blocksworld:1 blocksworld:20 barman:20 termes:20 tyreworld:20 --save docs/bench/deal_budget.txt", "plan-deal at N = 4, 16 and 1000: pieces, work budget, CPU time"),
+    BenchFile("deal_generated.txt", "python bench/bench_deal_generated.py --seeds 5", "plan-deal on generated problems of seven IPC domains"),
+    BenchFile("deal_ipc.txt", "python bench/bench_deal_ipc.py", "plan-deal on real IPC domains, p01"),
+    BenchFile("deal_ipc_extra.txt", "python bench/bench_deal_ipc.py --sample DIR --domains ... --no-own", "plan-deal on further real domains"),
+    BenchFile("deal_ipc_more.txt", "python bench/bench_deal_ipc.py --sample DIR --domains storage termes-sat18-strips --agents 2 3 4 --no-own --every-problem", "plan-deal on every storage and termes problem"),
+    BenchFile("dealing_ways.txt", "python bench/bench_dealing.py --rows docs/bench/methods_deal.json", "the eight ways to deal, alone and in sets"),
+    BenchFile("faithful_cross.txt", "python bench/bench_heldout.py --cross /tmp/llmp", "the paper's problem files read with our domains and theirs, plans checked both ways"),
+    BenchFile("faults.txt", "python bench/bench_faults.py --save docs/bench/faults.txt", "printed table of an earlier run (the page: faults.json)"),
     BenchFile("faults_round4.txt", "python bench/bench_faults.py --only bad-files,hostile-inputs --save docs/bench/faults_round4.txt", "bad files and hostile inputs with issue 39's probes (cited by the README)"),
-    BenchFile("faults_hostile.txt", "python bench/bench_faults.py --only hostile-inputs,orphans --save docs/bench/faults_hostile.txt", "inputs that used to hang or run away, and kills during grounding (cited by the README)"),
-    BenchFile("load.txt", "python bench/bench_load.py --corpus ../shared/ipc-sample --repeats 3 --out docs/bench/load.json", "the printed output of load.json (cited by the README)"),
-    BenchFile("methods_deal.txt", "python bench/bench_methods.py --report docs/bench/methods_deal.json", "the printed report of methods_deal.json (cited by the README)"),
-    BenchFile("methods_faithful.png", "python bench/bench_methods.py --report ... --plot docs/bench/methods_faithful.png", "the figure of the methods page as PNG (shown in the README)"),
-    BenchFile("methods_faithful.txt", "python bench/bench_methods.py --report docs/bench/methods_n2.json ... docs/bench/methods_deal.json", "the printed report of the methods page's rows (cited by the README)"),
-    BenchFile("methods_heldout.txt", "python bench/bench_methods.py --data /tmp/llmp ... --out outputs/bench/methods_heldout.json", "the printed output of the held-out runs, three runs appended (cited by the README)"),
-    BenchFile("methods_heldout_lite.txt", "python bench/bench_methods.py --data /tmp/llmp --methods portfolio-lite ...", "portfolio-lite on the held-out files, before rebinding (cited by the README)"),
-    BenchFile("methods_large_faithful.txt", "python bench/bench_methods.py --report docs/bench/methods_large_faithful.json", "the printed report of methods_large_faithful.json (cited by the README)"),
-    BenchFile("methods_lite.txt", "python bench/bench_methods.py --report docs/bench/methods_lite.json", "the printed report of portfolio-lite's rows (cited by the README)"),
-    BenchFile("methods_n2.txt", "python bench/bench_methods.py --report docs/bench/methods_n2.json", "the printed report of methods_n2.json (cited by the README)"),
-    BenchFile("methods_n34.txt", "python bench/bench_methods.py --report docs/bench/methods_n34.json", "the printed report of methods_n34.json (cited by the README)"),
-    BenchFile("methods_portfolio.txt", "python bench/bench_methods.py --report docs/bench/methods_portfolio.json", "the printed report of the portfolio's rows (cited by the README)"),
-    BenchFile("planner.txt", "python bench/bench_planner.py", "printed output of an earlier run (cited by the README; the page: planner.json)"),
-    BenchFile("planner_stress.txt", "python bench/bench_planner.py --data data/stress; --data data/large --domains tyreworld", "the planner on the stress set and the larger tyreworld task (cited by the README)"),
-    BenchFile("refusals.txt", "python bench/bench_startup.py --repeat 5 --scenarios refusals [--source DIR]", "commands refused before any work: exit code, lines, what was written, wall and CPU time, before and after issue 37 (cited by the README)"),
-    BenchFile("replay.txt", "python bench/bench_replay.py outputs/multiruns/<date>/<time>; twostep-data check-answers answers --data-root official/domains", "the README's replay sweep: every schedule re-validated, job times; the rules translator against the official logs' helper costs (cited by the README)"),
+    BenchFile("faults_hostile.txt", "python bench/bench_faults.py --only hostile-inputs,orphans --save docs/bench/faults_hostile.txt", "inputs that used to hang or run away, and kills during grounding"),
+    BenchFile("methods_deal.txt", "python bench/bench_methods.py --report docs/bench/methods_deal.json", "the printed report of methods_deal.json"),
+    BenchFile("methods_faithful.png", "python bench/bench_methods.py --report ... --plot docs/bench/methods_faithful.png", "the figure of the methods page as PNG"),
+    BenchFile("methods_faithful.txt", "python bench/bench_methods.py --report docs/bench/methods_n2.json ... docs/bench/methods_deal.json", "the printed report of the methods page's rows"),
+    BenchFile("methods_heldout.txt", "python bench/bench_methods.py --data /tmp/llmp ... --out outputs/bench/methods_heldout.json", "the printed output of the held-out runs, three runs appended"),
+    BenchFile("methods_heldout_lite.txt", "python bench/bench_methods.py --data /tmp/llmp --methods portfolio-lite ...", "portfolio-lite on the held-out files, before rebinding"),
+    BenchFile("methods_large_faithful.txt", "python bench/bench_methods.py --report docs/bench/methods_large_faithful.json", "the printed report of methods_large_faithful.json"),
+    BenchFile("methods_lite.txt", "python bench/bench_methods.py --report docs/bench/methods_lite.json", "the printed report of portfolio-lite's rows"),
+    BenchFile("methods_n2.txt", "python bench/bench_methods.py --report docs/bench/methods_n2.json", "the printed report of methods_n2.json"),
+    BenchFile("methods_n34.txt", "python bench/bench_methods.py --report docs/bench/methods_n34.json", "the printed report of methods_n34.json"),
+    BenchFile("methods_portfolio.txt", "python bench/bench_methods.py --report docs/bench/methods_portfolio.json", "the printed report of the portfolio's rows"),
+    BenchFile("planner_stress.txt", "python bench/bench_planner.py --data data/stress; --data data/large --domains tyreworld", "the planner on the stress set and the larger tyreworld task"),
+    BenchFile("refusals.txt", "python bench/bench_startup.py --repeat 5 --scenarios refusals [--source DIR]", "commands refused before any work: exit code, lines, what was written, wall and CPU time,"),
+    BenchFile("replay.txt", "python bench/bench_replay.py outputs/multiruns/<date>/<time>; twostep-data check-answers answers --data-root official/domains", "the README's replay sweep: every schedule re-validated, job times; the rules translator against the official logs' helper costs"),
+    BenchFile("resume.txt", "python bench/bench_resume.py", "a sweep, then the same command again reusing every job"),
+    BenchFile("score_cli.txt", "python bench/bench_score_cli.py --repeats 5", "twostep-score's wall and CPU time on four 60-step plans"),
+    BenchFile("startup.txt", "python bench/bench_startup.py --repeat 3 --scenarios default,logged,cold", "printed output of earlier runs, appended (the page: startup.json)"),
     BenchFile("structure.txt", "python bench/bench_structure.py --layout", "the library's shape before and after issue 40: root modules, import cycles, config mentions, status vocabularies, places a new method touches (cited by the README)"),
-    BenchFile("resume.txt", "python bench/bench_resume.py", "a sweep, then the same command again reusing every job (cited by the README)"),
-    BenchFile("score_cli.txt", "python bench/bench_score_cli.py --repeats 5", "twostep-score's wall and CPU time on four 60-step plans (cited by the README)"),
-    BenchFile("sweep.txt", "python bench/bench_sweep.py --jobs 20 100 400 --variants on off --launchers all basic --basic-max-jobs 20 --on-max-jobs 100 --no-small-scaling --save docs/bench/sweep.txt --json docs/bench/sweep.json", "the printed output of sweep.json, with the phases of a job (cited by the README)"),
-    BenchFile("startup.txt", "python bench/bench_startup.py --repeat 3 --scenarios default,logged,cold", "printed output of earlier runs, appended (cited by the README; the page: startup.json)"),
+    BenchFile("sweep.txt", "python bench/bench_sweep.py --jobs 20 100 400 --variants on off --launchers all basic --basic-max-jobs 20 --on-max-jobs 100 --no-small-scaling --save docs/bench/sweep.txt --json docs/bench/sweep.json", "the printed output of sweep.json, with the phases of a job"),
 )  # fmt: skip
 ARCHIVE = BENCH / "archive"
 
@@ -315,9 +310,9 @@ def bench_index(pages: Sequence[Page] = PAGES, bench: Path = BENCH) -> str:
         "",
         "## Other files",
         "",
-        "Printed outputs of benches that write no rows yet, and printed reports the README",
-        "still cites; phase 2 of the documentation moves the README's numbers to the pages,",
-        "and these leave the folder once nothing cites them.",
+        "Printed outputs of benches that write no rows yet, and printed reports of the rows",
+        "above (the commands of rows written before bench records); each is cited by a page",
+        "of the site or the CHANGELOG.",
         "",
     ]
     lines += record.table(
@@ -327,8 +322,8 @@ def bench_index(pages: Sequence[Page] = PAGES, bench: Path = BENCH) -> str:
     archived = sorted(ARCHIVE.glob("*")) if ARCHIVE.is_dir() else []
     archived = [p for p in archived if p.name != "README.md"]
     if archived:
-        lines += ["", "## Archive", "", "Earlier runs the README still compares with, kept under",
-                  "`archive/` with the date they ran and what replaced them:", ""]  # fmt: skip
+        lines += ["", "## Archive", "", "Earlier runs a page or the CHANGELOG still compares with,",
+                  "kept under `archive/` with the date they ran and what replaced them:", ""]  # fmt: skip
         lines += [
             f"- [`archive/{p.name}`](archive/{p.name}): {ARCHIVED.get(p.name, '')}"
             for p in archived
@@ -338,8 +333,39 @@ def bench_index(pages: Sequence[Page] = PAGES, bench: Path = BENCH) -> str:
 
 ARCHIVED: dict[str, str] = {
     "2026-11-24_conformance_before.txt": "the conformance bench before the current PDDL front end; replaced by conformance.json",
-    "2026-11-24_load_before.txt": "the load-time bench before the current PDDL front end; replaced by load.json",
 }
+
+
+README = REPO / "README.md"
+HEADLINE_BEGIN = (
+    "<!-- headline: generated by `make results` from docs/bench/methods_*.json; do not edit -->"
+)
+HEADLINE_END = "<!-- /headline -->"
+
+
+def headline_block(bench: Path = BENCH) -> str:
+    """The README's headline table, from the rows of the methods page (the same rows and
+    the same means as ``docs/results/methods.md``), with the page's run header."""
+    from bench.bench_methods import headline
+
+    page = next(p for p in PAGES if p.slug == "methods")
+    records = [record.load(bench / name) for name in page.sources]
+    lines = [HEADLINE_BEGIN, "", *headline(records), ""]
+    lines.append(
+        "Exec / SA: the joint schedule's length over the single-agent plan's, mean over the"
+        " five domains of the per-task ratio (lower is better); `*` the offline default;"
+        " rows from " + ", ".join(f"`{n}`" for n in page.sources) + "."
+    )
+    return "\n".join([*lines, "", HEADLINE_END])
+
+
+def readme_with_headline(text: str, bench: Path = BENCH) -> str:
+    """``text`` (the README) with its headline block made again from the rows."""
+    if HEADLINE_BEGIN not in text:
+        return text
+    before, rest = text.split(HEADLINE_BEGIN, 1)
+    _, after = rest.split(HEADLINE_END, 1)
+    return before + headline_block(bench) + after
 
 
 def generate(out: Path = REPO / "docs", bench: Path = BENCH) -> dict[Path, bytes]:
@@ -353,6 +379,9 @@ def generate(out: Path = REPO / "docs", bench: Path = BENCH) -> dict[Path, bytes
             files[out / "results" / name] = data
     files[out / "results" / "index.md"] = index_page(PAGES, bench).encode()
     files[out / "bench" / "README.md"] = bench_index(PAGES, bench).encode()
+    readme = out.parent / "README.md"
+    if readme.is_file():
+        files[readme] = readme_with_headline(readme.read_text(), bench).encode()
     return files
 
 
