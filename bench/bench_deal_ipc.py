@@ -124,7 +124,7 @@ CASES.update({
     "logistics": [["in"], ["at", "in"]],
     # the snake's body (blocked also marks walls: shared)
     "snake": [["headsnake", "tailsnake", "nextsnake"]],
-    # the README's one-agent choices for ferry, tsp and nurikabe
+    # the one-agent choices for ferry, tsp and nurikabe (docs/explanations/pddl.md)
     "ferry": [["at-ferry", "empty-ferry", "on"]],
     "tsp": [["at"]],
     "nurikabe-sat18": [["robot-pos", "moving"]],

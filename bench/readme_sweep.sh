@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The sweep behind the README's report figure and tables: goal-split (no LLM) and expert
+# The sweep behind the report figure and tables of docs/how-to/reproduce-paper.md: goal-split (no LLM) and expert
 # subgoals, tasks 1, 6, 11, 16 of the five domains, first plan of LAMA with a 30 s search
 # limit (the paper: anytime LAMA, 1000 s). SA is solved once (N = 1); MA and TwoStep for
 # N = 2..4; expert subgoals exist for N = 2 only. One MLflow experiment for all three.

@@ -1,5 +1,5 @@
-"""The README's "What to compare" steps, done in the MLflow UI in a real browser, on a
-sweep with timeouts.
+"""The tutorial's "Compare the runs in MLflow" steps (docs/tutorial/index.md), done in
+the MLflow UI in a real browser, on a sweep with timeouts.
 
 A small sweep through the console script (grippers and termes, tasks 1 and 6, SA and
 TwoStep with N = 2 and 3, a 2 s search limit: termes p06 runs out of it, for SA and so for
@@ -42,7 +42,7 @@ SWEEP = [
     "decomposer=goal-split", "planner.time_limit_s=2",
 ]  # fmt: skip
 METRICS = ("exec_length", "planning_time_s")
-JOB_RUNS = "tags.twostep.kind = 'job'"  # the runs filter the README gives
+JOB_RUNS = "tags.twostep.kind = 'job'"  # the runs filter the tutorial gives
 SUCCESSES = f"{JOB_RUNS} and tags.twostep.status = 'success'"
 TIMEOUTS = f"{JOB_RUNS} and tags.twostep.status = 'timeout'"
 TIMED_OUT_TIME = "unsolved.planning_time_s"  # a timed-out run's time, under its own name
@@ -160,7 +160,7 @@ def charts(browser: Browser) -> list[dict[str, Any]]:
 
 @dataclass
 class Compared:
-    """What the README's steps read off the page."""
+    """What the tutorial's steps read off the page."""
 
     every: Groups  # filter: the job runs (timeouts included)
     solved: Groups  # filter: the successful job runs
@@ -170,7 +170,7 @@ class Compared:
 
 
 def compare_in_mlflow(browser: Browser, page: str, shots: Path) -> Compared:
-    """The README's steps on an experiment's runs page (see the module docstring)."""
+    """The tutorial's steps on an experiment's runs page (see the module docstring)."""
     browser.open(page)
     browser.wait_for(["Run Name", "matching runs"])
     time.sleep(2)  # the assistant panel opens after the table

@@ -28,7 +28,7 @@ every deal to N agents (:meth:`~twostep.dealing.deal.Dealer.improve`), so the la
 search has the newly idle agent to fill too. On the benchmark's termes tasks, where the
 searches run out of work, this spends less in all than a flat bound per search did (for
 N = 4, 140,000 units over the searches for 2, 3 and 4 agents, against 180,000) and gains
-more at N = 4 than it gives up at N = 2 (the README's methods section has the numbers).
+more at N = 4 than it gives up at N = 2 (docs/results/methods.md has the numbers).
 """
 
 from __future__ import annotations

@@ -154,7 +154,7 @@ class Portfolio:
     ) -> Portfolio:
         """``portfolio-lite``: plan-deal, and the re-deals of two TwoStep candidates
         (:func:`lite_members`) with N agents only; a fraction of the portfolio's planning
-        time for most of its gain (README, Methods)."""
+        time for most of its gain (docs/results/methods.md)."""
         return cls(
             link_degree,
             fewer_agents=False,

@@ -4,7 +4,7 @@ to be a regular file of bounded size before a byte is read (a FIFO would block f
 ``/dev/zero`` never end), text as UTF-8 (a byte-order mark dropped), YAML with its aliases'
 expansion bounded; each problem one line naming the file (and line) and what it is.
 
-Limits (module constants, documented in the README's Reliability table):
+Limits (module constants, documented in docs/explanations/reliability.md, "Limits and checks"):
 :data:`MAX_INPUT_BYTES` for any input file, :data:`MAX_YAML_BYTES` and
 :data:`MAX_YAML_NODES` for YAML.
 """
