@@ -1,7 +1,7 @@
 """Benchmark: wall time of the ``twostep-score`` command on four 60-step plans.
 
     .venv/bin/python -m compileall -q .venv/lib     # once: PYTHONDONTWRITEBYTECODE=1 here
-    .venv/bin/python bench/bench_score_cli.py [--repeats 5]
+    .venv/bin/python bench/bench_score_cli.py [--repeats 5] [--json docs/bench/score_cli.json]
 
 The plans are bench_execution.py's ``independent`` case: four agents, each driving its own
 cart 60 cells along a private track (the search itself takes milliseconds, so the time is
@@ -10,7 +10,9 @@ the process: start-up, imports, reading the PDDL). The first row reads the parse
 outside; CPU is the child's user + system time, which the other jobs on a shared machine
 do not inflate. The ``engines imported`` row imports unified-planning's engine factory
 first (what reading PDDL cost before the lazy environment of
-:mod:`twostep.verify.up_environment`).
+:mod:`twostep.verify.up_environment`). ``--json FILE`` also writes the rows (every run's wall
+and CPU seconds) as a bench record (:mod:`bench.record`), which ``make results`` renders
+(:func:`page`).
 """
 
 from __future__ import annotations
@@ -26,10 +28,17 @@ import tempfile
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_execution import AGENT_PREDICATES, CASES, PLAN_LENGTH, SINGLE_AGENT_DOMAIN, build
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from bench import record
+
+GOAL_S = 1.5  # the command's wall time when it reads and grounds the PDDL (no cache)
 
 SCORE = "from twostep.cli.score import main; raise SystemExit(main())"
 ENGINES_FIRST = "import unified_planning.engines; " + SCORE
@@ -68,7 +77,10 @@ def time_process(command: list[str]) -> tuple[float, float]:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
     parser.add_argument("--repeats", type=int, default=5, help="runs per row")
+    parser.add_argument("--json", type=Path, help="also write the rows here (a bench record)")
     args = parser.parse_args(argv)
+    run = record.started()
+    measured: list[dict[str, Any]] = []
     executable = Path(sys.executable).parent / "twostep-score"
     print(f"$ python bench/bench_score_cli.py --repeats {args.repeats}")
     print(
@@ -104,7 +116,55 @@ def main(argv: Sequence[str] | None = None) -> int:
             wall = statistics.median(t[0] for t in times)
             cpu = statistics.median(t[1] for t in times)
             print(f"| {name} | {wall:.2f} | {cpu:.2f} |")
+            measured.append({"command": name, "wall_s": [t[0] for t in times],
+                             "cpu_s": [t[1] for t in times]})  # fmt: skip
+    if args.json:
+        record.write(args.json, run, measured, repeats=args.repeats, agents=4,
+                     steps=PLAN_LENGTH, goal_s=GOAL_S)  # fmt: skip
     return 0
+
+
+def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
+    """The results page of a ``--json`` record (bench.results): medians per command, the
+    goal for the uncached read, and a figure of every run."""
+    from matplotlib.figure import Figure
+
+    (data,) = records
+    rows, goal = data["rows"], data.get("goal_s", GOAL_S)
+    lines = [
+        "## Summary",
+        "",
+        f"`twostep-score` on {data.get('agents')} plans of {data.get('steps')} steps (each agent "
+        "drives its own cart along a private track, so the search takes milliseconds and the "
+        f"time is the process's); medians of {data.get('repeats')} fresh processes, timed from "
+        "outside (CPU: user + system of the process).",
+        "",
+    ]
+    table = []
+    for row in rows:
+        wall, cpu = statistics.median(row["wall_s"]), statistics.median(row["cpu_s"])
+        verdict = ""
+        if "--no-cache" in row["command"] and row["command"].startswith("twostep-score"):
+            verdict = f"<= {goal:g}: " + ("met" if wall <= goal else "missed")
+        table.append([row["command"], f"{wall:.2f}", f"{cpu:.2f}", verdict])
+    lines += record.table(["command", "wall s", "CPU s", "goal (wall s)"], table)
+    drawn = Figure(figsize=(6.4, 2.6), layout="constrained")
+    axes = drawn.subplots()
+    for y, row in enumerate(rows):
+        axes.scatter(row["wall_s"], [y] * len(row["wall_s"]), marker="o", color="#0072B2",
+                     label="wall" if y == 0 else None)  # fmt: skip
+        axes.scatter(row["cpu_s"], [y - 0.15] * len(row["cpu_s"]), marker="s", color="#D55E00",
+                     label="CPU" if y == 0 else None)  # fmt: skip
+    axes.axvline(goal, color="grey", linestyle="--", linewidth=1, label=f"goal {goal:g} s")
+    axes.set_yticks(range(len(rows)), [r["command"] for r in rows], fontsize=8)
+    axes.invert_yaxis()
+    axes.set_xscale("log")
+    axes.set_xlabel("seconds per run (log scale)")
+    axes.legend(fontsize=8, loc="lower right")
+    alt = "Wall and CPU seconds of every run of each twostep-score command"
+    lines += ["", "## Figure", "", figure(drawn, "runs", alt), "",
+              "Every run: wall time (circles) and CPU time (squares).", ""]  # fmt: skip
+    return lines
 
 
 if __name__ == "__main__":

@@ -123,6 +123,14 @@ PAGES: tuple[Page, ...] = (
         "bench_execution:page",
     ),
     Page(
+        "score-cli",
+        "twostep-score from the command line",
+        "the `twostep-score` command's wall and CPU time on four 60-step plans: reading the "
+        "PDDL, from its parsed-task cache, and with unified-planning's engines imported",
+        ("score_cli.json",),
+        "bench_score_cli:page",
+    ),
+    Page(
         "conformance",
         "Conformance and load time on real PDDL",
         "30 IPC domains read, planned and validated as Fast Downward does; twostep's load "
@@ -188,7 +196,7 @@ BENCH_FILES: tuple[BenchFile, ...] = (
     BenchFile("refusals.txt", "python bench/bench_startup.py --repeat 5 --scenarios refusals [--source DIR]", "commands refused before any work: exit code, lines, what was written, wall and CPU time,"),
     BenchFile("replay.txt", "python bench/bench_replay.py outputs/multiruns/<date>/<time>; twostep-data check-answers answers --data-root official/domains", "the README's replay sweep: every schedule re-validated, job times; the rules translator against the official logs' helper costs"),
     BenchFile("resume.txt", "python bench/bench_resume.py", "a sweep, then the same command again reusing every job"),
-    BenchFile("score_cli.txt", "python bench/bench_score_cli.py --repeats 5", "twostep-score's wall and CPU time on four 60-step plans"),
+    BenchFile("sweep.txt", "python bench/bench_sweep.py --jobs 20 100 400 --variants on off --launchers all basic --basic-max-jobs 20 --on-max-jobs 100 --no-small-scaling --save docs/bench/sweep.txt --json docs/bench/sweep.json", "the printed output of sweep.json, with the phases of a job"),
     BenchFile("startup.txt", "python bench/bench_startup.py --repeat 3 --scenarios default,logged,cold", "printed output of earlier runs, appended (the page: startup.json)"),
     BenchFile("structure.txt", "python bench/bench_structure.py --layout", "the library's shape before and after issue 40: root modules, import cycles, config mentions, status vocabularies, places a new method touches (cited by the README)"),
     BenchFile("sweep.txt", "python bench/bench_sweep.py --jobs 20 100 400 --variants on off --launchers all basic --basic-max-jobs 20 --on-max-jobs 100 --no-small-scaling --save docs/bench/sweep.txt --json docs/bench/sweep.json", "the printed output of sweep.json, with the phases of a job"),
