@@ -34,6 +34,7 @@ from tools import reference
 
 REPO = Path(__file__).resolve().parent.parent
 DOCS = REPO / "docs"
+README_FILE = REPO / "README.md"
 
 
 # ------------------------------------------------------------------------------ config
@@ -302,3 +303,26 @@ def test_each_results_page_names_its_rows_and_has_a_figure(page: results.Page) -
         assert (DOCS / "results" / figure).is_file()
     if page.slug not in ("faults",):  # faults: a table of counts, all 0 when they pass
         assert "![" in text
+
+
+PATH_IN_CODE = re.compile(r"`((?:twostep|flows|bench|tests|tools|conf|data|docs)/[\w./-]*\w)`")
+
+
+def test_every_repository_path_the_readme_and_pages_name_exists() -> None:
+    """A module or file moved in the code leaves no page pointing at its old place."""
+    pages = [README_FILE, *(p for p in site_pages() if not p.read_text()[:600].count("Generated"))]
+    named = 0
+    for page in pages:
+        for path in PATH_IN_CODE.findall(page.read_text()):
+            if any(c in path for c in "<>*{"):
+                continue  # a pattern, not a path
+            named += 1
+            assert (REPO / path).exists(), f"{page.relative_to(REPO)} names {path}, which is gone"
+    assert named > 50  # the pages do name files (a pattern that matched nothing fails)
+
+
+def test_the_path_check_sees_a_path() -> None:
+    assert PATH_IN_CODE.findall("see `twostep/methods/plan_deal.py` and `bench/x_*.py`") == [
+        "twostep/methods/plan_deal.py",
+        "bench/x_*.py",
+    ]
