@@ -1,7 +1,8 @@
 """The documentation site in a real browser: ``mkdocs build --strict`` into a temporary
 folder, served on 127.0.0.1, then headless Chromium on the home page, a how-to guide, the
-config reference and a results page; each must render its text, and every image of a page
-(the results page's figures) must have loaded.
+tutorial, the config reference and a results page; each must render its text, and every
+image of a page (the tutorial's UI screenshots, the results page's figures) must have
+loaded.
 
 Slow (a build and a browser: under a minute); ``make ui-check`` runs it. Screenshots of
 each page go to ``TWOSTEP_SITE_SCREENSHOTS=<folder>`` when it is set (else the test's
@@ -33,7 +34,8 @@ REPO = Path(__file__).resolve().parent.parent
 PAGES = {  # page -> texts it must show
     "index.html": ["Multi-agent task planning", "Tutorial", "How-to guides", "Reference",
                    "Explanations", "Results"],
-    "how-to/own-llm.html": ["Your own LLM", "llm.mode", "Phase 2"],
+    "how-to/own-llm.html": ["Your own LLM", "llm.mode", "One cache, one retry loop"],
+    "tutorial/index.html": ["Tutorial", "As a library", "A sweep", "Compare the runs in MLflow"],
     "reference/config.html": ["Configuration keys", "orchestration.task_runner", "Config groups",
                               "hydra/launcher"],
     "results/methods.html": ["All methods on the 100 tasks", "The runs", "Macro exec/SA",
