@@ -131,6 +131,14 @@ PAGES: tuple[Page, ...] = (
         "bench_score_cli:page",
     ),
     Page(
+        "llm-client",
+        "The LLM client's overhead",
+        "what the LLM client costs per call when the answer is cached, replayed or scripted, "
+        "beside a mocked litellm call",
+        ("llm_client.json",),
+        "bench_llm_client:page",
+    ),
+    Page(
         "conformance",
         "Conformance and load time on real PDDL",
         "30 IPC domains read, planned and validated as Fast Downward does; twostep's load "
