@@ -204,10 +204,9 @@ BENCH_FILES: tuple[BenchFile, ...] = (
     BenchFile("refusals.txt", "python bench/bench_startup.py --repeat 5 --scenarios refusals [--source DIR]", "commands refused before any work: exit code, lines, what was written, wall and CPU time,"),
     BenchFile("replay.txt", "python bench/bench_replay.py outputs/multiruns/<date>/<time>; twostep-data check-answers answers --data-root official/domains", "the README's replay sweep: every schedule re-validated, job times; the rules translator against the official logs' helper costs"),
     BenchFile("resume.txt", "python bench/bench_resume.py", "a sweep, then the same command again reusing every job"),
-    BenchFile("sweep.txt", "python bench/bench_sweep.py --jobs 20 100 400 --variants on off --launchers all basic --basic-max-jobs 20 --on-max-jobs 100 --no-small-scaling --save docs/bench/sweep.txt --json docs/bench/sweep.json", "the printed output of sweep.json, with the phases of a job"),
-    BenchFile("startup.txt", "python bench/bench_startup.py --repeat 3 --scenarios default,logged,cold", "printed output of earlier runs, appended (the page: startup.json)"),
     BenchFile("structure.txt", "python bench/bench_structure.py --layout", "the library's shape before and after issue 40: root modules, import cycles, config mentions, status vocabularies, places a new method touches (cited by the README)"),
     BenchFile("sweep.txt", "python bench/bench_sweep.py --jobs 20 100 400 --variants on off --launchers all basic --basic-max-jobs 20 --on-max-jobs 100 --no-small-scaling --save docs/bench/sweep.txt --json docs/bench/sweep.json", "the printed output of sweep.json, with the phases of a job"),
+    BenchFile("startup.txt", "python bench/bench_startup.py --repeat 3 --scenarios default,logged,cold", "printed output of earlier runs, appended (the page: startup.json)"),
 )  # fmt: skip
 ARCHIVE = BENCH / "archive"
 
