@@ -1,5 +1,5 @@
 """The house's layout: nothing at the root of ``twostep/`` but ``__init__.py``, whose package
-map (and the README's Layout) name exactly the packages on disk; no import cycle among the
+map names exactly the packages on disk (and the site's Layout the top-level folders); no import cycle among the
 library's modules; the independent checkers import nothing from ``twostep``.
 
 The import graph is read here with :mod:`ast` (every import: module level, under
@@ -33,14 +33,27 @@ def test_the_package_map_names_every_package_once() -> None:
     assert set(named) == _packages()
 
 
-def test_the_readme_layout_names_every_package() -> None:
-    readme = (ROOT / "README.md").read_text()
-    layout = readme[readme.index("\n## Layout") :]
-    tree = layout[layout.index("\ntwostep/\n") + 1 :]
-    tree = tree[: re.search(r"\n(?=\S)", tree).start()]  # type: ignore[union-attr]
-    named = set(re.findall(r"^  (\w+)/ ", tree, re.M))
-    assert named == _packages()
-    assert not re.findall(r"^  \w+\.py ", tree, re.M)  # no module at the root
+def test_the_development_page_layout_names_every_top_level_folder() -> None:
+    """The site's Layout (docs/development.md) names each folder at the top of the
+    repository that git tracks, and no folder that is not there; the library's packages are
+    listed by the package map above and the generated API reference."""
+    page = (ROOT / "docs" / "development.md").read_text()
+    layout = page[page.index("\n## Layout") :]
+    block = layout[layout.index("```\n") + 4 :]
+    block = block[: block.index("```")]
+    named = {m.split("/")[0] for m in re.findall(r"^(\w[\w.-]*/)", block, re.M)}
+    tracked = {p.name for p in ROOT.iterdir() if p.is_dir() and not p.name.startswith(".")}
+    tracked &= {f.split("/")[0] for f in _git_files()}
+    assert named - {"outputs"} == tracked, (named, tracked)
+
+
+def _git_files() -> list[str]:
+    import subprocess
+
+    out = subprocess.run(
+        ["git", "ls-files"], cwd=ROOT, capture_output=True, text=True, check=True
+    ).stdout
+    return [line for line in out.splitlines() if "/" in line]
 
 
 def _module_names(package: Path) -> dict[str, Path]:

@@ -18,6 +18,8 @@ against the packages):
 - :mod:`twostep.decomposers`  where helper subgoals come from (goal-split, plan-split,
                               expert, llm)
 - :mod:`twostep.llm`          LLM access (litellm), prompts and answer parsing
+- :mod:`twostep.english`      English subgoals into PDDL goals without a model (the rules translator)
+- :mod:`twostep.replay`       real model answers from logs, replayed (import, bundle, check)
 - :mod:`twostep.methods`      the methods side by side (SA, MA, TwoStep, plan-deal,
                               portfolio), one request in, one result out; the registry
 - :mod:`twostep.dealing`      plan-deal's algorithm: the SA plan's pieces dealt to N agents
