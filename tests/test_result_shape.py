@@ -125,7 +125,8 @@ def test_result_json_and_files_keep_their_shape(name: str, tmp_path: Path, data_
     files = {p.relative_to(job_dir).as_posix() for p in job_dir.rglob("*") if p.is_file()}
     assert files == {"result.json", "schedule.txt", "plans/agent0.plan"} | JOB_FILES[name]
     stored = tmp_path / "jobs" / str(result["job_key"])
-    assert {p.name for p in stored.iterdir()} == {"config.json", "result.json"}
+    # the entry is sealed as the job's own (issue 39: the store is checked before reuse)
+    assert {p.name for p in stored.iterdir()} == {"config.json", "result.json", "seal.json"}
     # the vocabularies: the same strings as before the enums
     assert result["status"] == "solved"
     assert result["method"] == {"sa": "sa", "ma": "ma"}.get(name, "twostep")
