@@ -50,8 +50,9 @@ import contextlib
 import hashlib
 import json
 import logging
+import os
 import time
-from collections.abc import Callable, Collection, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from contextvars import ContextVar
 from dataclasses import asdict
 from functools import cache
@@ -61,7 +62,9 @@ from typing import TYPE_CHECKING, Any
 
 from prefect import State, flow, tags, task
 from prefect.cache_policies import NO_CACHE
-from prefect.context import SettingsContext, TagsContext, TaskRunContext
+from prefect.client.orchestration import SyncPrefectClient
+from prefect.context import SettingsContext, SyncClientContext, TagsContext, TaskRunContext
+from prefect.flow_engine import run_flow_sync
 from prefect.settings import (
     PREFECT_API_URL,
     PREFECT_CLIENT_CSRF_SUPPORT_ENABLED,
@@ -71,7 +74,7 @@ from prefect.settings import (
     Settings,
     get_current_settings,
 )
-from prefect.states import Completed, Failed
+from prefect.states import Completed, Failed, Pending
 from prefect.utilities.annotations import quote
 
 from flows.console import format_summary
@@ -461,6 +464,29 @@ def quiet_logs(level: str) -> None:
         logging.getLogger(name).setLevel(level)
 
 
+_CLIENTS: dict[tuple[int, str], SyncClientContext] = {}
+
+
+@contextlib.contextmanager
+def open_client(api_url: str) -> Iterator[SyncPrefectClient]:
+    """This process's Prefect client of the server at ``api_url``, kept open from one job to
+    the next (a client per flow run costs its construction and a new connection each);
+    every API call of the flow run and its task runs goes through it. Enter inside
+    :func:`job_settings` (the client reads the API address from the settings)."""
+    key = (os.getpid(), api_url)  # a forked worker never shares its parent's connections
+    context = _CLIENTS.get(key)
+    if context is None:
+        context = SyncClientContext()
+        context.client.__enter__()  # closed with the process
+        context.client.raise_for_api_version_mismatch_once()
+        _CLIENTS[key] = context
+    token = SyncClientContext.__var__.set(context)
+    try:
+        yield context.client
+    finally:
+        SyncClientContext.__var__.reset(token)
+
+
 _SETTINGS: dict[tuple[str, str], Settings] = {}
 
 
@@ -586,20 +612,30 @@ def run_flow(
     storage.mkdir(parents=True, exist_ok=True)
     submit = config["orchestration"]["task_runner"] == "dask"
     # The results' folder named here: Prefect does not ask the server for a default one.
-    options: dict[str, Any] = {
-        "flow_run_name": name,
-        "result_storage": storage,
-    }
+    options: dict[str, Any] = {"result_storage": storage}
     runner = _task_runner(config, dask_address)
     if runner is not None:
         options["task_runner"] = runner
     running = _RUNNING.set((built, stats if stats is not None else StepStats(), submit))
     try:
-        with job_settings(api_url, storage), tags(*flow_tags):
+        with job_settings(api_url, storage), tags(*flow_tags), open_client(api_url) as client:
             # The parameter is what Prefect stores and shows: no URL credentials in it.
-            state = job_flow.with_options(**options)(flow_parameters(config), return_state=True)
+            job: dict[str, Any] = {"job": flow_parameters(config)}
+            job_flow_run = job_flow.with_options(**options)
+            # Created with its name: the engine would create it unnamed, then rename it.
+            created = client.create_flow_run(
+                job_flow_run,
+                name=name,
+                parameters=job_flow_run.serialize_parameters(job),
+                state=Pending(),
+                tags=TagsContext.get().current_tags,
+            )
+            state = run_flow_sync(
+                job_flow_run, flow_run=created, parameters=job, return_type="state"
+            )
     finally:
         _RUNNING.reset(running)
+    assert isinstance(state, State)
     result = state.result(raise_on_failure=False)
     if isinstance(result, BaseException):
         raise result  # the job raised: the caller records it as failed

@@ -61,6 +61,8 @@ _IDLE_SERVICES = (
     "DB_VACUUM",
 )
 
+_TASK_RUN_RECORDER = {"BATCH_SIZE": "100", "READ_BATCH_SIZE": "100", "FLUSH_INTERVAL": "1"}
+
 
 class ServerError(Exception):
     """The Prefect server did not start, or stopped answering."""
@@ -142,6 +144,12 @@ def server_environment(
     for service in _IDLE_SERVICES:
         env[f"PREFECT_SERVER_SERVICES_{service}_ENABLED"] = "false"
     env["PREFECT_SERVER_SERVICES_EVENT_PERSISTER_ENABLED"] = "true" if ui else "false"
+    # The task run recorder writes task runs from their events, by default one database
+    # transaction per event: half of the server's CPU time per job (bench/bench_sweep.py).
+    # In batches of up to 100, flushed at least every second (the UI shows a task run
+    # within a second; the recorder flushes what it holds when the server stops).
+    for key, value in _TASK_RUN_RECORDER.items():
+        env.setdefault(f"PREFECT_SERVER_SERVICES_TASK_RUN_RECORDER_{key}", value)
     # A server must never talk to another server.
     env.pop("PREFECT_API_URL", None)
     return env

@@ -102,9 +102,22 @@ def _flow_run(prefect_server: str, name: str, out: Path) -> dict[str, Any]:
     return run
 
 
+FINAL_STATES = {"COMPLETED", "FAILED", "CRASHED", "CANCELLED"}
+
+
 def _task_runs(prefect_server: str, flow_run_id: str) -> list[dict[str, Any]]:
+    """The flow run's task runs once the server has written them all: they reach it as
+    events, which its recorder writes in batches at least every second."""
     body = {"flow_runs": {"id": {"any_": [flow_run_id]}}}
-    return list(api(prefect_server, "/task_runs/filter", body))
+    seen: list[tuple[str, str]] | None = None
+    for _ in range(20):
+        runs = list(api(prefect_server, "/task_runs/filter", body))
+        states = sorted((t["name"], str((t.get("state") or {}).get("type"))) for t in runs)
+        if states == seen and all(state in FINAL_STATES for _, state in states):
+            break
+        seen = states
+        time.sleep(1.2)
+    return runs
 
 
 def _log_lines(prefect_server: str, flow_run_id: str) -> list[str]:
