@@ -104,6 +104,14 @@ PHASES = (
 PLANNER_GRID = ["domain=termes", "method=sa", "task=5,6,9,10,14", "planner.time_limit_s=60,61,62"]
 
 
+def paper_grid(domain: str) -> list[str]:
+    """The paper's grid (``experiment=paper``: 20 tasks x N = 1..4 x SA, MA, TwoStep x 3
+    seeds) on one domain, offline: ``lama-first`` and plan-deal subgoals stand in for
+    anytime LAMA and GPT-4o. 720 jobs; SA's and the planner's repeats over N and the seeds
+    are the planner cache's, as in the paper's grid."""
+    return ["experiment=paper", f"domain={domain}", "planner=lama-first", "decomposer=plan-deal"]
+
+
 def grid(jobs: int) -> list[str]:
     """A grid of exactly ``jobs`` small jobs: 2 domains x {SA, TwoStep} x tasks x seeds, the
     seed varying slowest (Hydra's order is the command line's): every block of jobs is the
@@ -554,6 +562,95 @@ def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
     return lines
 
 
+def grid_line(row: dict[str, Any]) -> str:
+    """A paper-grid sweep in one line, from the timing its own summary reports."""
+    t = row["timing"]
+    return (
+        f"{t['jobs']} jobs, {t['workers']} workers: wall {t['wall_s'] / 60:.1f} min, Fast "
+        f"Downward {t['planner_s'] / 60:.1f} min over the jobs, beyond it "
+        f"{t['beyond_per_job_s']:.2f} s per job ({100 * t['overhead_share']:.0f} % of the "
+        f"workers' time), {row['jobs_per_minute']:.0f} jobs/min  load "
+        f"{row['load_before'][0]:.1f}/{row['load_after'][0]:.1f}"
+    )
+
+
+def cost_lines(records: list[dict[str, Any]]) -> list[str]:
+    """The README's lines on what a sweep costs, from the rows of ``sweep.json`` and
+    ``sweep_grid.json``: the 100-job sweeps' overhead per job, the paper's grid."""
+    rows = [r for data in records for r in data["rows"]]
+    said = []
+    for variant, what in (("on", "with Prefect and MLflow on"), ("off", "with both off")):
+        row = next((r for r in rows if r.get("grid") == "small" and r["variant"] == variant
+                    and r["jobs"] == 100 and r["launcher"] == "all"), None)  # fmt: skip
+        if row is not None:
+            said.append(
+                f"{row['overhead_median_s']:.2f} s {what} (median; end to end "
+                f"{row['end_to_end_per_job_s']:.2f} s, load {row['load_before'][0]:.1f})"
+            )
+    lines = []
+    if said:
+        lines.append(
+            "What a sweep adds per job beyond planning, end to end (`bench/bench_sweep.py`: "
+            "100 small jobs on every core of 2): " + "; ".join(said) + "."
+        )
+    for row in (r for r in rows if r.get("grid") == "paper"):
+        t = row["timing"]
+        domain = next((o.split("=", 1)[1] for o in row["command"].split()
+                       if o.startswith("domain=")), "?")  # fmt: skip
+        lines.append(
+            f"The paper's grid on {domain} (`experiment=paper`, {t['jobs']} jobs, offline): "
+            f"{t['wall_s'] / 60:.1f} min on {t['workers']} workers for "
+            f"{t['planner_s'] / 60:.1f} min of Fast Downward, "
+            f"{100 * t['overhead_share']:.0f} % of the workers' time beyond it (load "
+            f"{row['load_before'][0]:.1f})."
+        )
+    return lines
+
+
+def page_grid(records: list[dict[str, Any]], figure: Any) -> list[str]:
+    """The results page of the paper-grid rows (``--paper-grid``): what the paper's grid
+    costs here, and what the same work costs on more cores."""
+    rows = [r for data in records for r in data["rows"] if r.get("grid") == "paper"]
+    lines = [
+        "## The paper's grid, one domain at a time",
+        "",
+        "`twostep -m experiment=paper` on one domain: 20 tasks x N = 1..4 x SA, MA and "
+        "TwoStep x 3 seeds = 720 jobs, offline (`planner=lama-first decomposer=plan-deal` "
+        "in place of anytime LAMA with 1000 s and GPT-4o subgoals), Prefect and MLflow on, "
+        "the default launcher (every core). The figures are the sweep's own timing line "
+        "(its summary): Fast Downward's wall time summed over the jobs' planner calls (the "
+        "planner cache answers SA's repeats over N and the seeds), and the workers' time "
+        "beyond it.",
+        "",
+    ]
+    lines += bench_record.table(
+        ["domain", "jobs", "workers", "wall min", "Fast Downward min", "beyond it s/job",
+         "share of the workers' time", "jobs/min", "load"],
+        [[next((o.split("=", 1)[1] for o in r["command"].split() if o.startswith("domain=")), "?"),
+          r["timing"]["jobs"], r["timing"]["workers"], f"{r['timing']['wall_s'] / 60:.1f}",
+          f"{r['timing']['planner_s'] / 60:.1f}", f"{r['timing']['beyond_per_job_s']:.2f}",
+          f"{100 * r['timing']['overhead_share']:.0f} %", f"{r['jobs_per_minute']:.0f}",
+          f"{r['load_before'][0]:.1f} / {r['load_after'][0]:.1f}"] for r in rows],
+    )  # fmt: skip
+    if rows:
+        total = sum(r["timing"]["wall_s"] * r["timing"]["workers"] for r in rows)
+        jobs = sum(r["timing"]["jobs"] for r in rows)
+        lines += [
+            "",
+            f"The same work on more cores (arithmetic on the measured worker time, "
+            f"{total / 60:.0f} min for {jobs} jobs; planner calls and jobs are independent, "
+            "so it divides by the workers until the longest job or the Prefect server "
+            "bounds it):",
+            "",
+        ]
+        lines += bench_record.table(
+            ["workers", "wall min, about"],
+            [[k, f"{total / k / 60:.1f}"] for k in (2, 8, 32)],
+        )  # fmt: skip
+        lines += ["", "Commands:", ""] + [f"    {r['command']}" for r in rows]
+    return lines
+
+
 # ----------------------------------------------------------------- printing
 
 
@@ -600,6 +697,14 @@ def main() -> int:
     parser.add_argument("--no-planner-grid", dest="planner_grid", action="store_false",
                         help="no workers' scaling on planner-dominated jobs")  # fmt: skip
     parser.add_argument("--profile", action="store_true", help="cProfile one sweep's jobs")
+    parser.add_argument(
+        "--paper-grid",
+        nargs="*",
+        default=[],
+        metavar="DOMAIN",
+        help="also run the paper's grid on these domains (experiment=paper, 720 jobs each, "
+        "lama-first and plan-deal subgoals): its wall, planner and overhead share",
+    )
     parser.add_argument("--servers", type=int, default=2, help="fresh/warm Prefect starts to time")
     parser.add_argument(
         "--data", type=Path, default=None, help="data.root (default: the package's)"
@@ -634,14 +739,16 @@ def main() -> int:
         out("# bytecode cache was off here (PYTHONDONTWRITEBYTECODE): the sweeps cache it")
     rows: list[dict[str, Any]] = []
 
-    def sweep(jobs: int | list[str], variant: str, launcher: str, tag: str = "") -> dict[str, Any]:
+    def sweep(
+        jobs: int | list[str], variant: str, launcher: str, tag: str = "", kind: str = "planner"
+    ) -> dict[str, Any]:
         size = jobs if isinstance(jobs, int) else "grid"
         root = folder / f"{variant}-{launcher}-{size}{tag}" / "outputs"
         root.parent.mkdir(parents=True, exist_ok=True)
         run = run_sweep(root, jobs, VARIANTS[variant] + LAUNCHERS[launcher], env, args.data)
         row = {
             "jobs_requested": size,
-            "grid": "small" if isinstance(jobs, int) else "planner",
+            "grid": "small" if isinstance(jobs, int) else kind,
             "variant": variant,
             "prefect": "orchestration.prefect=false" not in VARIANTS[variant],
             "mlflow": "mlflow.enabled=false" not in VARIANTS[variant],
@@ -651,6 +758,7 @@ def main() -> int:
             "load_after": run["load_after"],
             "machine": host,
             "date": time.strftime("%Y-%m-%d %H:%M:%S"),
+            "timing": run["summary"].get("timing"),  # the sweep's own timing line
             **analyse(run),
         }
         rows.append(row)
@@ -722,10 +830,11 @@ def main() -> int:
 
     # The largest sweeps (growth) last: the others' figures come first.
     ordered = sorted(args.jobs)
-    middle = ordered[len(ordered) // 2]
+    middle = ordered[len(ordered) // 2] if ordered else 100
     largest = [j for j in ordered if j > 100 and len(ordered) > 1]
     sizes([j for j in ordered if j not in largest])
-    legend()
+    if ordered:
+        legend()
 
     if args.scaling:
         for title, jobs in (
@@ -757,6 +866,13 @@ def main() -> int:
         out(header)
         out("-" * len(header))
         sizes(largest)
+
+    for domain in args.paper_grid:
+        out()
+        out(f"## The paper's grid on {domain} (offline), Prefect and MLflow on, every core")
+        row = sweep(paper_grid(domain), "on", "all", f"-paper-{domain}", kind="paper")
+        out(f"  {grid_line(row)}")
+        out(f"  {row['command']}")
 
     out()
     out("## Commands (one per size and variant; the launchers add their overrides)")

@@ -11,9 +11,11 @@ from __future__ import annotations
 
 import json
 import signal
+import sqlite3
 import subprocess
 import time
 from collections import Counter
+from contextlib import closing
 from pathlib import Path
 from typing import Any
 
@@ -55,6 +57,16 @@ def records(sweep: Path) -> list[dict[str, Any]]:
     return [json.loads(p.read_text()) for p in (sweep / ".twostep" / "jobs").glob("*.json")]
 
 
+def task_runs(out: Path) -> list[tuple[str, str]]:
+    """(flow run id, state type) of every task run in the sweep's Prefect database, read
+    once its server has stopped."""
+    database = out / "prefect" / "prefect.db"
+    with closing(sqlite3.connect(f"file:{database}?mode=ro", uri=True)) as db:
+        return [
+            (str(f), str(s)) for f, s in db.execute("SELECT flow_run_id, state_type FROM task_run")
+        ]
+
+
 def job_runs(out: Path) -> list[Any]:
     _, runs = mlflow_experiment(out)
     return [r for r in runs if r.data.tags["twostep.kind"] == "job"]
@@ -79,6 +91,10 @@ def test_a_parallel_sweep_gives_what_a_one_process_sweep_gives(tmp_path: Path) -
         facts = summary(sweeps[name])
         assert facts["jobs_done"] == JOBS and facts["jobs_failed"] == 0
         assert facts["prefect_flow_runs"] == {"COMPLETED": JOBS}
+        # every task run's end reached the server's records before it stopped
+        tasks = task_runs(out)
+        assert len({flow for flow, _ in tasks}) == JOBS
+        assert {state for _, state in tasks} == {"COMPLETED"}, Counter(s for _, s in tasks)
         runs = job_runs(out)
         assert len(runs) == JOBS  # one MLflow run per job
         assert len({r.data.tags["twostep.job_key"] for r in runs}) == JOBS
