@@ -464,6 +464,13 @@ def quiet_logs(level: str) -> None:
         logging.getLogger(name).setLevel(level)
 
 
+@cache
+def _flow_with(storage: Path) -> Any:
+    """The job's flow with its results' folder, made once per folder (a copy of a flow
+    builds its parameter schema again)."""
+    return job_flow.with_options(result_storage=storage)
+
+
 _CLIENTS: dict[tuple[int, str], SyncClientContext] = {}
 
 
@@ -621,7 +628,9 @@ def run_flow(
         with job_settings(api_url, storage), tags(*flow_tags), open_client(api_url) as client:
             # The parameter is what Prefect stores and shows: no URL credentials in it.
             job: dict[str, Any] = {"job": flow_parameters(config)}
-            job_flow_run = job_flow.with_options(**options)
+            job_flow_run = (
+                _flow_with(storage) if runner is None else job_flow.with_options(**options)
+            )
             # Created with its name: the engine would create it unnamed, then rename it.
             created = client.create_flow_run(
                 job_flow_run,
