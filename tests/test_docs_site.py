@@ -133,6 +133,25 @@ def test_the_config_reference_lists_every_key_with_its_default() -> None:
     )  # not the default domain's
 
 
+def test_the_config_reference_gives_the_ranges_a_run_is_checked_against() -> None:
+    """A key with a range (flows/checks.py) shows it, not just its type."""
+    from flows.checks import VALUE_RULES
+
+    keys_part = reference.config_page().split("## Config groups")[0]
+    allowed = {
+        line.split(" | ")[0].strip("| `"): line.split(" | ")[3]
+        for line in keys_part.splitlines()
+        if line.startswith("| `")
+    }
+    # by hand: a sampling temperature from 0 to 2, at least one agent, a positive time limit
+    assert "0 to 2" in allowed["llm.temperature"]
+    assert ">= 1" in allowed["agents"] and "any int" not in allowed["agents"]
+    assert allowed["planner.time_limit_s"].startswith("> 0")
+    for rule in VALUE_RULES:
+        if not rule.key.endswith(".name"):  # a group's options stand for its names
+            assert allowed[rule.key] == rule.allowed.replace("|", "\\|"), rule.key
+
+
 def test_the_config_reference_lists_every_group_option() -> None:
     page = reference.config_page()
     for folder in (REPO / "conf").iterdir():

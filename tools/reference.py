@@ -194,6 +194,7 @@ def _flatten(value: Any, prefix: str = "") -> Iterator[tuple[str, Any]]:
 
 def config_keys() -> list[ConfigKey]:
     """Every key of :class:`flows.config.TwostepConfig`, in the schema's order."""
+    from flows.checks import VALUE_RULES
     from flows.config import TwostepConfig
 
     comments = _comments(SCHEMA_FILE.read_text())
@@ -205,6 +206,7 @@ def config_keys() -> list[ConfigKey]:
             for key, text in _yaml_comments(path).items():
                 yaml_comments.setdefault(f"{group.name}.{key}", text)
     composed = composed_defaults()
+    ranges = {rule.key: rule.allowed for rule in VALUE_RULES}  # what a run checks
     groups = {
         g.name: [_option_name(g.name, o) for o in g.options]
         for g in config_groups()
@@ -219,6 +221,8 @@ def config_keys() -> list[ConfigKey]:
             allowed = " | ".join(groups[section])  # the options registered in conf/
         elif name == "domain.name":
             allowed = "a folder of data.root (group `domain`: " + ", ".join(groups["domain"]) + ")"
+        elif name in ranges:  # the range every run is checked against (flows/checks.py)
+            allowed = ranges[name]
         if _LIST.fullmatch(comment):
             comment = ""  # the list alone: the allowed values say it
         keys.append(
