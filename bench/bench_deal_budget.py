@@ -19,6 +19,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from bench import record
 from bench.bench_methods import agent_predicates
 from twostep.dealing import Dealer
 from twostep.methods import MethodRequest
@@ -36,7 +37,13 @@ def main() -> None:
     parser.add_argument("--agents", nargs="+", type=int, default=[4, 16, 1000])
     parser.add_argument("--tasks", nargs="+", default=["blocksworld:1", "termes:20"])
     parser.add_argument("--save", type=Path, default=None, help="also write the table here")
+    parser.add_argument("--json", type=Path, help="also write what it prints as a record here")
     args = parser.parse_args()
+    with record.capture(args.json, title="plan-deal with many agents: the work budget"):
+        _run(args)
+
+
+def _run(args: argparse.Namespace) -> None:
     rows = json.loads(args.rows.read_text())
     made: list[Dealer] = []
     init = Dealer.__init__
@@ -50,6 +57,7 @@ def main() -> None:
         "task | N | SA | plan-deal | dealt to | budget stop | work | CPU s",
         "---|" * 7 + "---",
     ]
+    print("\n".join(lines), flush=True)
     for spec in args.tasks:
         domain, number = spec.split(":")
         row = next(r for r in rows if r["method"] == "sa" and r["data"] == args.data

@@ -22,7 +22,7 @@ domain: runs, dealt shorter than SA, fallbacks by reason, crashes, invalid sched
 monotonicity violations (N longer than N-1, N = 1 being the SA plan) and the largest
 dealing time.
 
-    .venv/bin/python bench/bench_deal_generated.py --seeds 5 > docs/bench/deal_generated.txt
+    .venv/bin/python bench/bench_deal_generated.py --seeds 5 --json docs/bench/deal_generated.json
     .venv/bin/python bench/bench_deal_generated.py --domains storage --seeds 1 --sizes 1
     .venv/bin/python bench/bench_deal_generated.py --domains storage --only d1:c8:h3 \\
         --seed-list 1 --agents 2 --keep /tmp/generated
@@ -45,9 +45,11 @@ from collections import Counter
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from bench import record
 from bench.bench_deal_ipc import (
     deal_seconds,
     deal_within,
@@ -545,6 +547,34 @@ def problems(
             yield label, seed, make(seed)
 
 
+def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
+    """The results page of plan-deal beyond the benchmark (bench.results): a figure of this
+    bench's rows (plan-deal's length against the SA plan's, per N), then what each of the
+    records printed (this bench's, bench_deal_ipc's, bench_deal_budget's, bench_dealing's)."""
+    from matplotlib.figure import Figure
+
+    rows = records[0]["rows"]
+    column = next((c for c in rows[0] if c.startswith("plan-deal N=")), "") if rows else ""
+    agents = column.removeprefix("plan-deal N=").split("/") if column else []
+    fig = Figure(figsize=(6.4, 4.2))
+    axes = fig.subplots()
+    top = 1
+    for k, n in enumerate(agents):
+        points = [(int(r["SA"]), int(r[column].split("/")[k])) for r in rows
+                  if r.get("SA", "").isdigit() and r.get(column, "").count("/") == len(agents) - 1]  # fmt: skip
+        if points:
+            top = max(top, *(sa for sa, _ in points))
+            axes.scatter(*zip(*points, strict=True), s=12, alpha=0.6, label=f"N = {n}")
+    axes.plot([0, top], [0, top], color="grey", linewidth=0.8, label="as long as SA")
+    axes.set_xlabel("SA plan length")
+    axes.set_ylabel("plan-deal exec length")
+    axes.set_title("plan-deal on generated problems (seven IPC domains)")
+    axes.legend()
+    fig.tight_layout()
+    alt = "plan-deal's exec length against the SA plan's length on the generated problems"
+    return [figure(fig, "generated", alt), "", *record.printed_page(records, figure)]
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sample", type=Path, default=SAMPLE)
@@ -557,7 +587,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--time-limit", type=float, default=30.0, help="SA planner seconds")
     parser.add_argument("--deal-limit", type=int, default=60, help="seconds per plan-deal run")
     parser.add_argument("--keep", type=Path, help="also write the generated files here")
+    parser.add_argument("--json", type=Path, help="also write what it prints as a record here")
     args = parser.parse_args(argv)
+    with record.capture(args.json, title="plan-deal on generated problems of seven IPC domains"):
+        return _run(args, argv)
+
+
+def _run(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
     seeds = args.seed_list or list(range(1, args.seeds + 1))
     planner = PlannerSettings("lama-first", args.time_limit)
     shown = " ".join(argv if argv is not None else sys.argv[1:])

@@ -17,12 +17,12 @@ than ``--deal-limit`` s is a row too. Domains whose SA plan takes longer than th
 skipped. ``--every-problem`` deals every problem file of each domain folder (any file name),
 not only p01.
 
-    .venv/bin/python bench/bench_deal_ipc.py > docs/bench/deal_ipc.txt
+    .venv/bin/python bench/bench_deal_ipc.py --json docs/bench/deal_ipc.json
     .venv/bin/python bench/bench_deal_ipc.py --sample DIR --domains storage \\
         termes-sat18-strips --agents 2 3 4 --no-own --every-problem
     .venv/bin/python bench/bench_deal_ipc.py --sample DIR --domains ferry tsp --no-own
 
-The last deals further real domains (a scratch folder per domain, ``docs/bench/deal_ipc_extra.txt``).
+The last deals further real domains (a scratch folder per domain, ``docs/bench/deal_ipc_extra.json``).
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ from types import FrameType
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-
+from bench import record
 from checkers import IndependentValidator
 from twostep.methods import MethodRequest, RunResult, check_run, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
@@ -92,7 +92,7 @@ CASES: dict[str, list[list[str]]] = {
     "pipesworld-notankage": [["on"]],
 }
 # Further real domains with acting agents (the scratch folders of
-# docs/bench/conformance_extra*.txt; docs/bench/deal_ipc_extra.txt). trucks-strips is
+# docs/bench/conformance_extra*.txt; docs/bench/deal_ipc_extra.json). trucks-strips is
 # grounded: its truck's state is 0-ary facts named after it (where it is, which of its
 # areas is free, which package is in which area).
 TRUCK = ["at_truck1_l1", "at_truck1_l2", "at_truck1_l3", "free_a1_truck1", "free_a2_truck1"]
@@ -351,7 +351,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         action="store_true",
         help="every problem file of each domain folder (any name), not only p01",
     )
+    parser.add_argument("--json", type=Path, help="also write what it prints as a record here")
     args = parser.parse_args(argv)
+    with record.capture(args.json, title="plan-deal on real IPC domains"):
+        return _run(args, argv)
+
+
+def _run(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
     planner = PlannerSettings("lama-first", args.time_limit)
     if args.domains is None:
         args.domains = [d for d in CASES if (args.sample / d).is_dir()]

@@ -92,7 +92,13 @@ def main() -> int:
     parser.add_argument("--domains", nargs="*", default=list(DOMAINS))
     parser.add_argument("--tasks", default="1-20")
     parser.add_argument("--rows", nargs="*", default=[], help="methods bench rows with SA plans")
+    parser.add_argument("--json", type=Path, help="also write what it prints as a record here")
     args = parser.parse_args()
+    with record.capture(args.json, title="The eight ways to deal, alone and in sets"):
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     root = Path(args.data)
     label = data_label(root)
     plans = {

@@ -761,7 +761,7 @@ def table(rows: list[Row]) -> list[str]:
 
 def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
     """The results page of a ``--json`` record (bench.results)."""
-    (data,) = records
+    data, *printed = records  # the later ones: runs of some scenarios, kept as printed
     rows = [Row(**r) for r in data["rows"]]
     settings = data.get("settings", {})
     lines = [
@@ -794,7 +794,7 @@ def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
         *(f"- {' '.join(note.split())}" for row in rows for note in row.notes),  # one line each
         "",
     ]
-    return lines
+    return lines + bench_record.printed_page(printed, figure)
 
 
 def main() -> None:

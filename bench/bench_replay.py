@@ -11,7 +11,7 @@ jobs, how many succeeded, how many schedules each checker accepted, and the job 
 (``orchestration.job_wall_time_s``: mean and total); then the sweep's own wall time from its
 summary. Exit 1 if any schedule is refused.
 
-    .venv/bin/python bench/bench_replay.py outputs/multiruns/<date>/<time> > docs/bench/replay.txt
+    .venv/bin/python bench/bench_replay.py outputs/multiruns/<date>/<time> --json docs/bench/replay.json
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import yaml
 
+from bench import record
 from checkers import IndependentValidator
 from twostep.methods import check_run
 from twostep.methods.result import RunResult
@@ -42,6 +43,42 @@ def _run(result: dict[str, Any]) -> RunResult:
     return run
 
 
+REPO = Path(__file__).resolve().parent.parent
+TABLE_ONE = REPO / "docs" / "report" / "replay" / "replay_table1.csv"
+FIG_THREE = "../report/replay/replay_fig3.png"  # from docs/results/
+
+
+def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
+    """The results page (bench.results): what the replay bench printed, then the replay
+    report's Table I (``docs/report/replay/replay_table1.csv``, written by ``twostep-report``
+    from the same sweep) as a table, and its Fig. 3."""
+    import csv
+
+    lines = record.printed_page(records, figure)
+    with TABLE_ONE.open(newline="") as handle:
+        table = list(csv.DictReader(handle))
+    lines += [
+        "## Table I from the replayed answers",
+        "",
+        "The report of the replay sweep (`twostep-report`, the reproduce-the-paper how-to): "
+        "per domain and N, the official TwoStep's lengths from its logs, the same answers "
+        "run through twostep, and plan-deal; exec length and SA length are means over the "
+        "row's tasks (`tasks`), length / SA the one over the other. "
+        "Rows: [`docs/report/replay/replay_table1.csv`](../report/replay/replay_table1.csv).",
+        "",
+    ]
+    lines += record.table(
+        ["domain", "N", "row", "tasks", "exec length", "SA length", "length / SA"],
+        (
+            [r["domain"], r["agents"], r["row"], r["tasks"], f"{float(r['exec_length']):.2f}",
+             f"{float(r['sa_length']):.2f}", f"{float(r['length_over_sa']):.3f}"]
+            for r in table
+        ),
+    )  # fmt: skip
+    lines += ["", f"![Fig. 3 of the replay: exec length / SA length against N]({FIG_THREE})", ""]
+    return lines
+
+
 def _label(result: dict[str, Any]) -> str:
     if result["method"] == "twostep":
         return f"twostep ({result.get('decomposer')})"
@@ -51,7 +88,13 @@ def _label(result: dict[str, Any]) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("sweeps", nargs="+", type=Path, help="sweep directories")
+    parser.add_argument("--json", type=Path, help="also write what it prints as a record here")
     args = parser.parse_args(argv)
+    with record.capture(args.json, title="The replay sweep"):
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     rows: dict[tuple[str, str], dict[str, Any]] = defaultdict(
         lambda: {"jobs": 0, "success": 0, "check_run": 0, "independent": 0, "wall": []}
     )

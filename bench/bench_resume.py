@@ -8,6 +8,7 @@ job back from the job store: no planner call, no Prefect server.
 
     .venv/bin/python bench/bench_resume.py
     .venv/bin/python bench/bench_resume.py --repeats 3      # medians of 3 fresh roots
+    .venv/bin/python bench/bench_resume.py --repeats 3 --json docs/bench/resume.json
 
 ``tests/test_sweep.py`` checks that the second run computes nothing; how long each takes
 is this bench's.
@@ -27,6 +28,10 @@ import tempfile
 import time
 from pathlib import Path
 from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from bench import record
 
 REPO = Path(__file__).resolve().parent.parent
 TWOSTEP = Path(sys.executable).parent / "twostep"
@@ -57,7 +62,13 @@ def main() -> int:
     parser.add_argument("--data", type=Path, default=REPO / "data")
     parser.add_argument("--repeats", type=int, default=1, help="fresh output roots")
     parser.add_argument("--keep", action="store_true", help="keep the output folders")
+    parser.add_argument("--json", type=Path, help="also write what it prints as a record here")
     args = parser.parse_args()
+    with record.capture(args.json, title="A sweep, then the same command again"):
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     if not all((args.data / d / "p02.pddl").is_file() for d in ("blocksworld", "grippers")):
         raise SystemExit(f"need blocksworld and grippers p01, p02 under {args.data}")
     env = dict(os.environ)

@@ -50,6 +50,7 @@ class Page:
     what: str  # one line for the index: what the page shows
     sources: tuple[str, ...]  # files under docs/bench/
     render: str  # "module:function" of bench/, called with the sources' records
+    printed: tuple[str, ...] = ()  # printed reports of the rows kept beside them (docs/bench/)
 
 
 PAGES: tuple[Page, ...] = (
@@ -74,6 +75,7 @@ PAGES: tuple[Page, ...] = (
             "methods_deal.json",
         ),
         "bench_methods:page_methods",
+        ("methods_faithful.txt", "methods_faithful.png"),
     ),
     Page(
         "large",
@@ -167,8 +169,55 @@ PAGES: tuple[Page, ...] = (
         "Faults: what a user's mishaps do to a sweep's records",
         "LLM faults with kills, a deleted or truncated MLflow store, concurrent sweeps, bad "
         "files: recomputed jobs, duplicate or missing runs, tracebacks",
-        ("faults.json",),
+        ("faults.json", "faults_round4.json", "faults_hostile.json"),
         "bench_faults:page",
+    ),
+    Page(
+        "resume",
+        "A sweep's re-run",
+        "a 4-job sweep, then the same command again, which reuses every job: wall times and "
+        "what the second run reused",
+        ("resume.json",),
+        "record:printed_page",
+    ),
+    Page(
+        "refusals",
+        "Commands refused before any work",
+        "commands the tool must refuse (a value out of range, an unknown task, a typo in a "
+        "key): exit code, lines printed, whether anything was written, wall and CPU time",
+        ("refusals.json",),
+        "record:printed_page",
+    ),
+    Page(
+        "planner-stress",
+        "The planner on the stress set and a larger task",
+        "read and plan times of the stress tasks and the larger tyreworld task, our wrapper "
+        "against the Fast Downward driver called directly, every plan validated",
+        ("planner_stress.json",),
+        "record:printed_page",
+    ),
+    Page(
+        "deal-beyond",
+        "plan-deal beyond the benchmark",
+        "plan-deal on generated problems of seven IPC domains, on real IPC domains and "
+        "problems, with up to 1000 agents (its work budget), and the eight ways to deal",
+        (
+            "deal_generated.json",
+            "deal_ipc.json",
+            "deal_ipc_extra.json",
+            "deal_ipc_more.json",
+            "deal_budget.json",
+            "dealing_ways.json",
+        ),
+        "bench_deal_generated:page",
+    ),
+    Page(
+        "replay",
+        "The paper's own model answers, replayed",
+        "the replay sweep's schedules re-validated and its job times, the rules translator "
+        "against the official logs' helper costs, and the replay's Table I and Fig. 3",
+        ("replay.json",),
+        "bench_replay:page",
     ),
 )
 
@@ -188,34 +237,19 @@ class BenchFile:
 BENCH_FILES: tuple[BenchFile, ...] = (
     BenchFile("conformance_extra.txt", "python bench/bench_conformance.py --corpus DIR ...", "a second batch of real domains (not in the sample), printed output"),
     BenchFile("conformance_extra3.txt", "python bench/bench_conformance.py --corpus DIR3 ...", "a third batch of 11 real domains, printed output"),
-    BenchFile("deal_budget.txt", "python bench/bench_deal_budget.py --agents 4 16 1000 --tasks blocksworld:1 blocksworld:20 barman:20 termes:20 tyreworld:20 --save docs/bench/deal_budget.txt", "plan-deal at N = 4, 16 and 1000: pieces, work budget, CPU time"),
-    BenchFile("deal_generated.txt", "python bench/bench_deal_generated.py --seeds 5", "plan-deal on generated problems of seven IPC domains"),
-    BenchFile("deal_ipc.txt", "python bench/bench_deal_ipc.py", "plan-deal on real IPC domains, p01"),
-    BenchFile("deal_ipc_extra.txt", "python bench/bench_deal_ipc.py --sample DIR --domains ... --no-own", "plan-deal on further real domains"),
-    BenchFile("deal_ipc_more.txt", "python bench/bench_deal_ipc.py --sample DIR --domains storage termes-sat18-strips --agents 2 3 4 --no-own --every-problem", "plan-deal on every storage and termes problem"),
-    BenchFile("dealing_ways.txt", "python bench/bench_dealing.py --rows docs/bench/methods_deal.json", "the eight ways to deal, alone and in sets"),
     BenchFile("faithful_cross.txt", "python bench/bench_heldout.py --cross /tmp/llmp", "the paper's problem files read with our domains and theirs, plans checked both ways"),
-    BenchFile("faults.txt", "python bench/bench_faults.py --save docs/bench/faults.txt", "printed table of an earlier run (the page: faults.json)"),
-    BenchFile("faults_round4.txt", "python bench/bench_faults.py --only bad-files,hostile-inputs --save docs/bench/faults_round4.txt", "bad files and hostile inputs with issue 39's probes (cited by the README)"),
-    BenchFile("faults_hostile.txt", "python bench/bench_faults.py --only hostile-inputs,orphans --save docs/bench/faults_hostile.txt", "inputs that used to hang or run away, and kills during grounding"),
     BenchFile("methods_deal.txt", "python bench/bench_methods.py --report docs/bench/methods_deal.json", "the printed report of methods_deal.json"),
-    BenchFile("methods_faithful.png", "python bench/bench_methods.py --report ... --plot docs/bench/methods_faithful.png", "the figure of the methods page as PNG"),
-    BenchFile("methods_faithful.txt", "python bench/bench_methods.py --report docs/bench/methods_n2.json ... docs/bench/methods_deal.json", "the printed report of the methods page's rows"),
+    BenchFile("methods_faithful.png", "python bench/bench_methods.py --report ... --plot docs/bench/methods_faithful.png", "the figure of the methods page's rows as PNG (cited by the methods page)"),
+    BenchFile("methods_faithful.txt", "python bench/bench_methods.py --report docs/bench/methods_n2.json ... docs/bench/methods_deal.json", "the printed report of the methods page's rows (cited by the methods page)"),
     BenchFile("methods_heldout.txt", "python bench/bench_methods.py --data /tmp/llmp ... --out outputs/bench/methods_heldout.json", "the printed output of the held-out runs, three runs appended"),
-    BenchFile("methods_heldout_lite.txt", "python bench/bench_methods.py --data /tmp/llmp --methods portfolio-lite ...", "portfolio-lite on the held-out files, before rebinding"),
     BenchFile("methods_large_faithful.txt", "python bench/bench_methods.py --report docs/bench/methods_large_faithful.json", "the printed report of methods_large_faithful.json"),
     BenchFile("methods_lite.txt", "python bench/bench_methods.py --report docs/bench/methods_lite.json", "the printed report of portfolio-lite's rows"),
     BenchFile("methods_n2.txt", "python bench/bench_methods.py --report docs/bench/methods_n2.json", "the printed report of methods_n2.json"),
     BenchFile("methods_n34.txt", "python bench/bench_methods.py --report docs/bench/methods_n34.json", "the printed report of methods_n34.json"),
     BenchFile("methods_portfolio.txt", "python bench/bench_methods.py --report docs/bench/methods_portfolio.json", "the printed report of the portfolio's rows"),
-    BenchFile("planner_stress.txt", "python bench/bench_planner.py --data data/stress; --data data/large --domains tyreworld", "the planner on the stress set and the larger tyreworld task"),
-    BenchFile("refusals.txt", "python bench/bench_startup.py --repeat 5 --scenarios refusals [--source DIR]", "commands refused before any work: exit code, lines, what was written, wall and CPU time,"),
-    BenchFile("replay.txt", "python bench/bench_replay.py outputs/multiruns/<date>/<time>; twostep-data check-answers answers --data-root official/domains", "the README's replay sweep: every schedule re-validated, job times; the rules translator against the official logs' helper costs"),
-    BenchFile("resume.txt", "python bench/bench_resume.py", "a sweep, then the same command again reusing every job"),
     BenchFile("structure.txt", "python bench/bench_structure.py --layout", "the library's shape before and after issue 40: root modules, import cycles, config mentions, status vocabularies, places a new method touches (cited by the README)"),
     BenchFile("sweep.txt", "python bench/bench_sweep.py --jobs 20 100 400 --variants on off --launchers all basic --basic-max-jobs 20 --on-max-jobs 100 --no-small-scaling --save docs/bench/sweep.txt --json docs/bench/sweep.json", "the printed output of sweep.json, with the phases of a job"),
     BenchFile("sweep_grid.txt", "python bench/bench_sweep.py --jobs --scaling --servers 0 --paper-grid blocksworld --save docs/bench/sweep_grid.txt --json docs/bench/sweep_grid.json", "the printed output of sweep_grid.json"),
-    BenchFile("startup.txt", "python bench/bench_startup.py --repeat 3 --scenarios default,logged,cold", "printed output of earlier runs, appended (the page: startup.json)"),
 )  # fmt: skip
 ARCHIVE = BENCH / "archive"
 
@@ -236,6 +270,9 @@ def _header_lines(page: Page, records: Sequence[dict[str, Any]]) -> list[str]:
         printed = BENCH / name.replace(".json", ".txt")
         lines += record.run_lines(data.get("run"), f"docs/bench/{name}", printed)
         lines.append("")
+    if page.printed:
+        lines += ["Printed beside the rows (the same run): "
+                  + ", ".join(f"[`{n}`](../bench/{n})" for n in page.printed) + ".", ""]  # fmt: skip
     return lines
 
 
@@ -357,6 +394,7 @@ def bench_index(pages: Sequence[Page] = PAGES, bench: Path = BENCH) -> str:
 
 ARCHIVED: dict[str, str] = {
     "2026-11-24_conformance_before.txt": "the conformance bench before the current PDDL front end; replaced by conformance.json",
+    "2026-11-27_methods_heldout_lite.txt": "portfolio-lite on the held-out files before its members were rebound (cited by the CHANGELOG); the held-out page has plan-deal's current rows (methods_heldout.json)",
 }
 
 
