@@ -38,6 +38,10 @@ import time
 from pathlib import Path
 from typing import Any
 
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from bench import record
+
 REPO = Path(__file__).resolve().parent.parent
 TWOSTEP = Path(sys.executable).parent / "twostep"
 VARIANTS = {
@@ -133,7 +137,13 @@ def main() -> int:
     parser.add_argument("--import-repeats", type=int, default=3)
     parser.add_argument("--as-is", action="store_true", help="keep PYTHONDONTWRITEBYTECODE")
     parser.add_argument("--keep", action="store_true", help="keep the output folder")
+    parser.add_argument("--json", type=Path, help="also write what it prints as a record here")
     args = parser.parse_args()
+    with record.capture(args.json, title="A sweep's orchestration cost"):
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     if not (args.data / "blocksworld" / f"p{args.jobs:02d}.pddl").is_file():
         raise SystemExit(
             f"need blocksworld p01..p{args.jobs:02d} under {args.data} (twostep-data generate)"
