@@ -368,7 +368,7 @@ CATEGORIES = (  # (what, path fragments), first match wins
     ("Hydra: compose, run_job, launch", ("/hydra/", "/omegaconf/", "/antlr4/", "/flows/compose", "/flows/run_job", "/flows/launcher")),
     ("Prefect: flow and task runs, API calls", ("/prefect/",)),
     ("MLflow: client, SQLite store", ("/mlflow/", "/sqlalchemy/", "/alembic/")),
-    ("job store, job records", ("/flows/store", "/flows/sweep_state", "/twostep/files", "/twostep/identity")),
+    ("job store, job records", ("/flows/store", "/flows/sweep_state", "/twostep/util/files", "/flows/identity")),
     ("the library: task, method, scoring", ("/twostep/",)),
     ("the app and the rest of flows/", ("/flows/",)),
 )  # fmt: skip

@@ -11,7 +11,7 @@ module              what it is for
 ``status``          how a job ended, from its result (tags, records, flow state)
 ``step_stats``      what a job's step calls did: fresh calls, cache hits, time
 ``prefect_flow``    the Prefect flow of one job and its tasks (cache keys, retries)
-``store``           the store of finished jobs (keys: :mod:`twostep.jobs.identity`)
+``store``           the store of finished jobs (keys: :mod:`flows.identity`)
 ``artifacts``       the files a job writes (and logs as artifacts)
 ``console``         what the commands print: summary, schedule, progress, one-line errors
 ``sweep_callback``  the Hydra callback of a sweep (start, summary, exit code)

@@ -22,9 +22,9 @@ from typing import TYPE_CHECKING, Any, cast
 
 from flows.checks import JobError, check_values
 from flows.config import TwostepConfig
+from flows.identity import job_input_files
 from twostep.decomposers.base import Decomposer
 from twostep.embodied import ExecutorSettings
-from twostep.jobs.identity import job_input_files
 from twostep.makespan import SearchBudget
 from twostep.methods import (
     DIRECT,

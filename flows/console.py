@@ -14,8 +14,8 @@ from importlib import metadata, util
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from flows.identity import job_name
 from flows.status import reason_line
-from twostep.jobs.identity import job_name
 from twostep.util.redaction import redact_text
 
 if TYPE_CHECKING:
@@ -56,7 +56,7 @@ class MaskCredentials(logging.Filter):
 
 def format_summary(result: RunResult | Mapping[str, Any], name: str | None = None) -> str:
     """One line for the terminal (from a result or its result.json dict), starting with
-    the job's name (``name``, else made from the result: :func:`twostep.jobs.identity.job_name`)."""
+    the job's name (``name``, else made from the result: :func:`flows.identity.job_name`)."""
     r = result if isinstance(result, Mapping) else result.to_dict()
     name = name or job_name(r)
     if r.get("status") == "failed" and "error" in r:

@@ -46,8 +46,8 @@ def _fault_line(error: OSError, config: Any) -> str:
 
 def _job_label(config: Any) -> str:
     try:
+        from flows.identity import job_name
         from flows.store import job_config
-        from twostep.jobs.identity import job_name
 
         return job_name(job_config(config))
     except Exception:  # a config that does not resolve: its overrides say which job

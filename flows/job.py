@@ -40,6 +40,7 @@ from flows.build import Job, build_job, check_job
 from flows.checks import JobError
 from flows.config import TwostepConfig, agents_run, typed
 from flows.console import one_line
+from flows.identity import job_name
 from flows.services import running_prefect_api
 from flows.status import JobStatus, job_status
 from flows.step_stats import StepStats, counting_steps
@@ -55,7 +56,6 @@ from flows.tracking.runs import (
     run_exists,
 )
 from twostep.embodied.run import draws_pictures
-from twostep.jobs.identity import job_name
 from twostep.llm.client import LLMScriptError
 from twostep.pddl import PDDLError
 from twostep.programs.processes import ResourceLimitError

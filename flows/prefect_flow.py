@@ -78,16 +78,16 @@ from prefect.states import Completed, Failed, Pending
 from prefect.utilities.annotations import quote
 
 from flows.console import format_summary
+from flows.identity import is_relevant, job_name
+from flows.redaction import redact_config
 from flows.status import JobStatus, job_status, reason_line
 from flows.step_stats import StepStats
 from twostep import planner
-from twostep.jobs.identity import is_relevant, job_name
 from twostep.makespan import DEFAULT_SEARCH_BUDGET, ParallelExecution, SearchBudget
 from twostep.methods import Steps
 from twostep.methods.steps import SA_CALL, PlanCall, progress, score
 from twostep.pddl import Fact, Problem
 from twostep.planner import PlannerSettings, PlanResult, Status
-from twostep.util.redaction import redact_config
 
 if TYPE_CHECKING:
     from flows.build import Job

@@ -44,6 +44,14 @@ from urllib.parse import urlparse
 import pandas as pd
 
 from flows.locations import sqlite_path
+from flows.report_sources import (
+    RUN_PARAMS,
+    load_runs_from_sweep_dir,
+    params_to_columns,
+    replay_bundle,
+    replay_model,
+    replay_settings,
+)
 from flows.sweep_state import job_records
 from flows.tracking.contents import unsolved_name
 from twostep.cli import console_main
@@ -54,11 +62,10 @@ from twostep.report import (
     build_report,
     format_console,
     load_runs_from_csv,
-    load_runs_from_sweep_dir,
     normalise_runs,
     write_report,
 )
-from twostep.report.runs import PARAM_PREFIX, params_to_columns
+from twostep.report.runs import PARAM_PREFIX
 from twostep.report.table2 import TABLE2_DOMAIN, read_task_titles
 from twostep.tasks.benchmark import DEFAULT_DATA_ROOT
 from twostep.util.files import NotTextError, read_text_file
@@ -435,7 +442,7 @@ def _replay_report(report: Report, bundle: Path | None, out_dir: Path) -> list[P
     """Table I and Fig. 3 of a replay (:mod:`twostep.report.replay`) when the runs replay
     a bundle (or ``--bundle`` names one); a bundle that cannot be read: a warning."""
     from twostep.replay import BundleError, load_bundle
-    from twostep.report.replay import replay_bundle, replay_model, replay_settings, replay_tables
+    from twostep.report.replay import replay_tables
     from twostep.report.replay_plots import write_replay
 
     found = bundle or replay_bundle(report.runs)
@@ -481,7 +488,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             if loaded.ignored:
                 read_line += f" (skipped {loaded.ignored} sweep/report run(s))"
             _warn_missing_jobs(loaded)
-        report = build_report(runs, task_titles(runs, args.data_root))
+        report = build_report(runs, task_titles(runs, args.data_root), RUN_PARAMS)
     except ReportInputError as error:
         print(f"twostep-report: {error}", file=sys.stderr)
         return 1

@@ -1,7 +1,7 @@
 """Finished jobs, stored by job key, so that no finished job is ever computed twice.
 
 What goes into the key (the identity config and the content of every input file) and
-which results are kept is decided by :mod:`twostep.jobs.identity`; this module reads the
+which results are kept is decided by :mod:`flows.identity`; this module reads the
 config and the files, and owns ``<orchestration.job_store>/<key>/``. A result is written
 once, atomically, after the job finished; a job that raised, or whose result says it did
 not finish (``llm_error``, ``error``), is not stored: a re-run tries it again.
@@ -10,7 +10,7 @@ A stored entry is used only when it provably belongs to the job (:meth:`JobStore
 its folder is no symlink, its ``seal.json`` (written last) names the job's key, the job
 (domain, task, method, decomposer, agents, seed) and its inputs' digests, and holds the
 SHA-256 of its ``result.json``; the result says the same job and is whole and consistent
-(:func:`twostep.jobs.identity.result_problem`). Anything else is computed again, with one
+(:func:`flows.identity.result_problem`). Anything else is computed again, with one
 warning line naming the entry and why (the sweep's summary counts them). An entry stored
 before seals existed is checked by its ``config.json`` (it must hash to the key) and
 sealed when first used.
@@ -29,10 +29,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from twostep.jobs import identity
+from flows import identity
+from flows.redaction import redact_config
 from twostep.tasks.benchmark import BenchmarkError, task_path
 from twostep.util.files import json_text, write_json_atomic, write_text_atomic
-from twostep.util.redaction import redact_config
 
 SEAL = "seal.json"  # written last: the entry's key, job, inputs and result checksum
 SEAL_FORMAT = 1
@@ -63,7 +63,7 @@ def job_inputs(config: Mapping[str, Any]) -> dict[str, str]:
 
 
 def job_key(config: Mapping[str, Any], inputs: Mapping[str, str] | None = None) -> str:
-    """The job's key (:func:`twostep.jobs.identity.job_key`); ``inputs``: :func:`job_inputs`."""
+    """The job's key (:func:`flows.identity.job_key`); ``inputs``: :func:`job_inputs`."""
     return identity.job_key(config, inputs)
 
 
@@ -307,7 +307,7 @@ class JobStore:
         inputs: Mapping[str, str] | None = None,
     ) -> bool:
         """Store a finished job's result; False (nothing written) for one that did not
-        finish its work (:func:`twostep.jobs.identity.is_storable`), or when the store cannot
+        finish its work (:func:`flows.identity.is_storable`), or when the store cannot
         be written: the result is not lost, the job's run directory holds it, and a
         warning says so. ``inputs`` (the job's input digests): the entry is sealed
         (``seal.json``, written last), so that a later run can check it is this job's."""

@@ -24,16 +24,12 @@ from pathlib import Path
 def draw(sweep_dir: Path) -> list[tuple[Path, str | None]]:
     """The sweep's report as (file, artifact folder) pairs for its parent run; none (and
     a warning) when there is nothing to report."""
-    from twostep.report import (
-        ReportInputError,
-        build_report,
-        load_runs_from_sweep_dir,
-        write_report,
-    )
+    from flows.report_sources import RUN_PARAMS, load_runs_from_sweep_dir
+    from twostep.report import ReportInputError, build_report, write_report
 
     out = sweep_dir / "report"
     try:
-        report = build_report(load_runs_from_sweep_dir(sweep_dir))
+        report = build_report(load_runs_from_sweep_dir(sweep_dir), params=RUN_PARAMS)
         paths = write_report(report, out, f"TwoStep sweep {sweep_dir.name}", f"`{sweep_dir}`")
     except ReportInputError:
         return []

@@ -20,7 +20,7 @@ from typing import Any
 
 from omegaconf import DictConfig
 
-from twostep.jobs.identity import is_sweep_identity_key
+from flows.identity import is_sweep_identity_key
 from twostep.util.files import write_json_atomic
 from twostep.util.redaction import redact_text
 

@@ -29,6 +29,7 @@ from flows.artifacts import write_job_files
 from flows.build import Job
 from flows.config import register
 from flows.console import format_summary, progress_line
+from flows.identity import job_name
 from flows.job import execute_job
 from flows.servers import pid_alive
 from flows.store import JobStore, job_config, job_key
@@ -37,7 +38,6 @@ from flows.tracking.contents import config_tags, job_metrics, job_params
 from flows.tracking.runs import TrackingError
 from tests.conftest import blocks_problem
 from tests.test_prompts import make_blocksworld_data
-from twostep.jobs.identity import job_name
 
 REPO = Path(__file__).resolve().parent.parent
 CONF = REPO / "conf"

@@ -1,4 +1,4 @@
-"""Job identity (twostep/jobs/identity.py): which keys count, the key, the names, what is stored."""
+"""Job identity (flows/identity.py): which keys count, the key, the names, what is stored."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from typing import Any
 
 import pytest
 
-from twostep.jobs import identity
+from flows import identity
 
 BASE: dict[str, Any] = {
     "domain": {"name": "grippers", "agent_predicates": ["free"]},

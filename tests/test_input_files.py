@@ -26,9 +26,9 @@ from pathlib import Path
 
 import pytest
 
+from flows.identity import file_digest
 from tests.conftest import DATA
 from twostep.embodied import FloorPlanError, floor_plan_from_dict
-from twostep.jobs.identity import file_digest
 from twostep.util.files import (
     MAX_YAML_NODES,
     FileFormatError,

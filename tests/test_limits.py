@@ -25,8 +25,8 @@ from pathlib import Path
 
 import pytest
 
+from flows.identity import job_key
 from tests.conftest import DATA
-from twostep.jobs.identity import job_key
 from twostep.pddl import load_problem
 from twostep.pddl.translator import GroundingLimits
 from twostep.planner import PlannerSettings, plan_pddl

@@ -181,7 +181,7 @@ def test_a_data_root_whose_folder_has_tasks_but_no_domain_file_reads_them_with_o
     # The paper's blocksworld folder ships problems only. A data root in that shape lists
     # the domain, loads its tasks with twostep's own domain file, and a job's inputs name
     # that file; a folder of a domain twostep does not ship stays unknown.
-    from twostep.jobs.identity import job_input_files
+    from flows.identity import job_input_files
     from twostep.tasks.benchmark import (
         DEFAULT_DATA_ROOT,
         BenchmarkError,

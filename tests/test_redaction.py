@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from twostep.util.redaction import looks_like_a_key, redact_config, redact_text
+from flows.redaction import redact_config
+from twostep.util.redaction import looks_like_a_key, redact_text
 
 
 @pytest.mark.parametrize(

@@ -419,7 +419,7 @@ def test_the_grid_is_what_the_bundle_answers(two_runs: Path) -> None:
 def test_the_new_llm_keys_keep_stored_jobs_keys_and_the_bundle_is_an_input(tmp_path: Path) -> None:
     """llm.bundle and llm.translator at the values that compute what jobs computed before
     them leave the job key as it was; a bundle's content is one of the job's inputs."""
-    from twostep.jobs.identity import job_input_files, job_key
+    from flows.identity import job_input_files, job_key
 
     before = {"domain": {"name": "blocksworld"}, "task": 1, "agents": 2, "seed": 0,
               "method": {"name": "twostep"}, "decomposer": {"name": "llm"},

@@ -26,11 +26,11 @@ os.environ.setdefault("MLFLOW_DISABLE_TELEMETRY", "true")
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 
 from flows.report_cli import load_runs_from_mlflow, main
-from twostep.jobs.params import flatten_config
+from flows.report_sources import load_runs_from_sweep_dir
+from flows.tracking.params import flatten_config
 from twostep.report import (
     ReportInputError,
     build_report,
-    load_runs_from_sweep_dir,
     render_markdown,
     write_report,
 )

@@ -22,7 +22,8 @@ os.environ.setdefault("MLFLOW_DISABLE_TELEMETRY", "true")
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 
 from flows.report_cli import load_runs_from_mlflow, main
-from twostep.report import build_report, load_runs_from_sweep_dir
+from flows.report_sources import RUN_PARAMS, load_runs_from_sweep_dir
+from twostep.report import build_report
 
 REPO = Path(__file__).resolve().parent.parent
 EXPERIMENT = "report-real-sweep"
@@ -92,7 +93,7 @@ def test_report_numbers_equal_the_mlflow_metrics(sweep: tuple[str, Path]) -> Non
     logged = logged_metrics(tracking_uri)
     assert len(logged) == 2 * 3 * 2 * 2  # tasks x methods x N x seeds
     distinct = logged[(logged["method"] != "sa") | (logged["grid"] == 1)]
-    report = build_report(load_runs_from_mlflow(tracking_uri, EXPERIMENT))
+    report = build_report(load_runs_from_mlflow(tracking_uri, EXPERIMENT), params=RUN_PARAMS)
     assert report.counts["runs"] == len(distinct) == len(logged) - 2 * 2
     assert report.counts["grid_duplicates"] == 2 * 2  # SA at grid N = 2: 2 tasks x 2 seeds
     for row in report.summary.to_dict("records"):
@@ -109,8 +110,10 @@ def test_report_numbers_equal_the_mlflow_metrics(sweep: tuple[str, Path]) -> Non
 
 def test_sweep_dir_and_mlflow_reports_agree(sweep: tuple[str, Path]) -> None:
     tracking_uri, multirun = sweep
-    from_mlflow = build_report(load_runs_from_mlflow(tracking_uri, EXPERIMENT)).summary
-    from_dir = build_report(load_runs_from_sweep_dir(multirun)).summary
+    from_mlflow = build_report(
+        load_runs_from_mlflow(tracking_uri, EXPERIMENT), params=RUN_PARAMS
+    ).summary
+    from_dir = build_report(load_runs_from_sweep_dir(multirun), params=RUN_PARAMS).summary
     keys = ["domain", "series", "agents"]
     pd.testing.assert_frame_equal(
         from_mlflow.sort_values(keys).reset_index(drop=True),

@@ -12,8 +12,9 @@ from typing import Any
 
 import pytest
 
+from flows.report_sources import RUN_PARAMS, load_runs_from_sweep_dir
 from twostep.planner.limits import guard_stops, planner_limit_hits
-from twostep.report import build_report, format_console, load_runs_from_sweep_dir
+from twostep.report import build_report, format_console
 
 FINISHED = {"status": "solved", "exit_code": 0, "message": "plan found"}
 OUT_OF_TIME = {"status": "solved", "exit_code": 23, "message": "search out of time"}
@@ -70,7 +71,7 @@ def table(tmp_path: Path) -> Any:
     # task 2: the wall-clock guard stopped the planner (with a plan): a length, no time
     twostep.append(_result("twostep", 2, 0, 15, 40.0, GUARD))
     _write(tmp_path, [*sa, *twostep])
-    report = build_report(load_runs_from_sweep_dir(tmp_path))
+    report = build_report(load_runs_from_sweep_dir(tmp_path), params=RUN_PARAMS)
     return report
 
 

@@ -24,7 +24,6 @@ against the packages):
                               portfolio), one request in, one result out; the registry
 - :mod:`twostep.dealing`      plan-deal's algorithm: the SA plan's pieces dealt to N agents
 - :mod:`twostep.embodied`     the grid-kitchen executor and its pictures
-- :mod:`twostep.jobs`         a job's identity (key, name, input files) and flat params
 - :mod:`twostep.report`       the report: run table, series, tables and figures
 - :mod:`twostep.cli`          twostep-score, twostep-data, twostep-prompts
 - :mod:`twostep.util`         the checked file reader and atomic writer; secrets masked
@@ -62,8 +61,11 @@ MOVED_MODULES = {
     "twostep.processes": "twostep.programs.processes",
     "twostep.files": "twostep.util.files",
     "twostep.redaction": "twostep.util.redaction",
-    "twostep.identity": "twostep.jobs.identity",
-    "twostep.params": "twostep.jobs.params",
+    "twostep.identity": "flows.identity",
+    "twostep.params": "flows.tracking.params",
+    "twostep.jobs.identity": "flows.identity",  # the config's rules live in flows/
+    "twostep.jobs.params": "flows.tracking.params",
+    "twostep.jobs": "flows",  # (after its modules: the first name that matches wins)
     "twostep.validation": "twostep.verify.validation",
     "twostep.pddl.environment": "twostep.verify.up_environment",
     "twostep.pipeline": "twostep.methods",
@@ -71,6 +73,14 @@ MOVED_MODULES = {
 }
 """Old module name -> where it lives now (a package's modules moved with it): the old names
 still import, with a DeprecationWarning, for one release."""
+
+MOVED_NAMES = {
+    "twostep.util.redaction.redact_config": "flows.redaction.redact_config",
+    "twostep.report.load_runs_from_sweep_dir": "flows.report_sources.load_runs_from_sweep_dir",
+    "twostep.report.runs.load_runs_from_sweep_dir": "flows.report_sources.load_runs_from_sweep_dir",
+}
+"""Old name of a function -> where it lives now: the config's rules moved to ``flows/``;
+the old names still import (the module's ``__getattr__``), with the same warning."""
 
 
 def _moved(name: str) -> str | None:
@@ -101,6 +111,17 @@ class _MovedModules(abc.MetaPathFinder, abc.Loader):
             stacklevel=2,
         )
         sys.modules[module.__name__] = importlib.import_module(new)
+
+
+def moved_name(module: str, name: str, new_module: str) -> object:
+    """``name`` of ``new_module``, for a module's ``__getattr__`` that still answers to a
+    moved name (:data:`MOVED_NAMES`), with the moved modules' one-line warning."""
+    warnings.warn(
+        f"{module}.{name} is now {new_module}.{name}; the old name goes in the next release",
+        DeprecationWarning,
+        stacklevel=3,
+    )
+    return getattr(importlib.import_module(new_module), name)
 
 
 sys.meta_path.insert(0, _MovedModules())  # before the path finder: one module per file

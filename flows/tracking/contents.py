@@ -12,9 +12,9 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-from twostep.jobs.identity import config_seed_matters, identity_config, is_relevant
-from twostep.jobs.params import flatten_config
-from twostep.util.redaction import redact_config
+from flows.identity import config_seed_matters, identity_config, is_relevant
+from flows.redaction import redact_config
+from flows.tracking.params import flatten_config
 
 KIND = "twostep.kind"
 JOB_KEY = "twostep.job_key"
@@ -41,7 +41,7 @@ PER_SEED = "one per seed"
 
 # The params of a job run: what defines the experiment (where it runs goes to tags). A
 # key the job's method never reads (``decomposer.*`` for SA, ``llm.*`` without the LLM
-# decomposer) is left out: twostep.jobs.identity.is_relevant.
+# decomposer) is left out: flows.identity.is_relevant.
 EXPERIMENT_PARAMS: tuple[str, ...] = (
     "domain.name",
     "task",
@@ -119,7 +119,7 @@ def job_params(config: Mapping[str, Any]) -> dict[str, str]:
     """What defines the job's experiment (:data:`EXPERIMENT_PARAMS`, those its method
     reads); ``agents`` is the N the job ran: 1 for SA (the grid's N is a tag). Secret-looking
     keys never are params; credentials inside URLs are masked
-    (:func:`twostep.util.redaction.redact_config`)."""
+    (:func:`flows.redaction.redact_config`)."""
     method, decomposer = _method_of(config)
     flat = flatten_config(redact_config(config))
     params: dict[str, str] = {}

@@ -45,6 +45,22 @@ class MethodName(StrEnum):
     TWOSTEP = "twostep"
 
 
+# Where a run's answer depends on its seed: the LLM's answers (the seed is part of every
+# request) and the embodied executor's start cells and backoffs. Every other run is
+# deterministic: its seeds repeat one run (same plans, same lengths; the planner's times
+# of later seeds are the first seed's, from the planner cache).
+SEEDED_DECOMPOSERS: frozenset[str] = frozenset({"llm"})
+SEEDED_EXECUTORS: frozenset[str] = frozenset({"embodied"})
+
+
+def seed_matters(method: str | None, decomposer: str | None, executor: str | None = None) -> bool:
+    """Whether runs of ``method`` (``decomposer``, ``executor``) differ by seed; False: a
+    deterministic method, one distinct run whatever the seed."""
+    if executor is not None and str(executor) in SEEDED_EXECUTORS:
+        return True
+    return method == "twostep" and str(decomposer) in SEEDED_DECOMPOSERS
+
+
 class RunStatus(StrEnum):
     """How a run ended (result.json ``status``): the deciding planner call's status,
     ``llm_error`` when the decomposer's LLM calls failed, or ``embodied_failed`` when the

@@ -1,23 +1,29 @@
 """Reports: the paper's Fig. 3, Tables I and II and % changes from a table of runs.
 
-Pure analysis (pandas, matplotlib); reading MLflow lives in ``flows/report_cli.py``.
+Pure analysis (pandas, matplotlib) of a run table with canonical columns
+(:mod:`twostep.report.runs`); reading MLflow and a sweep's directory, and what a config's
+params stand for, live in ``flows/`` (``report_cli.py``, ``report_sources.py``).
 Typical use, from any source of runs::
 
-    from twostep.report import build_report, load_runs_from_sweep_dir, write_report
+    from flows.report_sources import RUN_PARAMS, load_runs_from_sweep_dir
+    from twostep.report import build_report, write_report
 
-    report = build_report(load_runs_from_sweep_dir(Path("outputs/multiruns/...")))
+    runs = load_runs_from_sweep_dir(Path("outputs/multiruns/..."))
+    report = build_report(runs, params=RUN_PARAMS)
     write_report(report, Path("outputs/reports/x"), title="...", source="...")
     report.compared     # the same cells over the tasks every series solved (the figures)
     report.summary      # per domain, series, N: mean/std over seeds, counts
 """
+
+from typing import Any
 
 from twostep.report.build import REPORT_METRICS, Report, build_report, series_label
 from twostep.report.render import format_console, render_markdown, write_report
 from twostep.report.runs import (
     METRICS,
     ReportInputError,
+    RunParams,
     load_runs_from_csv,
-    load_runs_from_sweep_dir,
     normalise_runs,
     result_to_row,
 )
@@ -27,13 +33,23 @@ __all__ = [
     "REPORT_METRICS",
     "Report",
     "ReportInputError",
+    "RunParams",
     "build_report",
     "format_console",
     "load_runs_from_csv",
-    "load_runs_from_sweep_dir",
     "normalise_runs",
     "render_markdown",
     "result_to_row",
     "series_label",
     "write_report",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """``load_runs_from_sweep_dir`` moved to :mod:`flows.report_sources` (it reads the
+    config each job's directory holds): the old name still imports, with a warning."""
+    if name == "load_runs_from_sweep_dir":
+        from twostep import moved_name
+
+        return moved_name(__name__, name, "flows.report_sources")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -61,12 +61,11 @@ from twostep.report.model import (
     Report,
 )
 from twostep.report.notes import coverage_notes, report_notes
-from twostep.report.runs import ReportInputError, normalise_runs
+from twostep.report.runs import NO_PARAMS, ReportInputError, RunParams, normalise_runs
 from twostep.report.seeds import grid_duplicates, measured_runs
 from twostep.report.series import (
     assign_series,
     detect_variant_params,
-    is_bookkeeping_param,
     series_label,
     series_order,
 )
@@ -80,9 +79,9 @@ __all__ = [
     "REPORT_METRICS",
     "SERIES_COLUMNS",
     "Report",
+    "RunParams",
     "build_report",
     "detect_variant_params",
-    "is_bookkeeping_param",
     "series_label",
 ]
 
@@ -123,11 +122,17 @@ def with_seeded(cells: pd.DataFrame, measured: pd.DataFrame) -> pd.DataFrame:
     return cells.assign(seeded=[bool(seeded.get(s, False)) for s in cells["series"]])
 
 
-def build_report(runs: pd.DataFrame, task_titles: Mapping[int, str] | None = None) -> Report:
+def build_report(
+    runs: pd.DataFrame,
+    task_titles: Mapping[int, str] | None = None,
+    params: RunParams = NO_PARAMS,
+) -> Report:
     """All of a report's tables from a run table (see :mod:`twostep.report.runs`).
 
     ``task_titles`` (task number -> a short description) heads Table II's columns when
-    given. Raises :class:`ReportInputError` when there is no run at all.
+    given; ``params`` says what the table's ``param.*`` columns stand for (the config's
+    rules: ``flows.report_sources.RUN_PARAMS`` for a table ``flows/`` made). Raises
+    :class:`ReportInputError` when there is no run at all.
     """
     if runs is None or len(runs) == 0:
         raise ReportInputError("no runs to report")
@@ -137,12 +142,12 @@ def build_report(runs: pd.DataFrame, task_titles: Mapping[int, str] | None = Non
     ) & table["method"].isin(["sa", "ma", "twostep"])
     table["superseded"] = superseded_runs(table)
     table["counted"] = table["placed"] & ~table["superseded"]
-    variant_params, between = detect_variant_params(table)
-    table, values_of = assign_series(table, variant_params)
+    variant_params, between = detect_variant_params(table, params)
+    table, values_of = assign_series(table, variant_params, params)
     table["duplicate"] = grid_duplicates(table)
     table["counted"] &= ~table["duplicate"]
     identified = table[table["counted"]]
-    measured = measured_runs(identified)  # what means are made of (one distinct run ...)
+    measured = measured_runs(identified, params)  # what means are made of (one distinct run ...)
     ok = measured[measured["status"] == "success"]
 
     per_seed = per_seed_means(ok)
@@ -207,4 +212,5 @@ def build_report(runs: pd.DataFrame, task_titles: Mapping[int, str] | None = Non
         variant_params=tuple(variant_params),
         notes=tuple(notes),
         table2=table2,
+        params=params,
     )

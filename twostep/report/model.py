@@ -6,6 +6,8 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
+from twostep.report.runs import RunParams
+
 #: The two metrics of Fig. 3, with axis labels: the normalised panel and the changes.
 REPORT_METRICS: tuple[str, ...] = ("exec_length", "planning_time_s")
 #: Metrics averaged per cell: Fig. 3's two, and the embodied length of kitchen runs (the
@@ -46,6 +48,7 @@ class Report:
     ``table1``: expert vs decomposers on the annotated tasks (paper's rows included).
     ``table2``: embodied length and planning time on the kitchen tasks (paper's rows
     included; empty without kitchen runs): :mod:`twostep.report.table2`.
+    ``params``: what the run table's ``param.*`` columns stand for.
     """
 
     runs: pd.DataFrame
@@ -63,6 +66,7 @@ class Report:
     variant_params: tuple[str, ...]
     notes: tuple[str, ...] = field(default=())
     table2: pd.DataFrame = field(default_factory=pd.DataFrame)  # the paper's Table II (kitchen)
+    params: RunParams = field(default_factory=RunParams)
 
     @property
     def domains(self) -> tuple[str, ...]:

@@ -28,6 +28,7 @@ from twostep.report.model import METRIC_LABELS, METRIC_NAMES, Report
 from twostep.report.paper import ANNOTATED_TASKS, TABLE1_AGENTS, TABLE1_DOMAINS
 from twostep.report.planning_time import planning_time_view, view_rows
 from twostep.report.plots import plot_report
+from twostep.report.runs import PARAM_PREFIX
 from twostep.report.seeds import distinct_label
 from twostep.report.table2 import (
     PAPER_TIME_LIMIT_S,
@@ -324,7 +325,8 @@ def _kitchen_limits(report: Report) -> str:
     """The planner alias and search limit(s) the kitchen runs were launched with."""
     runs = report.runs[report.runs["domain"] == TABLE2_DOMAIN]
     settings = []
-    for column, unit in (("param.planner.alias", ""), ("param.planner.time_limit_s", " s")):
+    for param, unit in report.params.planner:
+        column = f"{PARAM_PREFIX}{param}"
         if column in runs:
             values = sorted({str(v) for v in runs[column].dropna()})
             settings += [f"{v}{unit}" for v in values]

@@ -261,38 +261,6 @@ def coverage_markdown(check: Mapping[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _param(runs: pd.DataFrame, key: str) -> list[str]:
-    column = f"param.{key}"
-    if column not in runs:
-        return []
-    replayed = runs[(runs["method"] == "twostep") & (runs["decomposer"] == "llm")]
-    return [str(v) for v in dict.fromkeys(replayed[column]) if str(v) not in ("", "None", "nan")]
-
-
-def replay_bundle(runs: pd.DataFrame) -> str | None:
-    """The bundle the replayed TwoStep runs read (``llm.bundle``), if exactly one."""
-    found = _param(runs, "llm.bundle")
-    return found[0] if len(found) == 1 else None
-
-
-def replay_model(runs: pd.DataFrame) -> str | None:
-    found = _param(runs, "llm.model")
-    return found[0] if len(found) == 1 else None
-
-
-def replay_settings(runs: pd.DataFrame) -> dict[str, str]:
-    """How the replayed runs planned and scored, for the report's caption."""
-    alias = ", ".join(_param(runs, "planner.alias")) or "?"
-    limit = ", ".join(_param(runs, "planner.time_limit_s")) or "?"
-    score = ", ".join(_param(runs, "score_mode")) or "exact"
-    translator = ", ".join(_param(runs, "llm.translator")) or "?"
-    return {
-        "planner": f"Fast Downward {alias}, search time limit {limit} s (TwoStep: that / N per agent)",
-        "score": f"{score} (minimum makespan)" if score == "exact" else score,
-        "translator": translator,
-    }
-
-
 def compact_markdown(tables: ReplayTables) -> str:
     """Table I in one line per domain and row: ``length (tasks)`` per N, ``± std`` where
     runs differ; then each row's length / SA averaged over the domains."""

@@ -1,10 +1,11 @@
 """The run table every report starts from: one row per job, whatever its source.
 
 A report reads jobs from MLflow (``flows/report_cli.py``, following ``docs/tracking.md``),
-from a Hydra multirun directory (:func:`load_runs_from_sweep_dir`, no MLflow needed) or
-from a report's own ``runs.csv`` (:func:`load_runs_from_csv`: redraw a report without its
-source). All end up in the same *canonical run table*,
-checked and typed by :func:`normalise_runs`:
+from a sweep's directory (``flows/report_sources.py``, no MLflow needed) or from a
+report's own ``runs.csv`` (:func:`load_runs_from_csv`: redraw a report without its
+source). All end up in the same *canonical run table*, checked and typed by
+:func:`normalise_runs`; the report knows no config, so what the ``param.*`` columns stand
+for comes beside the table, from whoever read the config (:class:`RunParams`):
 
 =================  ===================================================================
 column             meaning
@@ -23,7 +24,7 @@ column             meaning
                    are superseded by its latest
 ``start_time``     run start, ms since the epoch (NaN if unknown)
 metric columns     :data:`METRICS` (float, NaN when not recorded)
-``param.<key>``    every other config value, as a string (the flattened resolved config)
+``param.<name>``   every other setting of the run, as a string (opaque to the report)
 =================  ===================================================================
 
 Rows whose domain, task, method, agents or seed cannot be read are kept (with NA keys):
@@ -32,17 +33,15 @@ Rows whose domain, task, method, agents or seed cannot be read are kept (with NA
 
 from __future__ import annotations
 
-import json
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
-from twostep.jobs.params import flatten_config
 from twostep.planner.limits import guard_stops, planner_limit_hits
-from twostep.util.files import FileFormatError, read_yaml_file
 
 
 class ReportInputError(Exception):
@@ -71,17 +70,44 @@ METRICS: tuple[str, ...] = (
 #: Columns that identify a job: one (domain, task, method, decomposer, N, seed) cell.
 KEY_COLUMNS: tuple[str, ...] = ("domain", "task", "method", "decomposer", "agents", "seed")
 
-#: Config keys that are the key columns themselves (not kept as ``param.*`` columns).
-KEY_PARAMS: dict[str, str] = {
-    "domain.name": "domain",
-    "task": "task",
-    "method.name": "method",
-    "decomposer.name": "decomposer",
-    "agents": "agents",
-    "seed": "seed",
-}
-
 PARAM_PREFIX = "param."
+
+
+def _every_param(name: str) -> bool:
+    return True
+
+
+def _read_by_every_run(name: str, method: str, decomposer: str) -> bool:
+    return True
+
+
+@dataclass(frozen=True)
+class RunParams:
+    """What a run table's ``param.*`` columns stand for (names without ``param.``), told by
+    whoever made the table from a config (``flows.report_sources.RUN_PARAMS``): the report
+    itself knows no config. The default knows nothing: every param may split series, for
+    every method; no executor, no planner settings.
+
+    * ``identity``: whether the param can change a run's result (one that cannot never
+      splits series);
+    * ``read_by``: whether runs of ``(method, decomposer)`` read the param (one they do
+      not read never splits their series);
+    * ``executor``: the param naming a run's executor (whether its seed matters:
+      :mod:`twostep.report.seeds`);
+    * ``planner``: the params that describe the planner, each with its unit (Table II's
+      caption).
+    """
+
+    identity: Callable[[str], bool] = _every_param
+    read_by: Callable[[str, str, str], bool] = _read_by_every_run
+    executor: str | None = None
+    planner: tuple[tuple[str, str], ...] = ()
+
+
+NO_PARAMS = RunParams()
+"""A run table's params told nothing about (the default of every report function)."""
+
+
 STATUSES: tuple[str, ...] = ("success", "failed", "timeout", "running")
 METHODS: tuple[str, ...] = ("sa", "ma", "twostep")
 
@@ -231,17 +257,6 @@ def normalise_runs(frame: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
-def params_to_columns(params: Mapping[str, str]) -> dict[str, Any]:
-    """Split flattened params into key columns and ``param.*`` columns."""
-    row: dict[str, Any] = {}
-    for key, value in params.items():
-        if key in KEY_PARAMS:
-            row[KEY_PARAMS[key]] = value
-        elif not key.startswith("hydra."):
-            row[PARAM_PREFIX + key] = value
-    return row
-
-
 def _subgoal_counts(subgoals: object) -> dict[str, float]:
     if not isinstance(subgoals, list):
         return {}
@@ -282,60 +297,6 @@ def result_to_row(result: Mapping[str, Any]) -> dict[str, Any]:
     return row
 
 
-def _read_hydra_config(job_dir: Path) -> dict[str, str]:
-    path = job_dir / ".hydra" / "config.yaml"
-    if not path.is_file():
-        return {}
-    try:
-        loaded = read_yaml_file(path)
-    except FileFormatError:
-        return {}
-    return flatten_config(loaded) if isinstance(loaded, Mapping) else {}
-
-
-def _job_dirs(root: Path) -> Iterable[Path]:
-    seen: set[Path] = set()
-    for path in sorted(root.rglob("result.json")):
-        seen.add(path.parent)
-    for path in sorted(root.rglob(".hydra/config.yaml")):
-        seen.add(path.parent.parent)
-    return sorted(seen)
-
-
-def load_runs_from_sweep_dir(root: Path) -> pd.DataFrame:
-    """The canonical run table of a Hydra multirun directory, without MLflow.
-
-    Every job directory below ``root`` counts: one with a ``result.json`` gives its
-    metrics; one with only ``.hydra/config.yaml`` (the job started but wrote no result)
-    is a failed run. Params come from the job's ``.hydra/config.yaml`` when present.
-    """
-    if not root.is_dir():
-        raise ReportInputError(f"sweep dir not found: {root}")
-    rows: list[dict[str, Any]] = []
-    for job_dir in _job_dirs(root):
-        params = _read_hydra_config(job_dir)
-        row = params_to_columns(params)
-        row["agents_param"] = params.get("agents")  # as launched (SA ignores it)
-        result_path = job_dir / "result.json"
-        if result_path.is_file():
-            try:
-                result = json.loads(result_path.read_text())
-            except (OSError, json.JSONDecodeError) as error:
-                row.update(status="failed", error=f"unreadable result.json: {error}")
-            else:
-                if isinstance(result, Mapping):
-                    row.update({k: v for k, v in result_to_row(result).items() if v is not None})
-                else:
-                    row.update(status="failed", error="result.json is not a JSON object")
-        else:
-            row.update(status="failed", error="job wrote no result.json")
-        row["run_id"] = str(job_dir.relative_to(root)) if job_dir != root else "."
-        rows.append(row)
-    if not rows:
-        raise ReportInputError(f"no job directories (result.json or .hydra/) under {root}")
-    return normalise_runs(pd.DataFrame.from_records(rows))
-
-
 def load_runs_from_csv(path: Path) -> pd.DataFrame:
     """The canonical run table of a ``runs.csv`` a report wrote (or any CSV with the
     canonical columns). Every value is read as text, so params keep their spelling."""
@@ -348,3 +309,13 @@ def load_runs_from_csv(path: Path) -> pd.DataFrame:
     if frame.empty:
         raise ReportInputError(f"no runs in {path}")
     return normalise_runs(frame)
+
+
+def __getattr__(name: str) -> Any:
+    """``load_runs_from_sweep_dir`` moved to :mod:`flows.report_sources` (it reads the
+    config each job's directory holds): the old name still imports, with a warning."""
+    if name == "load_runs_from_sweep_dir":
+        from twostep import moved_name
+
+        return moved_name(__name__, name, "flows.report_sources")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -12,7 +12,7 @@ A spread is shown only where runs differ, so a report must know which runs are t
   use that run alone, the lowest seed's (its planner calls were the ones measured), with
   n = 1 and no spread; the other seeds are still counted as runs (a timed-out task times
   out in every seed). Runs that differ by seed (the LLM decomposer's answers, the
-  embodied executor's start cells: :func:`twostep.jobs.identity.seed_matters`) are averaged
+  embodied executor's start cells: :func:`twostep.methods.result.seed_matters`) are averaged
   over their n seeds, with the sample std (:func:`measured_runs`).
 """
 
@@ -20,18 +20,17 @@ from __future__ import annotations
 
 import pandas as pd
 
-from twostep.jobs.identity import seed_matters
+from twostep.methods.result import seed_matters
 from twostep.report.model import CELL_COLUMNS
-from twostep.report.runs import PARAM_PREFIX
-
-EXECUTOR_PARAM = f"{PARAM_PREFIX}executor.name"
+from twostep.report.runs import NO_PARAMS, PARAM_PREFIX, RunParams
 
 
-def seeded_runs(runs: pd.DataFrame) -> pd.Series:
-    """Per run: whether its method's runs differ by seed (False: deterministic). A run
-    table without the executor param (an older one) says it by its domain: a domain with
-    embodied lengths was executed in the kitchen."""
-    executors = runs[EXECUTOR_PARAM] if EXECUTOR_PARAM in runs else pd.Series("", index=runs.index)
+def seeded_runs(runs: pd.DataFrame, executor: str | None = None) -> pd.Series:
+    """Per run: whether its method's runs differ by seed (False: deterministic); the
+    param ``executor`` names each run's executor. A run table without it (an older one)
+    says it by its domain: a domain with embodied lengths was executed in the kitchen."""
+    column = f"{PARAM_PREFIX}{executor}"
+    executors = runs[column] if executor and column in runs else pd.Series("", index=runs.index)
     if "embodied_length" in runs:
         kitchens = set(runs.loc[runs["embodied_length"].notna(), "domain"])
         unknown = executors.fillna("").astype(str) == ""
@@ -59,12 +58,12 @@ def grid_duplicates(runs: pd.DataFrame) -> pd.Series:
     return flags
 
 
-def measured_runs(identified: pd.DataFrame) -> pd.DataFrame:
+def measured_runs(identified: pd.DataFrame, params: RunParams = NO_PARAMS) -> pd.DataFrame:
     """The runs means are made of: every run of a seed-dependent series; of a
     deterministic one, per (cell, task) the lowest (successful) seed's run, its ``seed``
     set to the cell's lowest (one distinct run: one value per cell, n = 1). Adds
     ``seeded``."""
-    runs = identified.assign(seeded=seeded_runs(identified))
+    runs = identified.assign(seeded=seeded_runs(identified, params.executor))
     fixed = runs[~runs["seeded"]]
     if fixed.empty:
         return runs

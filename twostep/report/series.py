@@ -1,33 +1,22 @@
-"""Series: which runs form one line of Fig. 3, and which config params split them.
+"""Series: which runs form one line of Fig. 3, and which params split them.
 
-Which config params are not part of a job's identity, and which a method never reads, is
-decided by :mod:`twostep.jobs.identity` (the one owner, shared with the job store and sweeps);
-:func:`is_bookkeeping_param` and :func:`param_applies` are the report's names for it.
+Which params cannot change a run's result, and which a method never reads, is the
+config's rule, told with the run table (:class:`twostep.report.runs.RunParams`: the job
+identity's rules when ``flows/`` made the table); such params never split a series.
 """
 
 from __future__ import annotations
 
 import pandas as pd
 
-from twostep.jobs.identity import is_identity_key, is_relevant
 from twostep.report.model import SERIES_COLUMNS
-from twostep.report.runs import KEY_COLUMNS, PARAM_PREFIX
+from twostep.report.runs import KEY_COLUMNS, NO_PARAMS, PARAM_PREFIX, RunParams
 
 
-def is_bookkeeping_param(name: str) -> bool:
-    """True for params that never split series: not part of a job's identity."""
-    return not is_identity_key(name)
-
-
-def param_applies(param: str, method: str, decomposer: str) -> bool:
-    """Whether runs of ``method`` (and ``decomposer``) read ``param`` at all."""
-    return is_relevant(param, method, decomposer)
-
-
-def _relevance_mask(runs: pd.DataFrame, param: str) -> pd.Series:
-    """Per run, whether its method (and decomposer) reads ``param``: see :func:`param_applies`."""
+def _relevance_mask(runs: pd.DataFrame, param: str, params: RunParams) -> pd.Series:
+    """Per run, whether its method (and decomposer) reads ``param`` (``params.read_by``)."""
     flags = [
-        param_applies(param, str(method), str(decomposer))
+        params.read_by(param, str(method), str(decomposer))
         for method, decomposer in zip(runs["method"], runs["decomposer"], strict=True)
     ]
     return pd.Series(flags, index=runs.index, dtype=bool)
@@ -44,21 +33,24 @@ def series_label(method: str, decomposer: str, variant: str = "") -> str:
     return f"{base} [{variant}]" if variant else base
 
 
-def detect_variant_params(runs: pd.DataFrame) -> tuple[list[str], list[str]]:
+def detect_variant_params(
+    runs: pd.DataFrame, params: RunParams = NO_PARAMS
+) -> tuple[list[str], list[str]]:
     """(params that split series, params that only differ between methods/decomposers).
 
     A param splits series when it takes more than one value inside one job cell
     (same domain, task, method, decomposer, N, seed). Params that only change with the
-    domain (e.g. its agent predicates) are neither.
+    domain (e.g. its agent predicates) are neither; nor are params that cannot change a
+    result (``params.identity``), or runs that do not read the param (``params.read_by``).
     """
     identified = runs[runs["counted"]]
     variant: list[str] = []
     between: list[str] = []
     for column in sorted(c for c in identified.columns if str(c).startswith(PARAM_PREFIX)):
         name = column[len(PARAM_PREFIX) :]
-        if is_bookkeeping_param(name):
+        if not params.identity(name):
             continue
-        sub = identified[_relevance_mask(identified, name)]
+        sub = identified[_relevance_mask(identified, name, params)]
         if sub.empty or sub[column].nunique(dropna=False) <= 1:
             continue
         per_cell = sub.groupby(list(KEY_COLUMNS), dropna=False)[column].nunique(dropna=False)
@@ -72,7 +64,7 @@ def detect_variant_params(runs: pd.DataFrame) -> tuple[list[str], list[str]]:
 
 
 def assign_series(
-    runs: pd.DataFrame, variant_params: list[str]
+    runs: pd.DataFrame, variant_params: list[str], params: RunParams = NO_PARAMS
 ) -> tuple[pd.DataFrame, dict[str, dict[str, str]]]:
     """Runs with ``variant`` and ``series`` columns, and each series' variant values."""
     runs = runs.copy()
@@ -84,7 +76,7 @@ def assign_series(
         family_params[(str(method), str(decomposer))] = [
             p
             for p in variant_params
-            if param_applies(p, str(method), str(decomposer))
+            if params.read_by(p, str(method), str(decomposer))
             and sub[PARAM_PREFIX + p].nunique(dropna=False) > 1
         ]
     variants: list[str] = []
@@ -92,8 +84,8 @@ def assign_series(
     for row in runs.to_dict("records"):
         method, decomposer = str(row["method"]), str(row["decomposer"])
         identified = bool(row["counted"])
-        params = family_params.get((method, decomposer), []) if identified else []
-        values = {p: str(row[PARAM_PREFIX + p]) for p in params}
+        split_by = family_params.get((method, decomposer), []) if identified else []
+        values = {p: str(row[PARAM_PREFIX + p]) for p in split_by}
         variant = ", ".join(f"{p}={v}" for p, v in values.items())
         label = series_label(method, decomposer, variant) if identified else ""
         variants.append(variant)

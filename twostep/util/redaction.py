@@ -7,7 +7,7 @@
 * A setting that names an environment variable (``llm.api_key_env``) must hold a variable
   *name*; a value that is not one, or that looks like a random token, is taken for a
   pasted key (:func:`looks_like_a_key`): refused before any work, and written as ``***``
-  wherever a config is stored (:func:`redact_config`).
+  wherever a config is stored (``flows.redaction.redact_config``, the config's side).
 * A secret the caller knows (the API key of a call) is replaced wherever it appears, and
   so is anything shaped like a provider key (``sk-...``, Google's ``AIza...``) or a
   bearer token (``Bearer ...``).
@@ -20,7 +20,7 @@ Plain functions on text and plain data; nothing here reads the environment.
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from typing import Any
 
 MASK = "***"
@@ -85,15 +85,11 @@ def holds_a_key(text: str) -> bool:
     )
 
 
-def redact_config(data: Any, key: str = "") -> Any:
-    """A copy of a (nested) config with every string redacted (:func:`redact_text`) and a
-    ``*_env`` value that looks like a key replaced by ``***``."""
-    if isinstance(data, Mapping):
-        return {k: redact_config(v, str(k)) for k, v in data.items()}
-    if isinstance(data, list | tuple):
-        return [redact_config(v, key) for v in data]
-    if isinstance(data, str):
-        if key.endswith("_env") and looks_like_a_key(data):  # names a variable: no key here
-            return MASK
-        return redact_text(data)
-    return data
+def __getattr__(name: str) -> Any:
+    """``redact_config`` moved to :mod:`flows.redaction` (the config's rule): the old name
+    still imports, with a DeprecationWarning, for one release."""
+    if name == "redact_config":
+        from twostep import moved_name
+
+        return moved_name(__name__, name, "flows.redaction")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,9 +1,9 @@
 """Run parameters as flat, dotted names: ``{"planner": {"alias": "lama"}}`` -> ``planner.alias``.
 
-One definition for both sides of a report: the MLflow writer (``flows/tracking.py``) logs
-params under these names and the sweep-dir reader (:mod:`twostep.report.runs`) rebuilds
-them from result files, so both sources group runs the same way. Kept free of heavy
-imports: every job loads it.
+One definition for both sides of a report: the MLflow writer (:mod:`flows.tracking.contents`)
+logs params under these names and the sweep-dir reader (:mod:`flows.report_sources`)
+rebuilds them from the jobs' ``.hydra/config.yaml``, so both sources group runs the same
+way. Kept free of heavy imports: every job loads it.
 """
 
 from __future__ import annotations

@@ -1,9 +1,11 @@
 """Job identity: which config keys say *what* a job computes, its key, its names, and
 which results are kept.
 
-The one owner of these rules. The job store (``flows/store.py``), the sweep's identity
-(``flows/sweep.py``), the job names on the console and in MLflow, and the report's
-grouping of runs (``twostep/report``) all ask this module.
+The one owner of these rules, on the config's side of the house (the library never sees
+a config: :mod:`flows.build` turns one into library objects). The job store
+(:mod:`flows.store`), the sweep's identity (:mod:`flows.sweep_state`), the job names on the
+console and in MLflow, the params MLflow records (:mod:`flows.tracking.contents`) and the
+report's series (:data:`flows.report_sources.RUN_PARAMS`) all ask this module.
 
 * A config key is **not identity** when it only says where or how a job runs
   (:data:`NOT_IDENTITY_GROUPS`, :data:`NOT_IDENTITY_KEYS`), or when the job's method
@@ -30,6 +32,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+import twostep
 from twostep.util.files import NotTextError, read_input_bytes
 
 # Bump when a change to the pipeline makes stored results stale.
@@ -59,7 +62,7 @@ UNFINISHED_STATUSES: frozenset[str] = frozenset({"error", "llm_error", "failed",
 # What every result has (``RunResult.to_dict``): a stored entry without them is no result.
 RESULT_KEYS: frozenset[str] = frozenset({"domain", "task", "method", "agents", "success", "status"})
 
-_PROMPTS = Path(__file__).resolve().parents[1] / "prompts"
+_PROMPTS = Path(twostep.__file__).resolve().parent / "prompts"  # the LLM prompts' templates
 
 
 def is_identity_key(name: str) -> bool:
@@ -272,24 +275,11 @@ def result_problem(result: Mapping[str, Any]) -> str | None:
     return None
 
 
-# Where a job's answer depends on its seed: the LLM's answers (the seed is part of every
-# request) and the embodied executor's start cells and backoffs. Every other job is
-# deterministic: its seeds repeat one run (same plans, same lengths; the planner's times
-# of later seeds are the first seed's, from the planner cache).
-SEEDED_DECOMPOSERS: frozenset[str] = frozenset({"llm"})
-SEEDED_EXECUTORS: frozenset[str] = frozenset({"embodied"})
-
-
-def seed_matters(method: str | None, decomposer: str | None, executor: str | None = None) -> bool:
-    """Whether runs of ``method`` (``decomposer``, ``executor``) differ by seed; False: a
-    deterministic method, one distinct run whatever the seed."""
-    if executor is not None and str(executor) in SEEDED_EXECUTORS:
-        return True
-    return method == "twostep" and str(decomposer) in SEEDED_DECOMPOSERS
-
-
 def config_seed_matters(config: Mapping[str, Any]) -> bool:
-    """:func:`seed_matters` of a job's config."""
+    """:func:`twostep.methods.result.seed_matters` of a job's config (imported here, in a
+    job's process: the methods are loaded there anyway)."""
+    from twostep.methods.result import seed_matters
+
     method, decomposer = _method_of(config)
     return seed_matters(method, decomposer, _name_of(config.get("executor")))
 
