@@ -11,6 +11,7 @@ module              what it is for
 ``status``          how a job ended, from its result (tags, records, flow state)
 ``step_stats``      what a job's step calls did: fresh calls, cache hits, time
 ``prefect_flow``    the Prefect flow of one job and its tasks (cache keys, retries)
+``identity``        job identity: which keys count, the key, names, storing
 ``store``           the store of finished jobs (keys: :mod:`flows.identity`)
 ``artifacts``       the files a job writes (and logs as artifacts)
 ``console``         what the commands print: summary, schedule, progress, one-line errors
@@ -25,8 +26,10 @@ module              what it is for
 ``prefect_template`` the empty Prefect database every new Prefect home copies
 ``services``        ``twostep-services``: long-lived Prefect server and MLflow UI
 ``tracking``        MLflow: one interface (:mod:`flows.tracking.runs`), its writers
+``redaction``       a config's secrets masked (the ``*_env`` rule)
 ``locations``       the local files and folders behind URIs; whether they can be written
 ``environment``     offline-safe environment defaults (telemetry off)
 ``report_cli``      ``twostep-report``: the paper's figures from the runs
+``report_sources``  a report's runs: key columns, sweep dirs, what params mean
 ==================  ==========================================================
 """
