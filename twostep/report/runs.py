@@ -4,8 +4,7 @@ A report reads jobs from MLflow (``flows/report_cli.py``, following ``docs/track
 from a sweep's directory (``flows/report_sources.py``, no MLflow needed) or from a
 report's own ``runs.csv`` (:func:`load_runs_from_csv`: redraw a report without its
 source). All end up in the same *canonical run table*, checked and typed by
-:func:`normalise_runs`; the report knows no config, so what the ``param.*`` columns stand
-for comes beside the table, from whoever read the config (:class:`RunParams`):
+:func:`normalise_runs`:
 
 =================  ===================================================================
 column             meaning
@@ -28,7 +27,10 @@ metric columns     :data:`METRICS` (float, NaN when not recorded)
 =================  ===================================================================
 
 Rows whose domain, task, method, agents or seed cannot be read are kept (with NA keys):
-:func:`twostep.report.build.build_report` counts and lists them, never drops them.
+:func:`twostep.report.build.build_report` counts and lists them, never drops them. The
+report knows no config: what the ``param.*`` columns stand for (which can split a series,
+which a method reads, the executor, the planner's settings) comes beside the table, from
+whoever read the config (:class:`RunParams`).
 """
 
 from __future__ import annotations
