@@ -17,7 +17,10 @@ With ``--layout`` (the default package only) it prints the house's shape as well
   Hydra job config: a dotted key ``group.field`` of ``conf/``, a Hydra-only group
   (``hydra``, ``orchestration``, ``mlflow``, ``output``, ``experiment``) or ``.hydra``;
 - *status vocabularies*: the ``*Status`` enums and ``*STATUSES`` constants in the library
-  and ``flows/``, and the comparisons of a value with a bare status string there;
+  and ``flows/`` and the modules defining them, and the comparisons of a value with a
+  bare status string (``==``, ``!=``, ``in`` a literal tuple/list/set, ``.isin``,
+  ``.count``; a key test such as ``"error" in result`` is not one) outside the module that
+  defines them all, when one does;
 - *places a method touches*: for each method, the files of the library, ``flows/`` and
   ``conf/`` that name it (a string literal equal to its name, a ``MethodName`` member of
   it, a config file named after it, or its own module).
@@ -213,9 +216,47 @@ def config_mentions(root: Path, modules: Mapping[str, Path]) -> list[tuple[str, 
     return found
 
 
+# Words that are statuses besides the enums' values (the report's, the unfinished set's).
+STATUS_WORDS = {"success", "failed", "running", "error", "timeout"}
+NOT_ONLY_STATUS = {"none"}  # also the LLM's answer kind and a CLI value
+
+
+def _literals(node: ast.expr) -> list[object]:
+    if isinstance(node, ast.Constant):
+        return [node.value]
+    if isinstance(node, ast.Tuple | ast.List | ast.Set):
+        return [e.value for e in node.elts if isinstance(e, ast.Constant)]
+    return []
+
+
+def _status_comparisons(tree: ast.AST, values: set[str]) -> Iterator[tuple[int, str]]:
+    """(line, word) of each comparison of a value with a bare status word: ``==``, ``!=``,
+    ``is``; ``in`` a literal tuple, list or set (``"error" in result`` asks for a key);
+    ``.isin([...])`` and ``.count(...)``."""
+    for node in ast.walk(tree):
+        hits: list[object] = []
+        if isinstance(node, ast.Compare):
+            operands = [node.left, *node.comparators]
+            for op, left, right in zip(node.ops, operands, operands[1:], strict=False):
+                if isinstance(op, ast.Eq | ast.NotEq | ast.Is | ast.IsNot):
+                    hits += [x.value for x in (left, right) if isinstance(x, ast.Constant)]
+                elif isinstance(op, ast.In | ast.NotIn) and not isinstance(right, ast.Constant):
+                    hits += _literals(right)
+        elif (
+            isinstance(node, ast.Call)
+            and isinstance(node.func, ast.Attribute)
+            and node.func.attr in ("isin", "count")
+        ):
+            hits += [v for arg in node.args for v in _literals(arg)]
+        for hit in hits:
+            if isinstance(hit, str) and hit in values:
+                yield node.lineno, hit
+
+
 def status_vocabularies(root: Path) -> tuple[list[str], list[tuple[str, int, str]]]:
     """The status vocabularies of the library and ``flows/`` (``module.Name``), and the
-    comparisons with a bare string that is one of their values (module, line, string)."""
+    comparisons with a bare string that is one of their values (module, line, string),
+    outside the module that defines them all (when one does)."""
     vocabularies: list[str] = []
     values: set[str] = set()
     trees = {}
@@ -236,14 +277,14 @@ def status_vocabularies(root: Path) -> tuple[list[str], list[tuple[str, int, str
                 for target in targets:
                     if isinstance(target, ast.Name) and target.id.endswith("STATUSES"):
                         vocabularies.append(f"{module}.{target.id}")
-    values |= {"success", "failed", "running", "error", "timeout"}
-    bare = []
-    for module, tree in trees.items():
-        for node in ast.walk(tree):
-            if isinstance(node, ast.Compare):
-                for operand in (node.left, *node.comparators):
-                    if isinstance(operand, ast.Constant) and operand.value in values:
-                        bare.append((module, node.lineno, str(operand.value)))
+    values = (values | STATUS_WORDS) - NOT_ONLY_STATUS
+    owners = {name.rsplit(".", 1)[0] for name in vocabularies}
+    bare = [
+        (module, line, word)
+        for module, tree in trees.items()
+        if not (len(owners) == 1 and module in owners)
+        for line, word in _status_comparisons(tree, values)
+    ]
     return vocabularies, sorted(bare)
 
 
@@ -284,7 +325,8 @@ def layout(root: Path, package: str, modules: Mapping[str, Path]) -> None:
     for module, line, text in mentions:
         print(f"  {module}:{line} {text!r}")
     vocabularies, bare = status_vocabularies(root)
-    print(f"status vocabularies: {len(vocabularies)}")
+    owners = sorted({name.rsplit(".", 1)[0] for name in vocabularies})
+    print(f"status vocabularies: {len(vocabularies)} in {len(owners)} modules")
     for name in vocabularies:
         print(f"  {name}")
     print(f"bare status-string comparisons: {len(bare)}")

@@ -42,6 +42,7 @@ from twostep.pddl.translator import GroundingLimits
 from twostep.planner import PlannerSettings
 from twostep.tasks.benchmark import BenchmarkTask, load_task, task_path
 from twostep.util.files import exists, file_problem, yaml_problem
+from twostep.util.outcome import EmbodiedStatus
 
 if TYPE_CHECKING:
     from twostep.llm import LLMSettings
@@ -283,8 +284,15 @@ class Job:
         from twostep.embodied import embodied_fields, execute_plans, task_floor_plan
 
         if not run.success or not run.plans:
-            run.extra.update(executor="embodied", embodied_status="not_run", embodied_length=None)
-            run.extra["embodied"] = {"status": "not_run", "reason": "no plan to execute"}
+            run.extra.update(
+                executor="embodied",
+                embodied_status=EmbodiedStatus.NOT_RUN.value,
+                embodied_length=None,
+            )
+            run.extra["embodied"] = {
+                "status": EmbodiedStatus.NOT_RUN.value,
+                "reason": "no plan to execute",
+            }
             return run
         task = self.request.task
         floor = task_floor_plan(task.problem, task.problem_path.parent, self.layout)

@@ -36,6 +36,7 @@ from flows.launcher import launch_fields, register_plugins
 from flows.replay_sweeper import expose_plugin
 from flows.sweep_callback import SweepCallback
 from twostep.cli import ReaderGoneSafe, console_main
+from twostep.util.outcome import JobStatus
 
 if TYPE_CHECKING:
     from flows.job import JobOutcome
@@ -71,7 +72,7 @@ def app(cfg: DictConfig) -> None:
         print(f"error: {error}", file=sys.stderr, flush=True)
         if not multirun:
             sys.exit(2)
-        record = {"num": hydra_cfg.job.num, "name": job_dir.name, "status": "failed",
+        record = {"num": hydra_cfg.job.num, "name": job_dir.name, "status": JobStatus.FAILED.value,
                   "error": str(error)}  # fmt: skip
         record_job(Path(hydra_cfg.sweep.dir), hydra_cfg.job.num, record)
         return
@@ -118,7 +119,7 @@ def _finish_single_run(outcome: JobOutcome, line: str, job_dir: Path) -> None:
     print(f"result: {job_dir / 'result.json'}")
     for label, path in picture_paths(job_dir):
         print(f"{label}: {path}")
-    if outcome.status != "success":  # no plan (unsolvable, timeout): scripts see it
+    if outcome.status != JobStatus.SUCCESS:  # no plan (unsolvable, timeout): scripts see it
         sys.exit(1)
 
 

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from flows.identity import job_name
 from flows.status import reason_line
+from twostep.util.outcome import EmbodiedStatus, JobStatus, RunStatus, SubgoalStatus, limit_reached
 from twostep.util.redaction import redact_text
 
 if TYPE_CHECKING:
@@ -59,12 +60,12 @@ def format_summary(result: RunResult | Mapping[str, Any], name: str | None = Non
     the job's name (``name``, else made from the result: :func:`flows.identity.job_name`)."""
     r = result if isinstance(result, Mapping) else result.to_dict()
     name = name or job_name(r)
-    if r.get("status") == "failed" and "error" in r:
+    if r.get("status") == RunStatus.FAILED and "error" in r:
         return redact_text(f"{name} | FAILED: {r['error']}")
     status, message = str(r.get("status")), str(r.get("message") or "")
     if r.get("success"):
         outcome = "success"
-    elif status == "timeout":  # a timeout is not a failure of the job: it is counted apart
+    elif limit_reached(status):  # a timeout is not a failure of the job: it is counted apart
         outcome = f"TIMED OUT ({message or 'planner time limit'})"
     else:
         outcome = f"FAILED ({reason_line(status, message)})"
@@ -82,13 +83,13 @@ def format_summary(result: RunResult | Mapping[str, Any], name: str | None = Non
         d = chosen[0]
         parts.append(f"dealt {d.get('pieces')} pieces ({d.get('walks')} walking steps)")
     elif r.get("decomposer"):
-        accepted = sum(1 for s in subgoals if s.get("status") == "accepted")
+        accepted = sum(1 for s in subgoals if s.get("status") == SubgoalStatus.ACCEPTED)
         parts.append(f"subgoals={accepted}/{len(subgoals)} accepted")
     if r.get("fallback"):
         parts.append(f"fallback: {r['fallback']}")
     if r.get("executor") == "embodied":
         embodied = r.get("embodied") or {}
-        if r.get("embodied_status") == "success":
+        if r.get("embodied_status") == EmbodiedStatus.SUCCESS:
             parts.append(
                 f"embodied_length={r.get('embodied_length')} "
                 f"(waits={r.get('waits')}, backoffs={r.get('backoffs')})"
@@ -165,8 +166,8 @@ def outcome_counts(records: list[dict[str, Any]]) -> str:
     """``3 ok, 1 failed, 1 timed out``: how the finished jobs ended (the three add up to
     the jobs finished)."""
     statuses = [r.get("status") for r in records]
-    ok = statuses.count("success")
-    timed_out = statuses.count("timeout")
+    ok = statuses.count(JobStatus.SUCCESS)
+    timed_out = statuses.count(JobStatus.TIMEOUT)
     return f"{ok} ok, {len(records) - ok - timed_out} failed, {timed_out} timed out"
 
 

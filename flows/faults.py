@@ -67,7 +67,13 @@ def _failed(config: Any, error: OSError) -> Any:
         from flows.sweep_state import record_job
 
         num = int(config.hydra.job.num)
-        record = {"num": num, "name": name, "status": "failed", "error": line, "fault": True}
+        record = {
+            "num": num,
+            "name": name,
+            "status": JobStatus.FAILED.value,
+            "error": line,
+            "fault": True,
+        }
         try:
             record_job(Path(str(config.hydra.sweep.dir)), num, record)
         except OSError:

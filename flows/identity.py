@@ -34,6 +34,7 @@ from typing import Any
 
 import twostep
 from twostep.util.files import NotTextError, read_input_bytes
+from twostep.util.outcome import RunStatus, storable
 
 # Bump when a change to the pipeline makes stored results stale.
 # job-3: the methods moved into twostep/methods (one request, enums, typed SA time)
@@ -55,9 +56,6 @@ NOT_IDENTITY_KEYS: frozenset[str] = frozenset(
 # Keys added after jobs were stored, at the value that computes what those jobs computed:
 # left out of the identity, so that the stored jobs keep their keys.
 NEUTRAL_VALUES: dict[str, Any] = {"llm.bundle": None, "llm.translator": "llm"}
-
-# Results with these statuses did not finish their work: never stored, retried by a re-run.
-UNFINISHED_STATUSES: frozenset[str] = frozenset({"error", "llm_error", "failed", "resource_limit"})
 
 # What every result has (``RunResult.to_dict``): a stored entry without them is no result.
 RESULT_KEYS: frozenset[str] = frozenset({"domain", "task", "method", "agents", "success", "status"})
@@ -227,16 +225,13 @@ def input_digests(files: Mapping[str, Path]) -> dict[str, str]:
 
 def is_storable(result: Mapping[str, Any]) -> bool:
     """Whether a finished job's result may be reused by later runs."""
-    return str(result.get("status")) not in UNFINISHED_STATUSES and "error" not in result
+    return storable(result.get("status")) and "error" not in result
 
 
 def is_complete_result(result: Mapping[str, Any]) -> bool:
     """Whether a stored entry is the whole result of a finished job (an emptied, cut or
     hand-edited entry is not: the job is computed again)."""
     return result_problem(result) is None
-
-
-SOLVED = "solved"  # the status of every success (``RunResult.status``)
 
 
 def result_problem(result: Mapping[str, Any]) -> str | None:
@@ -253,8 +248,8 @@ def result_problem(result: Mapping[str, Any]) -> str | None:
     if not is_storable(result):
         return f"status '{status}' is never stored"
     if not result["success"]:
-        return "a failure with status 'solved'" if status == SOLVED else None
-    if status != SOLVED:
+        return "a failure with status 'solved'" if status == RunStatus.SOLVED else None
+    if status != RunStatus.SOLVED:  # the status of every success
         return f"a success with status '{status}'"
     plans = result.get("plans")
     if not isinstance(plans, Mapping) or not all(

@@ -60,8 +60,7 @@ from twostep.llm.client import LLMScriptError
 from twostep.pddl import PDDLError
 from twostep.programs.processes import ResourceLimitError
 from twostep.tasks.benchmark import BenchmarkError
-
-RESOURCE_LIMIT = "resource_limit"  # result.json status of a job a limit ended (exit 1)
+from twostep.util.outcome import RunStatus
 
 # Errors in what the user asked for: one line, no traceback.
 INPUT_ERRORS: tuple[type[Exception], ...] = (BenchmarkError, PDDLError, JobError, LLMScriptError)
@@ -90,7 +89,7 @@ class JobOutcome:
 
 
 def failed_result(
-    config: dict[str, Any], error: str, status: str = JobStatus.FAILED.value
+    config: dict[str, Any], error: str, status: str = RunStatus.FAILED.value
 ) -> dict[str, Any]:
     """The result of a job that raised (``status``: ``failed``, or ``resource_limit`` for
     a limit that ended it, :class:`~twostep.programs.processes.ResourceLimitError`)."""
@@ -324,7 +323,7 @@ def _run_or_reuse(
     that raised, its traceback (``entry``: its key, job and inputs; ``start``: when it
     started)."""
     key, name = entry.key, job_name(config)
-    stats, error, details, status = StepStats(), refused, None, JobStatus.FAILED.value
+    stats, error, details, status = StepStats(), refused, None, RunStatus.FAILED.value
     input_error = refused is not None
     compute_timings: dict[str, float] = {"server_wait_s": 0.0}
     phases: dict[str, float] = {}
@@ -337,7 +336,7 @@ def _run_or_reuse(
         except INPUT_ERRORS as exc:
             error, input_error = one_line(exc, name_type=False), True
         except ResourceLimitError as exc:  # names the limit and its key; never stored
-            error, status = one_line(exc, name_type=False), RESOURCE_LIMIT
+            error, status = one_line(exc, name_type=False), RunStatus.RESOURCE_LIMIT.value
         except Exception as exc:
             error, details = one_line(exc), traceback.format_exc()
         store_start = time.perf_counter()

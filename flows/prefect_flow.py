@@ -88,6 +88,7 @@ from twostep.methods import Steps
 from twostep.methods.steps import SA_CALL, PlanCall, progress, score
 from twostep.pddl import Fact, Problem
 from twostep.planner import PlannerSettings, PlanResult, Status
+from twostep.util.outcome import EmbodiedStatus, RunStatus
 
 if TYPE_CHECKING:
     from flows.build import Job
@@ -535,10 +536,10 @@ def running_job() -> tuple[Job, StepStats, bool]:
 
 # The flow run's state name for a job that ends without success, by what the result says
 # (others: the status in CamelCase). Every one is a FAILED state: red in the Prefect UI.
-FAILED_STATE_NAMES = {
-    "llm_error": LLM_ERROR_STATE,
-    "timeout": "TimedOut",  # Prefect's own name for a run stopped by its time limit
-    "embodied_failed": "EmbodiedFailed",
+FAILED_STATE_NAMES: dict[str, str] = {
+    RunStatus.LLM_ERROR: LLM_ERROR_STATE,
+    RunStatus.TIMEOUT: "TimedOut",  # Prefect's own name for a run stopped by its time limit
+    RunStatus.EMBODIED_FAILED: "EmbodiedFailed",
 }
 
 
@@ -549,10 +550,12 @@ def final_state(result: Mapping[str, Any]) -> dict[str, Any] | State[Any]:
     status, reason = job_status(result)
     if status is JobStatus.SUCCESS:
         return dict(result)
-    kind = str(result.get("status") or "failed")
+    kind = str(result.get("status") or RunStatus.FAILED)
     embodied = result.get("executor") == "embodied" and result.get("embodied_status")
-    if embodied and embodied != "success" and kind == "solved":
-        kind = "embodied_failed"  # planned, but the plans did not execute in the kitchen
+    if embodied and embodied != EmbodiedStatus.SUCCESS and kind == RunStatus.SOLVED:
+        kind = (
+            RunStatus.EMBODIED_FAILED.value
+        )  # planned, but the plans did not execute in the kitchen
     name = FAILED_STATE_NAMES.get(kind) or kind.replace("_", " ").title().replace(" ", "")
     return Failed(name=name, message=reason_line(kind, str(reason)), data=dict(result))
 

@@ -69,6 +69,7 @@ from twostep.report.runs import PARAM_PREFIX
 from twostep.report.table2 import TABLE2_DOMAIN, read_task_titles
 from twostep.tasks.benchmark import DEFAULT_DATA_ROOT
 from twostep.util.files import NotTextError, read_text_file
+from twostep.util.outcome import ReportStatus
 
 DEFAULT_TRACKING_URI = "sqlite:///outputs/mlflow.db"
 KIND_TAG = "twostep.kind"
@@ -173,9 +174,9 @@ def _run_row(run: Any) -> dict[str, Any] | None:
     status = tags.get(STATUS_TAG)
     lifecycle = str(run.info.status).upper()
     if status is None and lifecycle in ("RUNNING", "SCHEDULED"):
-        status = "running"
+        status = ReportStatus.RUNNING.value
     elif status is None and lifecycle in ("FAILED", "KILLED"):
-        status = "failed"
+        status = ReportStatus.FAILED.value
     row["status"] = status
     row["success"] = metrics.get("success")
     error = tags.get(ERROR_TAG, "")

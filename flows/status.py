@@ -5,25 +5,21 @@ run's final state)."""
 from __future__ import annotations
 
 from collections.abc import Mapping
-from enum import StrEnum
 from typing import Any
 
-
-class JobStatus(StrEnum):
-    """How a job ended (the ``twostep.status`` tag, the sweep's job records)."""
-
-    SUCCESS = "success"
-    FAILED = "failed"
-    TIMEOUT = "timeout"
+from twostep.util.outcome import JobStatus as JobStatus
+from twostep.util.outcome import limit_reached
 
 
 def job_status(result: Mapping[str, Any]) -> tuple[JobStatus, str | None]:
     """``twostep.status`` and ``twostep.error`` of a result.json dict."""
     if result.get("success"):
         return JobStatus.SUCCESS, None
-    if result.get("status") == "timeout":
+    if limit_reached(result.get("status")):
         return JobStatus.TIMEOUT, result.get("message") or "planner time limit"
-    message = result.get("error") or result.get("message") or result.get("status") or "failed"
+    message = (
+        result.get("error") or result.get("message") or result.get("status") or JobStatus.FAILED
+    )
     return JobStatus.FAILED, " ".join(str(message).split())[:500]
 
 

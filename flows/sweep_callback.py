@@ -60,6 +60,7 @@ from flows.sweep_state import (
 )
 from flows.sweep_timing import sweep_timing, timing_line
 from twostep.util.files import write_json_atomic, write_text_atomic
+from twostep.util.outcome import JobStatus
 from twostep.util.redaction import redact_text
 
 
@@ -307,12 +308,12 @@ class SweepCallback(Callback):
         records = job_records(Path(state.sweep_dir))
         seen = {r.get("num") for r in records}
         records += [r for r in UNRECORDED if r.get("num") not in seen]  # disk full: kept here
-        failed = [r for r in records if r.get("status") == "failed"]
+        failed = [r for r in records if r.get("status") == JobStatus.FAILED]
         summary: dict[str, Any] = {
             "jobs_total": state.total_jobs,
             "jobs_done": len(records),
             "jobs_failed": len(failed),
-            "jobs_timeout": sum(1 for r in records if r.get("status") == "timeout"),
+            "jobs_timeout": sum(1 for r in records if r.get("status") == JobStatus.TIMEOUT),
             "jobs_reused": sum(1 for r in records if r.get("reused")),
             # stored entries not used (another job's, changed, cut short): computed again
             "jobs_store_refused": sum(1 for r in records if r.get("store_refused")),

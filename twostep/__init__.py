@@ -26,7 +26,8 @@ against the packages):
 - :mod:`twostep.embodied`     the grid-kitchen executor and its pictures
 - :mod:`twostep.report`       the report: run table, series, tables and figures
 - :mod:`twostep.cli`          twostep-score, twostep-data, twostep-prompts
-- :mod:`twostep.util`         the checked file reader and atomic writer; secrets masked
+- :mod:`twostep.util`         the checked file reader and atomic writer; secrets masked;
+                              the outcome vocabulary (every status enum and its sets)
 
 Quick start::
 

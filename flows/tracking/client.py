@@ -42,6 +42,7 @@ from flows.tracking.contents import (
     metric_points,
 )
 from flows.tracking.template import quiet_mlflow_logging, seed_store
+from twostep.util.outcome import SETTLED, JobStatus
 from twostep.util.redaction import redact_text
 
 T = TypeVar("T")
@@ -435,7 +436,11 @@ def batches(params: list[Any], metrics: list[Any], tags: list[Any]) -> list[dict
 # MLflow's run status of a job, by how it ended (``twostep.status``): a timed-out job was
 # stopped by its time limit, KILLED; any other job without success FAILED. Only a
 # success is FINISHED (the green check of MLflow's runs table).
-RUN_STATUSES: dict[str, str] = {"success": "FINISHED", "timeout": "KILLED", "failed": "FAILED"}
+MLFLOW_RUN_STATES: dict[str, str] = {
+    JobStatus.SUCCESS: "FINISHED",
+    JobStatus.TIMEOUT: "KILLED",
+    JobStatus.FAILED: "FAILED",
+}
 
 
 def log_job_run(
@@ -455,7 +460,7 @@ def log_job_run(
         tags=record.get("tags"),
         start_ms=record.get("start_ms"),
     )
-    if found is not None and found.data.tags.get(STATUS) in ("success", "timeout"):
+    if found is not None and found.data.tags.get(STATUS) in SETTLED:
         if missing_artifacts(tracker.tracking_uri, run_id) is not None:  # mlruns/ deleted
             for path, folder in record["files"]:
                 if Path(path).is_file():
@@ -468,7 +473,7 @@ def log_job_run(
         job_tags(record),
         [(Path(path), folder) for path, folder in record["files"]],
         existing_params=dict(found.data.params) if found is not None else None,
-        terminated=RUN_STATUSES.get(str(record["status"]), "FAILED"),
+        terminated=MLFLOW_RUN_STATES.get(str(record["status"]), "FAILED"),
         end_ms=record.get("end_ms"),
     )
     return run_id

@@ -15,6 +15,7 @@ from typing import Any
 from flows.identity import config_seed_matters, identity_config, is_relevant
 from flows.redaction import redact_config
 from flows.tracking.params import flatten_config
+from twostep.util.outcome import SubgoalStatus
 
 KIND = "twostep.kind"
 JOB_KEY = "twostep.job_key"
@@ -214,8 +215,8 @@ def _outcome_metrics(result: Mapping[str, Any]) -> dict[str, Any]:
     if result.get("method") == "twostep" and isinstance(subgoals, list):
         statuses = [s.get("status") for s in subgoals if isinstance(s, Mapping)]
         metrics["subgoals_proposed"] = float(len(statuses))
-        metrics["subgoals_accepted"] = float(statuses.count("accepted"))
-        metrics["subgoals_discarded"] = float(statuses.count("discarded"))
+        metrics["subgoals_accepted"] = float(statuses.count(SubgoalStatus.ACCEPTED))
+        metrics["subgoals_discarded"] = float(statuses.count(SubgoalStatus.DISCARDED))
     translation = result.get("translation")
     if isinstance(translation, Mapping) and isinstance(translation.get("failed"), int):
         # the rules translator could not read these (llm.translator=rules): discarded

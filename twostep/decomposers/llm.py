@@ -40,9 +40,10 @@ from twostep.llm.prompts import Message, generator_messages, translator_messages
 from twostep.pddl import parse_goal
 from twostep.plans.subgoals import SubgoalError, SubgoalStatus, goal_conflict
 from twostep.tasks.benchmark import BenchmarkTask
+from twostep.util.outcome import ExchangeStatus, RunStatus
 
 # The run status of a decomposition whose LLM call failed (result.json ``status``).
-LLM_ERROR = "llm_error"
+LLM_ERROR = RunStatus.LLM_ERROR.value
 # How the reason of a subgoal the rules translator could not read begins.
 TRANSLATION_FAILED = "translation failed"
 
@@ -62,7 +63,7 @@ def _exchange(
         "recorded_seconds": round(response.recorded_seconds, 6),
         "messages": [{"role": m["role"], "text": m["content"]} for m in messages]
         + [{"role": "assistant", "text": response.text}],
-        "status": "ok",
+        "status": ExchangeStatus.OK.value,
         "reason": None,
         "parsed": None,
         "note": None,
@@ -111,10 +112,12 @@ def generate_subgoal(
     try:
         parsed = parse_english_subgoal(response.text, helper, task.problem)
     except SubgoalError as exc:
-        exchange.update(status="discarded", reason=str(exc))
+        exchange.update(status=ExchangeStatus.DISCARDED.value, reason=str(exc))
         return None, exchange
     if parsed.kind == "none":
-        exchange.update(status="none", reason="the LLM answered that no further helper helps")
+        exchange.update(
+            status=ExchangeStatus.NONE.value, reason="the LLM answered that no further helper helps"
+        )
         return None, exchange
     exchange.update(parsed=parsed.text, note=parsed.note)
     return parsed.text, exchange
@@ -141,7 +144,7 @@ def translate_subgoal(
     problem = task.problem
     if client.settings.translator == "rules":
         exchange = _translate_by_rules(task, english, seed, helper)
-        if exchange["status"] != "ok":
+        if exchange["status"] != ExchangeStatus.OK:
             return None, exchange
         text = str(exchange["parsed"])
     else:
@@ -153,13 +156,13 @@ def translate_subgoal(
     try:
         goal = parse_pddl_subgoal(text, problem)
     except SubgoalError as exc:
-        exchange.update(status="discarded", reason=str(exc))
+        exchange.update(status=ExchangeStatus.DISCARDED.value, reason=str(exc))
         return None, exchange
     others = {h: parse_goal(text, problem) for h, text in (earlier or {}).items()}
     reason = goal_conflict(goal, problem.goal, others)
     exchange["parsed"] = goal.to_pddl()
     if reason is not None:
-        exchange.update(status="discarded", reason=reason)
+        exchange.update(status=ExchangeStatus.DISCARDED.value, reason=reason)
         return None, exchange
     return goal.to_pddl(), exchange
 
@@ -184,13 +187,16 @@ def _translate_by_rules(task: BenchmarkTask, english: str, seed: int, helper: in
             {"role": "user", "text": english},
             {"role": "assistant", "text": translation.pddl or ""},
         ],
-        "status": "ok",
+        "status": ExchangeStatus.OK.value,
         "reason": None,
         "parsed": translation.pddl,
         "note": "; ".join(translation.notes) or None,
     }
     if translation.pddl is None:
-        exchange.update(status="discarded", reason=f"{TRANSLATION_FAILED}: {translation.reason}")
+        exchange.update(
+            status=ExchangeStatus.DISCARDED.value,
+            reason=f"{TRANSLATION_FAILED}: {translation.reason}",
+        )
     return exchange
 
 
@@ -267,7 +273,7 @@ class LLMDecomposer:
                 result.fail(helper, "generate", exc, [])
                 break
             result.exchanges.append(gen)
-            if gen["status"] == "none":
+            if gen["status"] == ExchangeStatus.NONE:
                 result.stopped_at, result.stop_exchange = helper, gen
                 # kept as a proposal so that result.json records the answer
                 result.proposals.append(

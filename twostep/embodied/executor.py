@@ -29,7 +29,6 @@ executing the plan, and each body starts from a copy of that agent's initial fac
 
 from __future__ import annotations
 
-import enum
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from random import Random
@@ -40,28 +39,12 @@ from twostep.embodied.navigation import reachable_cells, shortest_path
 from twostep.embodied.scene import Scene, scene_of
 from twostep.pddl import Fact, Goal, Problem
 from twostep.plans.simulate import GroundAction, Grounder, PlanError, parse_action
+from twostep.util.outcome import EmbodiedStatus as EmbodiedStatus
 
 AGENT_TYPE = "agent"
 LOCATION_TYPE = "location"
 
 PRIMITIVES = ("move", "interact", "wait", "backoff")
-
-
-class EmbodiedStatus(enum.StrEnum):
-    """How an embodied execution ended; every status but ``success`` is a failed run.
-
-    The values are the strings result.json, trace.json and MLflow hold.
-    """
-
-    SUCCESS = "success"
-    DEADLOCK = "deadlock"  # nobody can ever make progress: a precondition no one makes true
-    BOXED_IN = "boxed_in"  # agents cannot all stand, or a way is blocked and nobody can make way
-    UNREACHABLE = "unreachable"  # walls and furniture cut a location off
-    NO_CELL = "no_cell"  # a location the floor plan does not place
-    BUDGET_EXCEEDED = "budget_exceeded"
-    INVALID_PLAN = "invalid_plan"  # an action the task does not know
-    GOAL_NOT_REACHED = "goal_not_reached"
-    NOT_RUN = "not_run"  # no plan to execute (planning failed)
 
 
 SUCCESS = EmbodiedStatus.SUCCESS

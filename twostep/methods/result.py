@@ -32,8 +32,9 @@ from twostep.embodied.run import embodied_failure
 from twostep.makespan import ParallelExecution, check_schedule
 from twostep.methods.request import MethodRequest
 from twostep.pddl import Problem
-from twostep.planner import PlanResult, Status
+from twostep.planner import PlanResult
 from twostep.plans.simulate import Grounder
+from twostep.util.outcome import RunStatus as RunStatus
 
 
 class MethodName(StrEnum):
@@ -59,21 +60,6 @@ def seed_matters(method: str | None, decomposer: str | None, executor: str | Non
     if executor is not None and str(executor) in SEEDED_EXECUTORS:
         return True
     return method == "twostep" and str(decomposer) in SEEDED_DECOMPOSERS
-
-
-class RunStatus(StrEnum):
-    """How a run ended (result.json ``status``): the deciding planner call's status,
-    ``llm_error`` when the decomposer's LLM calls failed, or ``embodied_failed`` when the
-    plans were found but did not execute to the goal on the floor plan (``message`` says
-    why)."""
-
-    SOLVED = Status.SOLVED.value
-    TIMEOUT = Status.TIMEOUT.value
-    UNSOLVABLE = Status.UNSOLVABLE.value
-    INCOMPLETE = Status.INCOMPLETE.value
-    ERROR = Status.ERROR.value
-    LLM_ERROR = "llm_error"
-    EMBODIED_FAILED = "embodied_failed"
 
 
 class FallbackReason(StrEnum):

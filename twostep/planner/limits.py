@@ -13,6 +13,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from twostep.planner import returncodes
+from twostep.util.outcome import limit_reached
 
 #: Exit codes of a planner call stopped by its time limit (with or without a plan).
 LIMIT_CODES: frozenset[int] = returncodes.OUT_OF_TIME | {
@@ -40,10 +41,10 @@ def planner_limit_hits(result: Mapping[str, Any]) -> int:
     for call in _calls(result):
         code = call.get("exit_code")
         if not _guard_stopped(call) and (
-            (isinstance(code, int) and code in LIMIT_CODES) or call.get("status") == "timeout"
+            (isinstance(code, int) and code in LIMIT_CODES) or limit_reached(call.get("status"))
         ):
             hits += 1
-    if not hits and result.get("status") == "timeout" and not guard_stops(result):
+    if not hits and limit_reached(result.get("status")) and not guard_stops(result):
         hits = 1
     return hits
 

@@ -6,16 +6,11 @@ exists; the second only that this (incomplete) search found none.
 
 from __future__ import annotations
 
-import enum
 from dataclasses import dataclass
 
+from twostep.util.outcome import PlannerStatus
 
-class Status(enum.StrEnum):
-    SOLVED = "solved"
-    TIMEOUT = "timeout"
-    UNSOLVABLE = "unsolvable"  # proven: no plan exists
-    INCOMPLETE = "incomplete"  # an incomplete search exhausted its space without a plan
-    ERROR = "error"
+Status = PlannerStatus  # the outcome vocabulary's planner statuses (twostep.util.outcome)
 
 
 @dataclass(frozen=True)

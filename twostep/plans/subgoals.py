@@ -17,19 +17,9 @@ life cycle is :class:`SubgoalStatus`.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from enum import StrEnum
 
 from twostep.pddl import Fact, Goal, PDDLError, Problem, fact_to_pddl, parse_goal
-
-
-class SubgoalStatus(StrEnum):
-    """What became of a helper's subgoal (the ``status`` strings of result.json)."""
-
-    PROPOSED = "proposed"  # from the decomposer, not yet checked by the pipeline
-    ACCEPTED = "accepted"  # checked and planned: the helper's plan is in the schedule
-    DISCARDED = "discarded"  # unusable: ``reason`` says why
-    STOPPED = "stopped"  # the LLM answered "none": no further helper
-    UNUSED = "unused"  # planned, but the run fell back to the single-agent plan
+from twostep.util.outcome import SubgoalStatus as SubgoalStatus
 
 
 class SubgoalError(ValueError):

@@ -8,6 +8,7 @@ from typing import Any
 import pandas as pd
 
 from twostep.report.model import CELL_COLUMNS, CELL_METRICS, REPORT_METRICS, SERIES_COLUMNS
+from twostep.util.outcome import ReportStatus
 
 
 def sample_std(values: pd.Series) -> float:
@@ -37,12 +38,12 @@ def per_seed_means(ok: pd.DataFrame) -> pd.DataFrame:
 
 def cell_counts(identified: pd.DataFrame) -> pd.DataFrame:
     status = identified["status"]
-    missing = (status == "success") & identified[list(REPORT_METRICS)].isna().any(axis=1)
+    missing = (status == ReportStatus.SUCCESS) & identified[list(REPORT_METRICS)].isna().any(axis=1)
     frame = identified.assign(
-        _success=(status == "success").astype(int),
-        _failed=(status == "failed").astype(int),
-        _timeout=(status == "timeout").astype(int),
-        _running=(status == "running").astype(int),
+        _success=(status == ReportStatus.SUCCESS).astype(int),
+        _failed=(status == ReportStatus.FAILED).astype(int),
+        _timeout=(status == ReportStatus.TIMEOUT).astype(int),
+        _running=(status == ReportStatus.RUNNING).astype(int),
         _missing=missing.astype(int),
     )
     grouped = frame.groupby(list(CELL_COLUMNS), dropna=False)
@@ -112,7 +113,7 @@ def per_task_means(identified: pd.DataFrame, ok: pd.DataFrame) -> pd.DataFrame:
     keys = [*CELL_COLUMNS, "task"]
     counts = identified.groupby(keys, dropna=False).agg(
         n_runs=("run_id", "size"),
-        n_success=("status", lambda s: int((s == "success").sum())),
+        n_success=("status", lambda s: int((s == ReportStatus.SUCCESS).sum())),
     )
     if ok.empty:
         per_seed = pd.DataFrame(columns=[*keys, "seed", *CELL_METRICS])

@@ -71,6 +71,7 @@ from twostep.report.series import (
 )
 from twostep.report.table2 import table_two
 from twostep.report.tables import changes_against_baselines, table_one
+from twostep.util.outcome import REPORT_STATUSES, ReportStatus
 
 __all__ = [
     "CELL_COLUMNS",
@@ -107,7 +108,7 @@ def superseded_runs(table: pd.DataFrame) -> pd.Series:
     if keyed.empty:
         return flags
     order = keyed.assign(
-        _finished=(keyed["status"] != "running").astype(int),
+        _finished=(keyed["status"] != ReportStatus.RUNNING).astype(int),
         _start=keyed["start_time"].fillna(-1.0),
     ).sort_values(["job_key", "_finished", "_start"])
     latest = order.groupby("job_key").tail(1).index
@@ -148,7 +149,7 @@ def build_report(
     table["counted"] &= ~table["duplicate"]
     identified = table[table["counted"]]
     measured = measured_runs(identified, params)  # what means are made of (one distinct run ...)
-    ok = measured[measured["status"] == "success"]
+    ok = measured[measured["status"] == ReportStatus.SUCCESS]
 
     per_seed = per_seed_means(ok)
     summary = with_seeded(cell_summary(identified, per_seed), measured)
@@ -185,10 +186,7 @@ def build_report(
     status = current["status"]
     counts = {
         "runs": len(current),
-        "success": int((status == "success").sum()),
-        "failed": int((status == "failed").sum()),
-        "timeout": int((status == "timeout").sum()),
-        "running": int((status == "running").sum()),
+        **{word: int((status == word).sum()) for word in REPORT_STATUSES},
         "unidentified": int((~current["placed"]).sum()),
         "missing_metrics": int(summary["n_missing_metrics"].sum()),
         "superseded": int(table["superseded"].sum()),

@@ -29,6 +29,7 @@ import pandas as pd
 
 from twostep.report.aggregation import cell_summary, per_seed_means
 from twostep.report.model import CELL_COLUMNS, REPORT_METRICS
+from twostep.util.outcome import ReportStatus
 
 COVERAGE_COLUMNS: tuple[str, ...] = (
     "domain",
@@ -51,7 +52,11 @@ def length_metric(runs: pd.DataFrame) -> str:
 
 def solved_runs(runs: pd.DataFrame, metric: str) -> pd.Series:
     """Per run: succeeded with ``metric`` and the planning time recorded."""
-    return (runs["status"] == "success") & runs[metric].notna() & runs["planning_time_s"].notna()
+    return (
+        (runs["status"] == ReportStatus.SUCCESS)
+        & runs[metric].notna()
+        & runs["planning_time_s"].notna()
+    )
 
 
 def _task_list(tasks: set[int] | frozenset[int]) -> str:
@@ -126,7 +131,9 @@ def compared_tables(
         int(task) in compared_tasks.get(str(domain), set()) if not pd.isna(task) else False
         for domain, task in zip(measured["domain"], measured["task"], strict=True)
     ]
-    ok = measured[(measured["status"] == "success") & pd.Series(in_common, index=measured.index)]
+    ok = measured[
+        (measured["status"] == ReportStatus.SUCCESS) & pd.Series(in_common, index=measured.index)
+    ]
     per_seed = per_seed_means(ok)
     summary = cell_summary(identified, per_seed)
     solved = pd.Series(False, index=identified.index)

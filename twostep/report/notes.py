@@ -7,6 +7,7 @@ import pandas as pd
 from twostep.report.aggregation import span
 from twostep.report.model import CELL_COLUMNS, REPORT_METRICS
 from twostep.report.runs import PARAM_PREFIX
+from twostep.util.outcome import ReportStatus
 
 
 def report_notes(
@@ -47,7 +48,7 @@ def report_notes(
             f"{unidentified} run(s) lack domain, task, method, N or seed and could not be "
             "placed in any table; they are listed under the failed runs."
         )
-    running = int((identified["status"] == "running").sum())
+    running = int((identified["status"] == ReportStatus.RUNNING).sum())
     if running:
         notes.append(
             f"{running} run(s) had not finished when the report was made (still running, "
@@ -88,7 +89,7 @@ def report_notes(
             "planner cache). Their means are that run's, n = 1, with no ±; their runs are "
             "still counted per seed."
         )
-    ok = identified[identified["status"] == "success"]
+    ok = identified[identified["status"] == ReportStatus.SUCCESS]
     repeats = ok.groupby([*CELL_COLUMNS, "task", "seed"], dropna=False).size()
     repeats = repeats[repeats > 1]
     if len(repeats):

@@ -27,6 +27,7 @@ from typing import Any
 import pandas as pd
 
 from twostep.report.paper import PAPER_CHANGE_PCT
+from twostep.util.outcome import ReportStatus
 
 ALL_DOMAINS = "all"
 
@@ -88,7 +89,7 @@ def _share(runs: pd.DataFrame, series: str, domain: str, agents: int, test: str)
         (runs["series"] == series)
         & (runs["domain"] == domain)
         & (runs["agents"] == agents)
-        & (runs["status"] == "success")
+        & (runs["status"] == ReportStatus.SUCCESS)
     ]
     if "counted" in ok:
         ok = ok[ok["counted"]]

@@ -36,6 +36,7 @@ from twostep.report.table2 import (
     TABLE2_DOMAIN,
     table_two_rows,
 )
+from twostep.util.outcome import ReportStatus
 
 FAILED_ROWS_SHOWN = 200
 
@@ -353,7 +354,7 @@ def _table2_sections(report: Report) -> list[str]:
 
 def _failed_section(report: Report) -> str:
     runs = report.runs
-    bad = runs[((runs["status"] != "success") | ~runs["placed"]) & ~runs["superseded"]]
+    bad = runs[((runs["status"] != ReportStatus.SUCCESS) | ~runs["placed"]) & ~runs["superseded"]]
     if bad.empty:
         return "None."
     rows = []

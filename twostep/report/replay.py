@@ -32,6 +32,7 @@ import pandas as pd
 
 from twostep.replay import Bundle
 from twostep.replay.bundle import same_model
+from twostep.util.outcome import ReportStatus
 
 SOURCES = ("official", "twostep", "plan-deal")
 LABELS: Mapping[str, str] = {
@@ -84,7 +85,7 @@ def twostep_values(runs: pd.DataFrame) -> pd.DataFrame:
     if runs.empty:
         return pd.DataFrame(columns=list(VALUE_COLUMNS))
     counted = runs[runs["counted"]] if "counted" in runs else runs
-    ok = counted[(counted["status"] == "success") & (counted["method"] == "twostep")]
+    ok = counted[(counted["status"] == ReportStatus.SUCCESS) & (counted["method"] == "twostep")]
     ok = ok[ok["decomposer"].isin(["llm", "plan-deal"]) & ok["exec_length"].notna()]
     frame = pd.DataFrame(
         {

@@ -44,6 +44,7 @@ from typing import Any
 import pandas as pd
 
 from twostep.planner.limits import guard_stops, planner_limit_hits
+from twostep.util.outcome import STATUS_SYNONYMS, ReportStatus, SubgoalStatus, limit_reached
 
 
 class ReportInputError(Exception):
@@ -109,28 +110,7 @@ class RunParams:
 NO_PARAMS = RunParams()
 """A run table's params told nothing about (the default of every report function)."""
 
-
-STATUSES: tuple[str, ...] = ("success", "failed", "timeout", "running")
 METHODS: tuple[str, ...] = ("sa", "ma", "twostep")
-
-_STATUS_SYNONYMS: dict[str, str] = {
-    "success": "success",
-    "succeeded": "success",
-    "solved": "success",
-    "ok": "success",
-    "finished": "success",
-    "failed": "failed",
-    "failure": "failed",
-    "error": "failed",
-    "unsolvable": "failed",
-    "killed": "failed",
-    "crashed": "failed",
-    "timeout": "timeout",
-    "timed_out": "timeout",
-    "timed-out": "timeout",
-    "running": "running",
-    "scheduled": "running",
-}
 
 
 def is_missing(value: object) -> bool:
@@ -148,7 +128,8 @@ def is_missing(value: object) -> bool:
 
 
 def normalise_status(status: object, success: object = None) -> str:
-    """One of :data:`STATUSES` from a status word and/or a success flag.
+    """A :class:`~twostep.util.outcome.ReportStatus` value from a status word (its
+    :data:`~twostep.util.outcome.STATUS_SYNONYMS`) and/or a success flag.
 
     ``status`` wins when it is a known word; otherwise a truthy ``success`` means
     ``success`` and anything else ``failed`` (a job that recorded neither did not finish
@@ -156,13 +137,13 @@ def normalise_status(status: object, success: object = None) -> str:
     """
     if not is_missing(status):
         word = str(status).strip().lower()
-        if word in _STATUS_SYNONYMS:
-            return _STATUS_SYNONYMS[word]
+        if word in STATUS_SYNONYMS:
+            return STATUS_SYNONYMS[word].value
     if not is_missing(success):
         text = str(success).strip().lower()
         if text in ("1", "1.0", "true", "yes"):
-            return "success"
-    return "failed"
+            return ReportStatus.SUCCESS.value
+    return ReportStatus.FAILED.value
 
 
 def _to_int(value: object) -> int | None:
@@ -265,8 +246,8 @@ def _subgoal_counts(subgoals: object) -> dict[str, float]:
     statuses = [s.get("status") for s in subgoals if isinstance(s, Mapping)]
     return {
         "subgoals_proposed": float(len(statuses)),
-        "subgoals_accepted": float(sum(1 for s in statuses if s == "accepted")),
-        "subgoals_discarded": float(sum(1 for s in statuses if s == "discarded")),
+        "subgoals_accepted": float(sum(1 for s in statuses if s == SubgoalStatus.ACCEPTED)),
+        "subgoals_discarded": float(sum(1 for s in statuses if s == SubgoalStatus.DISCARDED)),
     }
 
 
@@ -279,12 +260,12 @@ def result_to_row(result: Mapping[str, Any]) -> dict[str, Any]:
     raw_status = _to_text(result.get("status")).lower()
     success = result.get("success")
     if success is True:
-        row["status"] = "success"
-    elif raw_status == "timeout":
-        row["status"] = "timeout"
+        row["status"] = ReportStatus.SUCCESS.value
+    elif limit_reached(raw_status):
+        row["status"] = ReportStatus.TIMEOUT.value
     else:
-        row["status"] = "failed"
-    if row["status"] != "success":
+        row["status"] = ReportStatus.FAILED.value
+    if row["status"] != ReportStatus.SUCCESS:
         row["error"] = _to_text(result.get("message")) or raw_status or "not successful"
     for metric in METRICS:
         if metric in result:

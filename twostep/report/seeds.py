@@ -23,6 +23,7 @@ import pandas as pd
 from twostep.methods.result import seed_matters
 from twostep.report.model import CELL_COLUMNS
 from twostep.report.runs import NO_PARAMS, PARAM_PREFIX, RunParams
+from twostep.util.outcome import ReportStatus
 
 
 def seeded_runs(runs: pd.DataFrame, executor: str | None = None) -> pd.Series:
@@ -70,7 +71,7 @@ def measured_runs(identified: pd.DataFrame, params: RunParams = NO_PARAMS) -> pd
     # a seed that failed where another succeeded (a crash, a timeout under load) says
     # nothing about the method: the lowest successful seed, else the lowest seed
     first = (
-        fixed.assign(_failed=fixed["status"] != "success")
+        fixed.assign(_failed=fixed["status"] != ReportStatus.SUCCESS)
         .sort_values(["_failed", "seed"])
         .drop_duplicates([*CELL_COLUMNS, "task"], keep="first")
         .drop(columns="_failed")

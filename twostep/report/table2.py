@@ -30,6 +30,7 @@ from twostep.report.aggregation import sample_std
 from twostep.report.seeds import distinct_label
 from twostep.tasks.benchmark import TITLES_FILE, BenchmarkError, parse_task_titles
 from twostep.util.files import FileFormatError, NotTextError, read_yaml_file
+from twostep.util.outcome import ReportStatus
 
 TABLE2_DOMAIN = "alfworld"
 TABLE2_TASKS: tuple[int, ...] = (1, 2, 3, 4)
@@ -49,7 +50,7 @@ PAPER_TABLE2: tuple[tuple[str, list[tuple[float, float | None]], list[float | No
 
 
 def _cell(runs: pd.DataFrame, length: str) -> dict[str, Any]:
-    ok = runs[(runs["status"] == "success") & runs[length].notna()]
+    ok = runs[(runs["status"] == ReportStatus.SUCCESS) & runs[length].notna()]
     per_seed = ok.groupby("seed")[length].mean()
     limited = runs["planner_timeouts"].fillna(0) > 0
     guarded = runs["planner_guard_stops"].fillna(0) > 0
@@ -64,9 +65,11 @@ def _cell(runs: pd.DataFrame, length: str) -> dict[str, Any]:
         "n_runs": len(runs),
         "n_timeouts": int(limited.sum()),
         "n_guard_stops": int(guarded.sum()),
-        "n_failed": int((runs["status"] != "success").sum()),
+        "n_failed": int((runs["status"] != ReportStatus.SUCCESS).sum()),
         # planned but not executed to the goal on the floor plan (embodied length only)
-        "n_not_executed": int(((runs["status"] == "success") & runs[length].isna()).sum()),
+        "n_not_executed": int(
+            ((runs["status"] == ReportStatus.SUCCESS) & runs[length].isna()).sum()
+        ),
     }
 
 

@@ -16,6 +16,7 @@ from twostep.report.paper import (
     TABLE1_AGENTS,
     TABLE1_DOMAINS,
 )
+from twostep.util.outcome import ReportStatus
 
 
 def changes_against_baselines(
@@ -115,7 +116,7 @@ def table_one(identified: pd.DataFrame, series_frame: pd.DataFrame) -> pd.DataFr
     for _, series in series_frame.iterrows():
         agents = 1 if series["method"] == "sa" else TABLE1_AGENTS
         cells = in_scope[(in_scope["series"] == series["series"]) & (in_scope["agents"] == agents)]
-        ok = cells[(cells["status"] == "success") & cells["exec_length"].notna()]
+        ok = cells[(cells["status"] == ReportStatus.SUCCESS) & cells["exec_length"].notna()]
         if ok.empty:
             continue
         label = str(series["series"])
@@ -139,7 +140,9 @@ def table_one(identified: pd.DataFrame, series_frame: pd.DataFrame) -> pd.DataFr
         row["macro_std"] = sample_std(macro)
         row["macro_n_seeds"] = len(macro)
         row["macro_n_domains"] = len(present)
-        row["n_failed"] = int(cells["status"].isin(["failed", "timeout"]).sum())
+        row["n_failed"] = int(
+            cells["status"].isin([ReportStatus.FAILED, ReportStatus.TIMEOUT]).sum()
+        )
         rows.append(row)
     for label, values in PAPER_TABLE1:
         paper_row: dict[str, Any] = {"series": label, "source": "paper"}
