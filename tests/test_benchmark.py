@@ -6,26 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import BLOCKS_DOMAIN, blocks_problem
+from tests.support.data import make_root
 from twostep.tasks.benchmark import BenchmarkError, list_domains, list_tasks, load_task
-
-
-def make_root(tmp_path: Path) -> Path:
-    folder = tmp_path / "blocks"
-    folder.mkdir()
-    (folder / "domain.pddl").write_text(BLOCKS_DOMAIN)
-    (folder / "domain.nl").write_text("Blocks on a table.")
-    (folder / "p01.pddl").write_text(
-        blocks_problem(
-            "(on-table a) (clear a) (on-table b) (clear b) (arm-empty)", "(on a b)", "a b"
-        )
-    )
-    (folder / "p01.nl").write_text("Put a on b.")
-    (folder / "p03.pddl").write_text(
-        blocks_problem("(on-table a) (clear a) (arm-empty)", "(holding a)", "a")
-    )
-    (folder / "p_example.sol").write_text("(pickup a)\n; cost = 1 (unit cost)\n")
-    return tmp_path
 
 
 def test_layout_is_read(tmp_path: Path) -> None:

@@ -7,15 +7,7 @@ import sys
 from pathlib import Path
 
 from tests.conftest import BLOCKS_DOMAIN
-
-REPO = Path(__file__).resolve().parent.parent
-
-
-def run_cli(*overrides: str, cwd: Path = REPO) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "flows.cli", "orchestration.prefect=false", "mlflow.enabled=false", *overrides],
-        capture_output=True, text=True, cwd=cwd, timeout=240,
-    )  # fmt: skip
+from tests.support.commands import REPO, run_cli
 
 
 def test_malformed_pddl_names_file_and_line(tmp_path: Path) -> None:

@@ -11,8 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from tests.conftest import own_task
-from tests.test_plan_split import FAST, sa_result
-from tests.test_rebind import _valid
+from tests.support.plans import FAST, check_valid_task_run, sa_result
 from twostep.dealing import Dealer
 from twostep.dealing.copies import carries_through, piece_copies
 from twostep.methods import MethodRequest
@@ -69,7 +68,7 @@ def test_an_agent_takes_the_robot_that_stands_where_the_piece_begins(
     request = MethodRequest(task, 4, FAST, GRIPPERS, sa_plan=sa_result(ONE_PLAN))
     run = run_plan_deal(request, rebind=False)
     assert run.exec_length == 3
-    _valid(task, run, GRIPPERS)
+    check_valid_task_run(task, run, GRIPPERS)
     # in 3 steps ball2 goes with a robot that starts in room1: robot1, not the plan's robot3
     actions = [action for plan in run.plans.values() for action in plan]
     assert any(action.startswith("(pick robot1 ball2 room1 ") for action in actions)
@@ -147,7 +146,7 @@ def test_the_mover_cut_frees_each_robot_on_its_own(tmp_path: Path, data_root: Pa
     request = MethodRequest(task, 4, FAST, GRIPPERS, sa_plan=sa_result(TWO_PLAN))
     run = run_plan_deal(request)
     assert run.exec_length == 5
-    _valid(task, run, GRIPPERS)
+    check_valid_task_run(task, run, GRIPPERS)
     rows = [r for r in run.extra["deal"] if r["agents"] == 4 and "rebound" not in r]
     assert {r["cut"]: r["pieces"] for r in rows if not r.get("improved")} == {
         "free": 2, "holding": 5, "mover": 3,
@@ -155,7 +154,7 @@ def test_the_mover_cut_frees_each_robot_on_its_own(tmp_path: Path, data_root: Pa
     assert run_plan_deal(request, cut="free").exec_length == 8
     by_mover = run_plan_deal(request, cut="mover")
     assert by_mover.exec_length == 5
-    _valid(task, by_mover, GRIPPERS)
+    check_valid_task_run(task, by_mover, GRIPPERS)
 
 
 def test_without_robots_the_mover_cut_is_the_free_cut_and_is_not_dealt_again(
@@ -163,9 +162,10 @@ def test_without_robots_the_mover_cut_is_the_free_cut_and_is_not_dealt_again(
 ) -> None:
     # termes: no mover, so no row of the mover cut beside the free cut (its pieces are the
     # free cut's; 7 steps, derived in tests/test_plan_deal.py).
-    from tests.test_plan_deal import TERMES, TERMES_PLAN, TERMES_TOWER, _copy_task
+    from tests.examples import TERMES, TERMES_PLAN, TERMES_TOWER
+    from tests.support.plans import copy_task
 
-    task = _copy_task(tmp_path, data_root, "termes", TERMES_TOWER)
+    task = copy_task(tmp_path, data_root, "termes", TERMES_TOWER)
     assert Dealer(task.problem, TERMES_PLAN, TERMES).mover_cut_is_free()
     request = MethodRequest(task, 2, FAST, TERMES, sa_plan=sa_result(TERMES_PLAN))
     run = run_plan_deal(request)

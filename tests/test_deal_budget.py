@@ -21,8 +21,7 @@ import pytest
 
 import twostep.methods.plan_deal as plan_deal
 from tests.conftest import DATA
-from tests.test_plan_deal import _preds
-from tests.test_plan_split import _check
+from tests.support.plans import agent_predicates_of, check_valid_run
 from twostep.dealing import Dealer
 from twostep.methods import MethodRequest, RunResult, run_single_agent
 from twostep.methods.plan_deal import deal_budget, run_plan_deal
@@ -39,8 +38,10 @@ def dealt(
     task = load_task(domain, task_id, DATA)
     if sa is None:
         sa = run_single_agent(MethodRequest(task)).planner_calls[0].result
-    run = run_plan_deal(MethodRequest(task, agents, agent_predicates=_preds(domain), sa_plan=sa))
-    _check(task.problem, run, _preds(domain))
+    run = run_plan_deal(
+        MethodRequest(task, agents, agent_predicates=agent_predicates_of(domain), sa_plan=sa)
+    )
+    check_valid_run(task.problem, run, agent_predicates_of(domain))
     return run, sa
 
 
@@ -125,7 +126,7 @@ def test_the_budget_never_binds_on_the_stored_runs() -> None:
         sa = PlanResult(Status.SOLVED, tuple(row["plan"]), 0.0, 0.0)
         for agents in (2, 3, 4):
             request = MethodRequest(
-                task, agents, agent_predicates=_preds(row["domain"]), sa_plan=sa
+                task, agents, agent_predicates=agent_predicates_of(row["domain"]), sa_plan=sa
             )
             run = run_plan_deal(request)
             key = (row["data"], row["domain"], row["task"], agents)

@@ -17,7 +17,7 @@ import pytest
 
 from checkers import IndependentValidator
 from tests.conftest import own_task
-from tests.test_plan_split import FAST, sa_result
+from tests.support.plans import FAST, sa_result
 from twostep.dealing import Dealer, DealError, walks
 from twostep.dealing.encoding import FactSpace, Step
 from twostep.methods import MethodRequest, check_run

@@ -27,7 +27,7 @@ from flows.report_cli import load_runs_from_mlflow
 from flows.report_cli import main as report_main
 from flows.report_sources import load_runs_from_sweep_dir
 from flows.store import JobStore
-from tests.test_cli import REPO, run_cli
+from tests.support.commands import REPO, run_cli
 
 KITCHEN = REPO / "data" / "alfworld"
 FRIDGE_CELL = (1, 2)  # loc-fridge1 in kitchen.yaml

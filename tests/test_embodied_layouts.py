@@ -10,13 +10,13 @@ numpy, apart from the code under test) and from the fixture's names.
 from __future__ import annotations
 
 import json
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from checkers.trace_check import alfworld_layouts_folder, check_trace
+from tests.support.data import alfred_root
 from tests.support.skips import needs_alfworld, skip_without_alfworld_engine
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.embodied import (
@@ -40,21 +40,10 @@ from twostep.methods.plan_deal import run_plan_deal
 from twostep.planner import PlannerSettings
 from twostep.tasks.benchmark import BenchmarkTask, load_task
 
-FIXTURE = Path(__file__).resolve().parent / "fixtures" / "alfred_scene" / "alfred" / "p01.pddl"
 AGENT_PREDICATES = ("atlocation", "holds", "holdsany", "holdsanyreceptacleobject")
 FAST = PlannerSettings(alias="lama-first", search_time_limit_s=60)
 
 pytestmark = needs_alfworld
-
-
-def alfred_root(tmp: Path, problem_text: str | None = None) -> Path:
-    """A data root with the wheel's alfred.pddl beside our problem."""
-    folder = tmp / "alfred"
-    folder.mkdir(parents=True)
-    wheel = Path(str(alfworld_layouts_folder())).parent.parent / "data" / "alfred.pddl"
-    shutil.copy(wheel, folder / "domain.pddl")
-    (folder / "p01.pddl").write_text(problem_text or FIXTURE.read_text())
-    return tmp
 
 
 @pytest.fixture(scope="module")

@@ -22,8 +22,8 @@ from flows.build import run_config
 from flows.checks import JobError
 from flows.config import register, typed
 from tests.conftest import BLOCKS_DOMAIN, FIXTURES, blocks_problem
+from tests.support.commands import REPO, run_cli
 from tests.support.skips import needs_alfworld
-from tests.test_cli import REPO, run_cli
 
 OUTPUT: list[Path] = []  # the module's output.root (set by the fixture below)
 
@@ -103,7 +103,7 @@ def test_domain_alfred_runs_a_real_problem_on_its_scene(
     scene's layout; the trace checker, which reads the layout and the PDDL itself, replays
     the trace: no violation, no interaction out of reach."""
     from checkers.trace_check import check_trace
-    from tests.test_embodied_layouts import alfred_root
+    from tests.support.data import alfred_root
 
     root = alfred_root(tmp_path)
     cfg = make(f"data.root={root}", "domain=alfred", "task=1", f"method={method}",
@@ -162,7 +162,7 @@ def test_executor_layout_chooses_the_scene(tmp_path: Path) -> None:
     """``executor.layout``: the problem's own scene is found without it; a scene that does
     not hold the problem's locations is refused with their names; ``open`` places them on
     an open grid."""
-    from tests.test_embodied_layouts import alfred_root
+    from tests.support.data import alfred_root
 
     root = alfred_root(tmp_path)
     base = [f"data.root={root}", "domain=alfred", "task=1", "method=sa"]

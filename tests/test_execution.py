@@ -5,11 +5,29 @@ from __future__ import annotations
 import functools
 import itertools
 import random
-from collections import deque
 from collections.abc import Sequence
 
 import pytest
 
+from tests.examples import (
+    BLOCKSWORLD,
+    TOY,
+    TOY_AGENT,
+    TOY_PROBLEM,
+    TRACKS,
+    ground,
+    problem,
+    tracks_problem,
+)
+from tests.support.brute_force import (
+    JointState,
+    brute_force_length,
+    finished,
+    interfere,
+    joint_step,
+    random_case,
+    start_node,
+)
 from twostep.makespan import (
     ParallelExecution,
     ScheduleError,
@@ -18,26 +36,8 @@ from twostep.makespan import (
     split_state,
 )
 from twostep.makespan.check import EnvironmentPart, may_interfere
-from twostep.pddl import Fact, Goal, Problem, parse_goal, parse_problem
-from twostep.plans.simulate import GroundAction, Grounder
-
-BLOCKSWORLD = """
-(define (domain blocksworld)
- (:requirements :strips)
- (:predicates (clear ?x) (ontable ?x) (on ?x ?y) (arm-empty) (holding ?x))
- (:action pickup :parameters (?x)
-  :precondition (and (clear ?x) (ontable ?x) (arm-empty))
-  :effect (and (not (ontable ?x)) (not (clear ?x)) (not (arm-empty)) (holding ?x)))
- (:action putdown :parameters (?x)
-  :precondition (holding ?x)
-  :effect (and (not (holding ?x)) (clear ?x) (arm-empty) (ontable ?x)))
- (:action stack :parameters (?x ?y)
-  :precondition (and (holding ?x) (clear ?y))
-  :effect (and (not (holding ?x)) (not (clear ?y)) (clear ?x) (arm-empty) (on ?x ?y)))
- (:action unstack :parameters (?x ?y)
-  :precondition (and (on ?x ?y) (clear ?x) (arm-empty))
-  :effect (and (holding ?x) (clear ?y) (not (clear ?x)) (not (arm-empty)) (not (on ?x ?y)))))
-"""
+from twostep.pddl import Fact, Goal, Problem, parse_goal
+from twostep.plans.simulate import GroundAction
 
 THREE_BLOCKS_ON_TABLE = """
 (define (problem three) (:domain blocksworld)
@@ -76,58 +76,6 @@ LIGHTS_PROBLEM = """
 (define (problem dark) (:domain lights) (:objects r1) (:init)
  (:goal (and (passed r1) (lit r1))))
 """
-
-TRACKS = """
-(define (domain tracks)
- (:requirements :strips :typing)
- (:types cart cell)
- (:predicates (at ?c - cart ?p - cell) (next ?p - cell ?q - cell) (free ?p - cell) (ready))
- (:action move :parameters (?c - cart ?p - cell ?q - cell)
-  :precondition (and (ready) (at ?c ?p) (next ?p ?q) (free ?q))
-  :effect (and (not (at ?c ?p)) (not (free ?q)) (at ?c ?q) (free ?p))))
-"""
-
-
-def tracks_problem(
-    lengths: Sequence[int], hub_at: int | None = None
-) -> tuple[str, list[list[str]]]:
-    """Carts on private tracks of the given lengths, optionally all crossing one hub cell.
-
-    Returns the problem text and each cart's plan (drive to the end of its track).
-    """
-    cells: list[str] = []
-    init = ["(ready)"]
-    goal = []
-    plans = []
-    for cart, length in enumerate(lengths):
-        track = [f"k{cart}-{i}" for i in range(length + 1)]
-        if hub_at is not None and 0 < hub_at < length:
-            track[hub_at] = "hub"
-        cells += [c for c in track if c not in cells]
-        init.append(f"(at c{cart} {track[0]})")
-        init += [f"(next {p} {q})" for p, q in itertools.pairwise(track)]
-        init += [f"(free {c})" for c in track[1:] if c != "hub"]
-        goal.append(f"(at c{cart} {track[-1]})")
-        plans.append([f"(move c{cart} {p} {q})" for p, q in itertools.pairwise(track)])
-    if hub_at is not None:
-        init.append("(free hub)")
-    carts = " ".join(f"c{i}" for i in range(len(lengths)))
-    text = (
-        f"(define (problem tracks-1) (:domain tracks)\n (:objects {carts} - cart "
-        f"{' '.join(cells)} - cell)\n (:init {' '.join(sorted(set(init)))})\n"
-        f" (:goal (and {' '.join(goal)})))"
-    )
-    return text, plans
-
-
-@functools.cache
-def problem(domain: str, text: str) -> Problem:
-    return parse_problem(domain, text)
-
-
-def ground(prob: Problem, *plans: list[str]) -> list[list[GroundAction]]:
-    grounder = Grounder(prob)
-    return [grounder.ground_plan(plan) for plan in plans]
 
 
 def score(
@@ -350,102 +298,6 @@ def test_unknown_mode_is_rejected() -> None:
 
 # ------------------------------------------------------------ randomised checks
 
-TOY = """
-(define (domain toy)
- (:requirements :strips :negative-preconditions)
- (:predicates (f ?x) (g ?x) (h ?x))
- (:action set :parameters (?x) :effect (f ?x))
- (:action unset :parameters (?x) :precondition (f ?x) :effect (not (f ?x)))
- (:action grab :parameters (?x) :precondition (f ?x) :effect (and (not (f ?x)) (h ?x)))
- (:action drop :parameters (?x) :precondition (h ?x) :effect (and (not (h ?x)) (f ?x)))
- (:action mark :parameters (?x) :precondition (f ?x) :effect (g ?x))
- (:action avoid :parameters (?x) :precondition (not (f ?x)) :effect (g ?x))
- (:action erase :parameters (?x) :precondition (g ?x) :effect (not (g ?x))))
-"""
-TOY_PROBLEM = "(define (problem toy-1) (:domain toy) (:objects o1 o2) (:init) (:goal (and)))"
-TOY_AGENT = ("h",)
-
-
-def interfere(a: GroundAction, b: GroundAction, agent_predicates: Sequence[str]) -> bool:
-    """Graphplan interference on environment facts, written out plainly for the oracle."""
-
-    def env(facts: frozenset[Fact]) -> set[Fact]:
-        return {f for f in facts if f[0] not in agent_predicates}
-
-    return any(
-        env(x.delete) & (y.pre_positive | y.add) or env(x.add) & (y.pre_negative | y.delete)
-        for x, y in ((a, b), (b, a))
-    )
-
-
-JointState = tuple[tuple[int, ...], frozenset[Fact], tuple[frozenset[Fact], ...]]
-
-
-def joint_step(
-    plans: list[list[GroundAction]],
-    node: JointState,
-    chosen: Sequence[int],
-    agent_predicates: Sequence[str],
-) -> JointState | None:
-    """The state after the chosen agents act together, or None if they cannot."""
-    indices, env, copies = node
-    actions = [plans[i][indices[i]] for i in chosen]
-    if not all(a.applicable(env | copies[i]) for i, a in zip(chosen, actions, strict=True)):
-        return None
-    if any(interfere(a, b, agent_predicates) for a, b in itertools.combinations(actions, 2)):
-        return None
-    delete = set().union(*(a.delete for a in actions))
-    add = set().union(*(a.add for a in actions))
-    new_env = frozenset(f for f in (env - delete) | add if f[0] not in agent_predicates)
-    new_copies = list(copies)
-    new_indices = list(indices)
-    for i, a in zip(chosen, actions, strict=True):
-        new_copies[i] = split_state(a.apply(env | copies[i]), agent_predicates)[1]
-        new_indices[i] += 1
-    return tuple(new_indices), new_env, tuple(new_copies)
-
-
-def finished(plans: list[list[GroundAction]], node: JointState, goal: Goal) -> bool | None:
-    """None while some plan has actions left, else whether the goal holds in every view."""
-    indices, env, copies = node
-    if any(i < len(p) for i, p in zip(indices, plans, strict=True)):
-        return None
-    return all(goal.holds(env | c) for c in copies) if copies else goal.holds(env)
-
-
-def start_node(
-    plans: list[list[GroundAction]], init: frozenset[Fact], agent_predicates: Sequence[str]
-) -> JointState:
-    environment, agent = split_state(init, agent_predicates)
-    return (0,) * len(plans), environment, (agent,) * len(plans)
-
-
-def brute_force_length(
-    plans: list[list[GroundAction]],
-    init: frozenset[Fact],
-    goal: Goal,
-    agent_predicates: Sequence[str],
-) -> int | None:
-    """Breadth-first search over every index tuple and every non-empty set of agents."""
-    start = start_node(plans, init, agent_predicates)
-    seen = {start}
-    queue = deque([(start, 0)])
-    while queue:
-        node, depth = queue.popleft()
-        done = finished(plans, node, goal)
-        if done is not None:
-            if done:
-                return depth
-            continue
-        active = [i for i, p in enumerate(plans) if node[0][i] < len(p)]
-        for size in range(1, len(active) + 1):
-            for chosen in itertools.combinations(active, size):
-                child = joint_step(plans, node, chosen, agent_predicates)
-                if child is not None and child not in seen:
-                    seen.add(child)
-                    queue.append((child, depth + 1))
-    return None
-
 
 def algorithm_one(
     plans: list[list[GroundAction]],
@@ -472,37 +324,6 @@ def algorithm_one(
 
     result = solve(start_node(plans, init, agent_predicates))
     return None if result >= infinity else result
-
-
-def random_case(
-    rng: random.Random, prob: Problem
-) -> tuple[list[list[GroundAction]], frozenset[Fact], Goal]:
-    """Random initial state, plans (mostly random walks in hand-off order) and goal."""
-    grounder = Grounder(prob)
-    actions = [
-        grounder.ground(f"({name} {obj})") for name in prob.domain.actions for obj in ("o1", "o2")
-    ]
-    env_facts = [(p, o) for p in ("f", "g") for o in ("o1", "o2")]
-    init = frozenset(f for f in env_facts if rng.random() < 0.5)
-    init |= {("h", "o1")} if rng.random() < 0.2 else set()
-    environment, agent = split_state(init, TOY_AGENT)
-    plans = []
-    for _ in range(rng.randint(1, 4)):
-        copy = agent
-        plan = []
-        for _ in range(rng.randint(0, 4)):
-            view = environment | copy
-            applicable = [a for a in actions if a.applicable(view)]
-            action = rng.choice(applicable if applicable and rng.random() < 0.85 else actions)
-            plan.append(action)
-            if action.applicable(view):
-                environment, copy = split_state(action.apply(view), TOY_AGENT)
-        plans.append(plan)
-    positive = frozenset(f for f in environment if rng.random() < 0.5)
-    negative = frozenset(f for f in env_facts if f not in environment and rng.random() < 0.3)
-    if rng.random() < 0.2:
-        negative |= {("h", "o1")}
-    return plans, init, Goal(positive, negative)
 
 
 def test_random_cases_against_oracles() -> None:

@@ -17,9 +17,8 @@ from hypothesis import HealthCheck, given, settings
 
 from flows.build import JobError, check_job, run_config, search_budget
 from flows.config import register, typed
-from tests.test_execution import TRACKS, problem
-from tests.test_execution_scaling import STAGGERED, two_hub_tracks, two_hub_tracks_text
-from tests.test_independent_checks import _brute_force, cases
+from tests.examples import STAGGERED, TRACKS, problem, two_hub_tracks, two_hub_tracks_text
+from tests.support.brute_force import brute_force, cases
 from twostep.makespan import (
     DEFAULT_SEARCH_BUDGET,
     ParallelExecution,
@@ -52,7 +51,7 @@ def test_time_budget_returns_a_valid_schedule_above_its_lower_bound() -> None:
 @given(cases())
 def test_zero_time_budget_brackets_the_brute_force_optimum(case) -> None:
     plans, init, goal, predicates = case
-    expected = _brute_force(plans, init, goal, predicates)
+    expected = brute_force(plans, init, goal, predicates)
     if expected is None:
         return  # nothing to bracket (ScheduleError; covered in test_execution_scaling)
     found = parallel_length(plans, init, goal, predicates, max_nodes=None, time_limit_s=0)

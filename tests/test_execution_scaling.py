@@ -9,25 +9,24 @@ makespans of symmetric queueing cases, and the search without symmetry reduction
 
 from __future__ import annotations
 
-import itertools
 import random
 
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tests.test_execution import (
+from tests.examples import (
+    STAGGERED,
     TOY,
     TOY_AGENT,
     TOY_PROBLEM,
     TRACKS,
-    brute_force_length,
     ground,
     problem,
-    random_case,
     tracks_problem,
+    two_hub_tracks,
 )
-from tests.test_independent_checks import _brute_force, cases
+from tests.support.brute_force import brute_force, brute_force_length, cases, random_case
 from twostep.makespan import ScheduleError, check_schedule, parallel_length
 from twostep.makespan.bounds import (
     ContentionBound,
@@ -141,7 +140,7 @@ def _bounds_along(plans, init, goal, predicates, length: int, steps) -> None:
 @given(cases())
 def test_bounds_and_budget_bracket_the_brute_force_optimum(case) -> None:
     plans, init, goal, predicates = case
-    expected = _brute_force(plans, init, goal, predicates)
+    expected = brute_force(plans, init, goal, predicates)
     if expected is None:
         with pytest.raises(ScheduleError):
             parallel_length(plans, init, goal, predicates, max_nodes=0)
@@ -257,7 +256,7 @@ def symmetric_cases(draw: st.DrawFn):
 @given(symmetric_cases())
 def test_symmetry_reduction_keeps_the_brute_force_optimum(case) -> None:
     plans, init, goal, kinds = case
-    expected = _brute_force(plans, init, goal, ())
+    expected = brute_force(plans, init, goal, ())
     task = compile_task(plans, init, goal, ())
     symmetry = Symmetry(task)
     # Copies of one template must be found interchangeable (they differ only by name).
@@ -283,38 +282,6 @@ def test_symmetry_reduction_keeps_the_brute_force_optimum(case) -> None:
     if paper.sets is not None and paper_unreduced.sets is not None:
         assert len(paper.sets) == len(paper_unreduced.sets) >= expected
         check_schedule(_as_steps(plans, paper.sets), plans, init, goal, ())
-
-
-def two_hub_tracks_text(hubs: list[tuple[int, int]], length: int) -> tuple[str, list[list[str]]]:
-    """Carts on private tracks of ``length`` moves; cart c crosses the shared cells ``hub``
-    at position hubs[c][0] and ``hub2`` at hubs[c][1] (the bench's staggered case).
-    Returns the problem text (domain TRACKS) and each cart's plan."""
-    cells, init, goal, plans = [], ["(ready)", "(free hub)", "(free hub2)"], [], []
-    for cart, (first, second) in enumerate(hubs):
-        track = [f"k{cart}-{i}" for i in range(length + 1)]
-        track[first], track[second] = "hub", "hub2"
-        cells += [c for c in track if c not in cells]
-        init.append(f"(at c{cart} {track[0]})")
-        init += [f"(next {p} {q})" for p, q in itertools.pairwise(track)]
-        init += [f"(free {c})" for c in track[1:] if not c.startswith("hub")]
-        goal.append(f"(at c{cart} {track[-1]})")
-        plans.append([f"(move c{cart} {p} {q})" for p, q in itertools.pairwise(track)])
-    carts = " ".join(f"c{i}" for i in range(len(hubs)))
-    text = (
-        f"(define (problem two-hubs) (:domain tracks) (:objects {carts} - cart "
-        f"{' '.join(cells)} - cell) (:init {' '.join(sorted(set(init)))}) "
-        f"(:goal (and {' '.join(goal)})))"
-    )
-    return text, plans
-
-
-def two_hub_tracks(hubs: list[tuple[int, int]], length: int):
-    text, plans = two_hub_tracks_text(hubs, length)
-    prob = problem(TRACKS, text)
-    return prob, ground(prob, *plans)
-
-
-STAGGERED = [(3, 8), (4, 11), (6, 10)] * 2  # three kinds of cart, two of each
 
 
 def test_symmetry_finds_the_same_optimum_with_fewer_nodes() -> None:

@@ -23,7 +23,8 @@ from flows.build import open_decomposer
 from flows.config import register
 from flows.sweep_state import count_jobs
 from tests.conftest import blocks_problem
-from tests.test_pipeline import BW, FAST, _task
+from tests.examples import BW
+from tests.support.plans import FAST, blocks_task
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.methods import MethodRequest, run_single_agent, run_twostep
 from twostep.report import build_report, render_markdown
@@ -91,7 +92,7 @@ def _sa_with_huge_time(task: Any) -> Any:
 
 
 def test_twostep_with_helpers_does_not_count_the_sa_plan(tmp_path: Path) -> None:
-    task = _task(tmp_path)  # two towers: goal-split gives the helper one of them
+    task = blocks_task(tmp_path)  # two towers: goal-split gives the helper one of them
     sa_plan = _sa_with_huge_time(task)
     run = run_twostep(
         MethodRequest(
@@ -112,7 +113,7 @@ def test_twostep_without_a_helper_counts_the_sa_plan_it_returns(tmp_path: Path) 
         "(on a b) (on b c)",
         "a b c",
     )
-    task = _task(tmp_path, one_tower)  # one component: goal-split proposes no helper
+    task = blocks_task(tmp_path, one_tower)  # one component: goal-split proposes no helper
     sa_plan = _sa_with_huge_time(task)
     run = run_twostep(
         MethodRequest(

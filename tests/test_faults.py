@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.test_flows import make_data
+from tests.support.data import make_data
 
 REPO = Path(__file__).resolve().parent.parent
 TWOSTEP = Path(sys.executable).parent / "twostep"

@@ -15,7 +15,6 @@ import signal
 import subprocess
 import sys
 import time
-import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -36,31 +35,12 @@ from flows.store import JobStore, job_config, job_key
 from flows.sweep_state import SweepState, record_job
 from flows.tracking.contents import config_tags, job_metrics, job_params
 from flows.tracking.runs import TrackingError
-from tests.conftest import blocks_problem
-from tests.test_prompts import make_blocksworld_data
+from tests.support.commands import api
+from tests.support.data import make_data
 
 REPO = Path(__file__).resolve().parent.parent
 CONF = REPO / "conf"
 TWOSTEP = Path(sys.executable).parent / "twostep"  # the console script of this venv
-TWO_TOWERS = blocks_problem(
-    " ".join(f"(on-table {b}) (clear {b})" for b in "abcdef") + " (arm-empty)",
-    "(on a b) (on b c) (on d e) (on e f)",
-    "a b c d e f",
-)
-
-
-def make_data(root: Path) -> Path:
-    """blocksworld p01 (3 blocks), p02 (two towers: goal-split helps), p03 (one block)."""
-    make_blocksworld_data(root)
-    folder = root / "blocksworld"
-    (folder / "p02.pddl").write_text(TWO_TOWERS)
-    (folder / "p03.pddl").write_text(
-        blocks_problem("(on-table a) (clear a) (arm-empty)", "(holding a)", "a")
-    )
-    (folder / "p04.pddl").write_text(
-        "(define (problem broken) (:domain blocks) (:init (on-table a)"
-    )
-    return root
 
 
 @pytest.fixture(scope="module")
@@ -477,14 +457,6 @@ def test_watchdog_stops_its_command_when_the_owner_is_killed(tmp_path: Path) -> 
 
 
 # ----------------------------------------------------------------- with a Prefect server
-
-
-def api(url: str, path: str, body: dict[str, Any]) -> Any:
-    request = urllib.request.Request(
-        f"{url}{path}", data=json.dumps(body).encode(), headers={"Content-Type": "application/json"}
-    )
-    with urllib.request.urlopen(request, timeout=10) as response:
-        return json.loads(response.read())
 
 
 class CountingPlanner:

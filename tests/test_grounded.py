@@ -21,6 +21,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tests.examples import GRAPH, GRAPH_PROBLEM, ROAD_LENGTHS, ROAD_LENGTHS_PROBLEM
 from twostep.makespan import ScheduleError, check_schedule, parallel_length
 from twostep.pddl import Fact, Goal, PDDLError, Problem, parse_goal, parse_problem
 from twostep.planner import PlannerSettings, plan
@@ -46,47 +47,6 @@ LAMPS_PROBLEM = """
  (:goal (and (not (on l1)) (on l2) (on l3))))
 """
 
-# reach: the nodes reachable from the source through open edges (recursive, layer 0);
-# cut-off: the nodes not reachable (negation of a derived predicate: a higher layer).
-GRAPH = """
-(define (domain graph)
- (:requirements :strips :derived-predicates :negative-preconditions)
- (:predicates (edge ?a ?b) (open ?a ?b) (source ?a) (reach ?a) (cut-off ?a)
-              (visited ?a) (lost ?a))
- (:derived (reach ?a) (source ?a))
- (:derived (reach ?b) (exists (?a) (and (reach ?a) (edge ?a ?b) (open ?a ?b))))
- (:derived (cut-off ?a) (not (reach ?a)))
- (:action close :parameters (?a ?b) :precondition (open ?a ?b) :effect (not (open ?a ?b)))
- (:action open-gate :parameters (?a ?b) :precondition (and (edge ?a ?b) (not (open ?a ?b)))
-   :effect (open ?a ?b))
- (:action visit :parameters (?a) :precondition (reach ?a) :effect (visited ?a))
- (:action mark-lost :parameters (?a) :precondition (cut-off ?a) :effect (lost ?a)))
-"""
-GRAPH_PROBLEM = """
-(define (problem graph-1) (:domain graph) (:objects n1 n2 n3 n4)
- (:init (source n1) (edge n1 n2) (edge n2 n3) (edge n3 n4) (open n1 n2) (open n2 n3))
- (:goal (and (visited n4) (lost n3))))
-"""
-
-# Costs computed from a static function, as IPC 2008's elevators and transport do.
-ROADS = """
-(define (domain roads)
- (:requirements :typing :action-costs)
- (:types place)
- (:predicates (at ?p - place) (road ?a ?b - place))
- (:functions (road-length ?a ?b - place) - number (total-cost) - number)
- (:action drive :parameters (?a ?b - place)
-   :precondition (and (at ?a) (road ?a ?b))
-   :effect (and (not (at ?a)) (at ?b) (increase (total-cost) (road-length ?a ?b)))))
-"""
-ROADS_PROBLEM = """
-(define (problem roads-1) (:domain roads) (:objects a b c d - place)
- (:init (at a) (road a b) (road b d) (road a c) (road c d) (road a d)
-   (= (road-length a b) 5) (= (road-length b d) 5) (= (road-length a c) 2)
-   (= (road-length c d) 9) (= (road-length a d) 20) (= (total-cost) 0))
- (:goal (at d))
- (:metric minimize (total-cost)))
-"""
 
 # A disjunctive precondition, and a predicate declared with one parameter name twice
 # (IPC zenotravel's style), with "(in?x ?x)" written without a space as well.
@@ -163,7 +123,7 @@ def test_derived_predicates_with_negation_across_layers() -> None:
 
 
 def test_costs_from_static_functions() -> None:
-    prob = problem(ROADS, ROADS_PROBLEM)
+    prob = problem(ROAD_LENGTHS, ROAD_LENGTHS_PROBLEM)
     costs = {str(a): a.cost for a in prob.grounded.actions.values()}
     assert costs == {
         "(drive a b)": 5,

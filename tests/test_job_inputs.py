@@ -20,7 +20,7 @@ from flows.build import Job
 from flows.config import register
 from flows.job import execute_job
 from tests.conftest import blocks_problem
-from tests.test_flows import make_data
+from tests.support.data import make_data
 
 REPO = Path(__file__).resolve().parent.parent
 CONF = REPO / "conf"

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.test_prompts import make_blocksworld_data
+from tests.support.data import make_blocksworld_data
 from twostep.decomposers.base import Decomposer, DecompositionRequest, SubgoalProposal
 from twostep.decomposers.llm import NONE_REASON, LLMDecomposer, generate_subgoal, translate_subgoal
 from twostep.llm.client import (

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.test_prompts import make_blocksworld_data
+from tests.support.data import make_blocksworld_data
 from twostep.decomposers.base import DecompositionRequest
 from twostep.decomposers.llm import LLMDecomposer
 from twostep.llm import LLMClient, LLMSettings, open_client

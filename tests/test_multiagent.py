@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import BLOCKS_DOMAIN, blocks_problem
+from tests.examples import SHELF, SHELF_PROBLEM
 from twostep.pddl import domain_to_pddl, parse_problem, problem_to_pddl
 from twostep.planner import PlannerSettings, plan
 from twostep.plans.simulate import Grounder
@@ -63,27 +64,6 @@ def test_compiled_plan_splits_into_single_agent_terms() -> None:
             assert len(grounder.ground(step).args) == len(step.strip("()").split()) - 1
 
 
-# An agent-specific predicate inside a quantifier, a conditional effect and a derived
-# predicate: (busy) holds while the agent holds anything, so one hand holds one object.
-SHELF = """
-(define (domain shelf)
- (:requirements :adl :derived-predicates)
- (:predicates (holding ?o) (on-shelf ?o) (in-bin ?o) (busy))
- (:derived (busy) (exists (?o) (holding ?o)))
- (:action take :parameters (?o) :precondition (and (on-shelf ?o) (not (busy)))
-   :effect (and (holding ?o) (not (on-shelf ?o))))
- (:action bin :parameters (?o) :precondition (holding ?o)
-   :effect (and (in-bin ?o) (not (holding ?o))))
- (:action drop-all :parameters ()
-   :effect (forall (?o) (when (holding ?o) (and (not (holding ?o)) (on-shelf ?o))))))
-"""
-SHELF_PROBLEM = """
-(define (problem shelf-1) (:domain shelf) (:objects a b c)
- (:init (on-shelf a) (on-shelf b) (on-shelf c))
- (:goal (and (in-bin a) (in-bin b))))
-"""
-
-
 def test_agent_argument_reaches_quantifiers_conditions_and_derived_predicates() -> None:
     from twostep.makespan import check_schedule, parallel_length
     from twostep.pddl import planner_input
@@ -112,11 +92,11 @@ def test_agent_argument_reaches_quantifiers_conditions_and_derived_predicates() 
 
 
 def test_costs_from_functions_survive_the_compilation() -> None:
-    from tests.test_grounded import ROADS, ROADS_PROBLEM
+    from tests.examples import ROAD_LENGTHS, ROAD_LENGTHS_PROBLEM
     from twostep.pddl import planner_input
     from twostep.planner import plan as run_planner
 
-    p = parse_problem(ROADS, ROADS_PROBLEM)
+    p = parse_problem(ROAD_LENGTHS, ROAD_LENGTHS_PROBLEM)
     ma, names = compile_multi_agent_problem(p, 2, ["at"])
     _, problem_text = planner_input(ma)
     assert "(= (road-length a b) 5)" in problem_text

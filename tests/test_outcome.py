@@ -75,7 +75,7 @@ def test_no_bare_status_comparison_outside_the_outcome_module() -> None:
 
 
 def test_the_scan_finds_a_planted_comparison() -> None:
-    planted = '''
+    planted = """
 def f(result, runs, statuses, found):
     if result.get("status") == "timeout":
         return 1
@@ -86,7 +86,7 @@ def f(result, runs, statuses, found):
     if "discarded" != statuses[0]:
         return 4
     return runs["status"].isin(["failed"]).sum() + statuses.count("accepted")
-'''
+"""
     assert bare_status_comparisons(planted, _status_words()) == [
         (3, "timeout"),
         (7, "success"),
@@ -147,11 +147,11 @@ def test_the_stored_words_are_unchanged() -> None:
 
 
 def test_the_derived_sets() -> None:
-    assert outcome.UNFINISHED == {"error", "llm_error", "failed", "resource_limit"}
+    assert {"error", "llm_error", "failed", "resource_limit"} == outcome.UNFINISHED
     assert [s for s in outcome.RunStatus if outcome.storable(s)] == [
         "solved", "timeout", "unsolvable", "incomplete", "embodied_failed"
     ]  # fmt: skip
-    assert outcome.SETTLED == {"success", "timeout"}
+    assert {"success", "timeout"} == outcome.SETTLED
     assert [outcome.limit_reached(s) for s in ("timeout", "solved", "resource_limit", None)] == [
         True, False, False, False
     ]  # fmt: skip

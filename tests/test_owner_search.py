@@ -14,7 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.test_plan_split import BW, FAST, _blocks, _check, sa_result
+from tests.examples import BW
+from tests.support.plans import FAST, blocks_task, check_valid_run, sa_result
 from twostep.dealing import Dealer, DealError
 from twostep.dealing.improve import search_owners
 from twostep.dealing.timeline import JointSteps
@@ -122,12 +123,12 @@ def test_owner_search_reaches_the_shortest_schedule(
     # reached, and are shorter than the list schedules without the search (8 and 7: their
     # agents leave b1 for another to take off b4, and the joint clean-up cannot drop the
     # detour).
-    task = _blocks(tmp_path, UNSTACKED)
+    task = blocks_task(tmp_path, UNSTACKED)
     request = MethodRequest(task, agents, FAST, BW, sa_plan=sa_result(UNSTACKED_PLAN))
     without = run_plan_deal(request, owner_search=False)
     run = run_plan_deal(request)
     for one in (without, run):
-        _check(task.problem, one, BW)
+        check_valid_run(task.problem, one, BW)
     assert without.exec_length == length + 1
     assert run.exec_length == length and run.fallback is None
     chosen = next(row for row in run.extra["deal"] if row.get("chosen"))
@@ -161,7 +162,7 @@ def test_the_owner_search_keeps_the_walks_links_where_the_deal_needs_them(
     run = run_plan_deal(MethodRequest(task, 2, FAST, preds, sa_plan=plan))
     searched = [row for row in run.extra["deal"] if row.get("improved")]
     assert searched and all("error" not in row for row in searched)
-    _check(task.problem, run, preds)
+    check_valid_run(task.problem, run, preds)
 
 
 def test_passes_repeat_while_one_keeps_a_move() -> None:
@@ -205,7 +206,7 @@ def test_the_search_for_more_agents_starts_where_the_one_for_fewer_ended(
     three = run_plan_deal(MethodRequest(task, 3, FAST, preds, sa_plan=plan))
     four = run_plan_deal(MethodRequest(task, 4, FAST, preds, sa_plan=plan))
     for run in (three, four):
-        _check(task.problem, run, preds)
+        check_valid_run(task.problem, run, preds)
     (search,) = [r for r in four.extra["deal"] if r.get("improved") and r["agents"] == 4]
     assert search["after"] == 3
     deals = [r["exec_length"] for r in four.extra["deal"]

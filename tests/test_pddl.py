@@ -140,9 +140,9 @@ def test_goal_holds_and_unmet() -> None:
 
 
 def test_action_costs_are_read_and_written_back() -> None:
-    from tests.test_planner import ROAD_COSTS, ROADS_DOMAIN, ROADS_PROBLEM
+    from tests.examples import DRIVE_OR_FLY, DRIVE_OR_FLY_PROBLEM, ROAD_COSTS
 
-    problem = parse_problem(ROADS_DOMAIN, ROADS_PROBLEM)
+    problem = parse_problem(DRIVE_OR_FLY, DRIVE_OR_FLY_PROBLEM)
     assert {a.name: a.cost for a in problem.domain.actions.values()} == ROAD_COSTS
     domain_text, problem_text = domain_to_pddl(problem.domain), problem_to_pddl(problem)
     assert "(increase (total-cost) 12)" in domain_text

@@ -5,7 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from tests.conftest import blocks_problem
-from tests.test_benchmark import make_root
+from tests.examples import BW
+from tests.support.plans import FAST, blocks_task
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.methods import (
@@ -15,17 +16,7 @@ from twostep.methods import (
     run_single_agent,
     run_twostep,
 )
-from twostep.planner import PlannerSettings
-from twostep.tasks.benchmark import load_task
 from twostep.verify.validation import validate_plan
-
-BW = ["arm-empty", "holding"]
-FAST = PlannerSettings("lama-first", 20)
-TWO_TOWERS = blocks_problem(
-    " ".join(f"(on-table {b}) (clear {b})" for b in "abcdef") + " (arm-empty)",
-    "(on a b) (on b c) (on d e) (on e f)",
-    "a b c d e f",
-)
 
 
 class Scripted:
@@ -40,12 +31,6 @@ class Scripted:
         return [SubgoalProposal(helper=i, pddl=g) for i, g in enumerate(self.goals, start=1)]
 
 
-def _task(tmp_path: Path, problem: str = TWO_TOWERS):
-    root = make_root(tmp_path)
-    (root / "blocks" / "p05.pddl").write_text(problem)
-    return load_task("blocks", 5, root)
-
-
 def _check(task, result) -> None:
     """The schedule re-validates and every agent's plan is valid in single-agent terms."""
     assert sorted(result.agent_order) == sorted(result.plans)
@@ -54,7 +39,7 @@ def _check(task, result) -> None:
 
 
 def test_single_agent(tmp_path: Path) -> None:
-    task = _task(tmp_path)
+    task = blocks_task(tmp_path)
     result = run_single_agent(MethodRequest(task, planner=FAST))
     assert result.success and result.exec_length == result.sa_length == len(result.plans["agent0"])
     assert validate_plan(task.problem, result.plans["agent0"]).valid
@@ -62,7 +47,7 @@ def test_single_agent(tmp_path: Path) -> None:
 
 
 def test_multi_agent_is_split_and_scored(tmp_path: Path) -> None:
-    task = _task(tmp_path)
+    task = blocks_task(tmp_path)
     sa = run_single_agent(MethodRequest(task, planner=FAST))
     result = run_multi_agent(MethodRequest(task, 2, FAST, BW, sa_length=sa.sa_length))
     assert result.success and result.exec_length is not None
@@ -72,7 +57,7 @@ def test_multi_agent_is_split_and_scored(tmp_path: Path) -> None:
 
 
 def test_twostep_goal_split_runs_in_parallel(tmp_path: Path) -> None:
-    task = _task(tmp_path)
+    task = blocks_task(tmp_path)
     result = run_twostep(MethodRequest(task, 2, FAST, BW, GoalSplitDecomposer(BW)))
     assert result.success and result.fallback is None
     assert [s["status"] for s in result.subgoals] == ["accepted"]
@@ -87,7 +72,7 @@ def test_twostep_goal_split_runs_in_parallel(tmp_path: Path) -> None:
 
 
 def test_bad_subgoals_are_discarded_with_reasons(tmp_path: Path) -> None:
-    task = _task(tmp_path)
+    task = blocks_task(tmp_path)
     decomposer = Scripted(
         "(and (stacked a b))",  # unknown predicate
         "(on-table a)",  # already true
@@ -105,7 +90,7 @@ def test_bad_subgoals_are_discarded_with_reasons(tmp_path: Path) -> None:
 
 
 def test_unsolvable_subgoal_is_discarded(tmp_path: Path) -> None:
-    task = _task(tmp_path)
+    task = blocks_task(tmp_path)
     result = run_twostep(
         MethodRequest(task, 3, FAST, BW, Scripted("(and (on a a))", "(and (on d e) (arm-empty))"))
     )
@@ -117,7 +102,7 @@ def test_unsolvable_subgoal_is_discarded(tmp_path: Path) -> None:
 
 
 def test_goal_already_holds(tmp_path: Path) -> None:
-    task = _task(
+    task = blocks_task(
         tmp_path, blocks_problem("(on-table a) (clear a) (arm-empty)", "(on-table a)", "a")
     )
     for result in (

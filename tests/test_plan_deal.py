@@ -14,20 +14,25 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import own_task
-from tests.support.skips import IPC_SAMPLE, needs_ipc_sample
-from tests.test_plan_split import (
+from tests.examples import (
     BW,
-    FAST,
+    STORAGE_PROBLEM,
     TERMES,
     TERMES_PLAN,
     TERMES_TOWER,
     TWO_TOWERS,
     TWO_TOWERS_PLAN,
-    _blocks,
-    _check,
-    _copy_task,
+    storage_init,
+)
+from tests.support.plans import (
+    FAST,
+    agent_predicates_of,
+    blocks_task,
+    check_valid_run,
+    copy_task,
     sa_result,
 )
+from tests.support.skips import IPC_SAMPLE, needs_ipc_sample
 from twostep.dealing import (
     Dealer,
     DealError,
@@ -54,14 +59,14 @@ def test_two_towers_dealt_to_two_and_four_agents(tmp_path: Path) -> None:
     # lead the longest paths, so they start first on two agents. N = 2: each agent then
     # finishes its own tower, 4 steps (SA: 8). N = 4: the upper blocks go to the other two
     # agents, which pick them up while the lower ones are stacked: 3 steps.
-    task = _blocks(tmp_path, TWO_TOWERS)
+    task = blocks_task(tmp_path, TWO_TOWERS)
     for agents, length in ((2, 4), (4, 3)):
         deal = deal_plan(task.problem, TWO_TOWERS_PLAN, agents, BW)
         assert deal.walks == 0 and deal.cleaned == 8 and deal.estimate == length
         run = run_plan_deal(
             MethodRequest(task, agents, FAST, BW, sa_plan=sa_result(TWO_TOWERS_PLAN))
         )
-        _check(task.problem, run, BW)
+        check_valid_run(task.problem, run, BW)
         assert run.exec_length == length and run.fallback is None
         assert run.decomposer == "plan-deal" and len(run.agent_order) == agents
 
@@ -69,7 +74,7 @@ def test_two_towers_dealt_to_two_and_four_agents(tmp_path: Path) -> None:
 def test_action_elimination_drops_what_the_goal_does_not_need(tmp_path: Path) -> None:
     # (pickup f) (putdown f) at the start and (unstack a b) (stack a b) at the end change
     # nothing the goal needs: the greedy elimination removes both pairs, 12 -> 8 actions.
-    task = _blocks(tmp_path, TWO_TOWERS)
+    task = blocks_task(tmp_path, TWO_TOWERS)
     wasteful = ("(pickup f)", "(putdown f)", *TWO_TOWERS_PLAN, "(unstack a b)", "(stack a b)")
     grounded = Grounder(task.problem).ground_plan(wasteful)
     cleaned = eliminate_actions(task.problem, grounded)
@@ -83,7 +88,7 @@ def test_joint_elimination_uses_each_agents_own_arm(tmp_path: Path) -> None:
     # doing the real work. Dropping its first (pickup e) makes (stack e f), (unstack e f)
     # and (putdown e) inapplicable, so they go with it, and the goal still holds: agent 1
     # keeps only its last four actions. Agent 0's chain is needed for the goal and stays.
-    task = _blocks(tmp_path, TWO_TOWERS)
+    task = blocks_task(tmp_path, TWO_TOWERS)
     g = Grounder(task.problem).ground
     joint = [
         (0, g("(pickup b)")), (1, g("(pickup e)")), (0, g("(stack b c)")), (1, g("(stack e f)")),
@@ -108,7 +113,7 @@ def test_termes_agents_walk_to_their_pieces(tmp_path: Path, data_root: Path) -> 
     # pieces to two agents does better: the top needs the base (t3) and an agent holding a
     # block on the ramp, i.e. one that did not build the base (create, ramp t2, create,
     # move-up t4 at the earliest), so it is placed at t5, the ramp removed after it.
-    task = _copy_task(tmp_path, data_root, "termes", TERMES_TOWER)
+    task = copy_task(tmp_path, data_root, "termes", TERMES_TOWER)
     deal = deal_plan(task.problem, TERMES_PLAN, 2, TERMES, cut="free", order="plan")
     assert deal.plans[0] == [
         "(create-block d)", "(move d p3 n0)", "(place-block p3 p2 n0 n1)",
@@ -120,7 +125,7 @@ def test_termes_agents_walk_to_their_pieces(tmp_path: Path, data_root: Path) -> 
     ]  # fmt: skip
     assert deal.walks == 3  # d->p3 for the base, up the ramp for the top, p3->d after
     run = run_plan_deal(MethodRequest(task, 2, FAST, TERMES, sa_plan=sa_result(TERMES_PLAN)))
-    _check(task.problem, run, TERMES)
+    check_valid_run(task.problem, run, TERMES)
     assert run.exec_length == 7 and run.exact
     assert run.extra["deal"][0] == {  # the one-agent deal: the cleaned SA plan
         "agents": 1, "pieces": 1, "walks": 4, "cleaned_sa_length": 12, "agents_used": 1,
@@ -142,13 +147,13 @@ def test_no_walk_means_the_sa_plan(
     # order needs no search for the first agent, who walks the plan's own walks, and
     # deals it: with it off here; on below.)
     monkeypatch.setattr(walks, "WALK_LIMIT", 0)
-    task = _copy_task(tmp_path, data_root, "termes", TERMES_TOWER)
+    task = copy_task(tmp_path, data_root, "termes", TERMES_TOWER)
     request = MethodRequest(task, 2, FAST, TERMES, sa_plan=sa_result(TERMES_PLAN))
     dealt = run_plan_deal(request)
     (chosen,) = [row for row in dealt.extra["deal"] if row.get("chosen")]
     assert chosen.get("offloaded") and dealt.fallback is None
     assert dealt.exec_length is not None and dealt.exec_length < len(TERMES_PLAN)
-    _check(task.problem, dealt, TERMES)
+    check_valid_run(task.problem, dealt, TERMES)
 
     def stuck(*args: object) -> None:
         raise DealError("stuck")
@@ -164,7 +169,7 @@ def test_no_walk_means_the_sa_plan(
 def test_longer_than_sa_falls_back(tmp_path: Path) -> None:
     # One tower of two blocks: a single chain (pickup b, stack b c... here a on b): no
     # overlap, the deal equals SA's length, never longer; with one agent nothing is dealt.
-    task = _blocks(tmp_path, TWO_TOWERS)
+    task = blocks_task(tmp_path, TWO_TOWERS)
     run = run_plan_deal(MethodRequest(task, 1, FAST, BW, sa_plan=sa_result(TWO_TOWERS_PLAN)))
     assert run.exec_length == 8 and run.fallback == "one agent"
 
@@ -173,7 +178,7 @@ def test_an_sa_plan_that_does_not_apply_is_not_dealt(tmp_path: Path) -> None:
     # (stack a b) first: the arm holds nothing yet. The dealer says so in the deal rows
     # (no exception); the outcome is the plan it was given, which check_run rejects, and the
     # run is an error, not a success.
-    task = _blocks(tmp_path, TWO_TOWERS)
+    task = blocks_task(tmp_path, TWO_TOWERS)
     bad = ("(stack a b)", *TWO_TOWERS_PLAN)
     run = run_plan_deal(MethodRequest(task, 2, FAST, BW, sa_plan=sa_result(bad)))
     assert run.extra["deal"] == [
@@ -188,11 +193,11 @@ def test_an_sa_plan_that_does_not_apply_is_not_dealt(tmp_path: Path) -> None:
 
 
 def test_portfolio_keeps_the_deal_when_it_is_shortest(tmp_path: Path) -> None:
-    task = _blocks(tmp_path, TWO_TOWERS)
+    task = blocks_task(tmp_path, TWO_TOWERS)
     run = run_portfolio(
         MethodRequest(task, 2, FAST, BW, sa_plan=sa_result(TWO_TOWERS_PLAN)), Portfolio()
     )
-    _check(task.problem, run, BW)
+    check_valid_run(task.problem, run, BW)
     rows = run.extra["candidates"]
     (deal,) = [r for r in rows if r["decomposer"] == "plan-deal"]  # with N agents only
     assert deal["agents"] == 2 and deal["exec_length"] == 4
@@ -212,7 +217,7 @@ def test_walk_links_kept_when_no_walk_exists(data_root: Path) -> None:
     run = run_plan_deal(MethodRequest(task, 4, FAST, preds, sa_plan=sa.planner_calls[0].result))
     assert run.fallback is None and run.exec_length is not None
     assert sa.exec_length is not None and run.exec_length < sa.exec_length
-    _check(task.problem, run, preds)
+    check_valid_run(task.problem, run, preds)
 
 
 @pytest.mark.parametrize("agents", [2, 4])
@@ -233,7 +238,7 @@ def test_real_sa_plans_deal_and_validate(data_root: Path, agents: int) -> None:
         assert run.success and run.exec_length is not None and sa.exec_length is not None
         assert run.exec_length <= sa.exec_length
         if run.fallback is None:
-            _check(task.problem, run, preds)
+            check_valid_run(task.problem, run, preds)
 
 
 def _hubs(task: BenchmarkTask) -> int:
@@ -262,7 +267,7 @@ def test_tyreworld_deals_reach_the_one_jack_floor(data_root: Path, task_id: int)
         run = run_plan_deal(
             MethodRequest(task, agents, FAST, [], sa_plan=sa.planner_calls[0].result)
         )
-        _check(task.problem, run, [])
+        check_valid_run(task.problem, run, [])
         assert run.exec_length == 6 * hubs + 6, (agents, run.exec_length)
         searched = [row for row in run.extra["deal"] if row.get("improved")]
         assert searched and all(row["moves"] == 0 for row in searched)
@@ -355,7 +360,7 @@ def test_walks_that_mark_spots_split_a_round(tmp_path: Path) -> None:
         run = run_plan_deal(
             MethodRequest(task, agents, FAST, ["here"], sa_plan=sa_result(tuple(plan)))
         )
-        _check(task.problem, run, ["here"])
+        check_valid_run(task.problem, run, ["here"])
         assert run.exec_length == 4 and run.extra["agents_used"] == 2 and run.fallback is None
 
 
@@ -406,7 +411,7 @@ def test_walks_that_change_shared_facts_deal(tmp_path: Path) -> None:
     assert walking == [a for a in plan if a.startswith("(step")]  # steps walk, paints act
     for agents in (2, 4):
         run = run_plan_deal(MethodRequest(task, agents, FAST, ["at"], sa_plan=sa_result(plan)))
-        _check(task.problem, run, ["at"])
+        check_valid_run(task.problem, run, ["at"])
         assert run.exec_length == 5 and run.extra["agents_used"] == 2 and run.fallback is None
 
 
@@ -425,7 +430,7 @@ def test_walks_that_reach_goal_facts_are_walked_at_the_end(tmp_path: Path) -> No
     )  # fmt: skip
     for agents in (2, 3):
         run = run_plan_deal(MethodRequest(task, agents, FAST, ["at"], sa_plan=sa_result(plan)))
-        _check(task.problem, run, ["at"])
+        check_valid_run(task.problem, run, ["at"])
         assert run.fallback is None and run.extra["agents_used"] == 2
         assert run.exec_length == 4
 
@@ -439,7 +444,7 @@ def test_an_sa_plan_of_walks_alone_is_dealt(tmp_path: Path) -> None:
     assert run.exec_length == 1 and run.fallback is not None
     assert "no deal shorter" in run.fallback  # dealt, just not shorter
     assert all("error" not in row for row in run.extra["deal"])
-    _check(task.problem, run, ["at"])
+    check_valid_run(task.problem, run, ["at"])
 
 
 # lift: our own elevator. ``halt`` has only conditional effects (riders whose target this
@@ -491,7 +496,7 @@ def test_a_lift_with_conditional_effects_deals(tmp_path: Path) -> None:
     assert dealer.pieces("free", False)[0] == [[1, 3], [7, 9]]  # a's halts, b's halts
     for agents in (2, 3):
         run = run_plan_deal(MethodRequest(task, agents, FAST, preds, sa_plan=sa_result(plan)))
-        _check(task.problem, run, preds)
+        check_valid_run(task.problem, run, preds)
         assert run.exec_length == 4 and run.extra["agents_used"] == 2 and run.fallback is None
 
 
@@ -578,13 +583,6 @@ MONOTONE_SLICE = [
 ]
 
 
-def _preds(domain: str) -> list[str]:
-    import yaml
-
-    conf = Path(__file__).parents[1] / "conf" / "domain" / f"{domain}.yaml"
-    return list(yaml.safe_load(conf.read_text())["agent_predicates"])
-
-
 def lengths_over_n(
     task: BenchmarkTask, preds: list[str], independent: bool, planner: PlannerSettings = FAST
 ) -> list[int]:
@@ -597,7 +595,7 @@ def lengths_over_n(
             MethodRequest(task, agents, planner, preds, sa_plan=sa.planner_calls[0].result)
         )
         if independent:
-            _check(task.problem, run, preds)
+            check_valid_run(task.problem, run, preds)
         else:
             check_run(task.problem, run, preds)
         assert run.exec_length is not None and run.extra["agents_used"] <= agents
@@ -608,7 +606,9 @@ def lengths_over_n(
 @pytest.mark.parametrize(("domain", "task_id"), MONOTONE_SLICE)
 def test_never_longer_with_more_agents(data_root: Path, domain: str, task_id: int) -> None:
     # N agents may leave one idle, so the deal to N-1 agents is one of N's candidates.
-    lengths = lengths_over_n(load_task(domain, task_id, data_root), _preds(domain), True)
+    lengths = lengths_over_n(
+        load_task(domain, task_id, data_root), agent_predicates_of(domain), True
+    )
     assert lengths == sorted(lengths, reverse=True)
 
 
@@ -622,38 +622,13 @@ def test_never_longer_with_more_agents_on_all_100_tasks(data_root: Path) -> None
     for domain in ("barman", "blocksworld", "grippers", "termes", "tyreworld"):
         for task_id in range(1, 21):
             task = load_task(domain, task_id, data_root)
-            lengths = lengths_over_n(task, _preds(domain), False, patient)
+            lengths = lengths_over_n(task, agent_predicates_of(domain), False, patient)
             if lengths != sorted(lengths, reverse=True):
                 worse.append((domain, task_id, lengths))
     assert not worse
 
 
 # ---------------------------------------------- real domains the generators never saw
-
-# Storage with four crates (our own problem for the sample's domain, whose own p01 has a
-# single crate: three actions in a chain, nothing to deal): six depot areas in two rows,
-# four container areas, one load area joining both; the hoist starts in the depot.
-STORAGE_PROBLEM = """(define (problem storage-four-crates)
-  (:domain Storage-Propositional)
-  (:objects depot0-1-1 depot0-1-2 depot0-1-3 depot0-2-1 depot0-2-2 depot0-2-3
-            container-0-0 container-0-1 container-0-2 container-0-3 - storearea
-            hoist0 - hoist crate0 crate1 crate2 crate3 - crate
-            container0 - container depot0 - depot loadarea - transitarea)
-  (:init %s)
-  (:goal (and (in crate0 depot0) (in crate1 depot0) (in crate2 depot0) (in crate3 depot0))))"""
-
-
-def _storage_init() -> str:
-    depot = [f"depot0-{r}-{c}" for r in (1, 2) for c in (1, 2, 3)]
-    facts = [f"(in {a} depot0)" for a in depot] + [f"(clear {a})" for a in depot[1:]]
-    for a, b in [(0, 1), (1, 2), (3, 4), (4, 5), (0, 3), (1, 4), (2, 5)]:
-        facts += [f"(connected {depot[a]} {depot[b]})", f"(connected {depot[b]} {depot[a]})"]
-    for area in ("depot0-1-1", "depot0-1-3", *(f"container-0-{k}" for k in range(4))):
-        facts += [f"(connected {area} loadarea)", f"(connected loadarea {area})"]
-    for k in range(4):
-        facts += [f"(in container-0-{k} container0)", f"(on crate{k} container-0-{k})",
-                  f"(in crate{k} container0)"]  # fmt: skip
-    return " ".join([*facts, "(at hoist0 depot0-1-1)", "(available hoist0)"])
 
 
 @needs_ipc_sample
@@ -673,7 +648,7 @@ def test_ipc_sample_domains_deal_to_two_agents(tmp_path: Path) -> None:
     cases["floortile-sat11-strips"] = ["robot-at", "robot-has"]
     (tmp_path / "storage").mkdir()
     shutil.copy(IPC_SAMPLE / "storage" / "domain.pddl", tmp_path / "storage" / "domain.pddl")
-    (tmp_path / "storage" / "p01.pddl").write_text(STORAGE_PROBLEM % _storage_init())
+    (tmp_path / "storage" / "p01.pddl").write_text(STORAGE_PROBLEM % storage_init())
     tasks = {name: load_task(name, 1, IPC_SAMPLE) for name in cases}
     tasks["storage"] = load_task("storage", 1, tmp_path)
     cases["storage"] = ["at", "available", "lifting"]
@@ -745,7 +720,7 @@ def test_ipc_sample_domains_beyond_agents_yaml_deal() -> None:
             run = run_plan_deal(
                 MethodRequest(task, agents, FAST, preds, sa_plan=sa.planner_calls[0].result)
             )
-            _check(task.problem, run, preds)
+            check_valid_run(task.problem, run, preds)
             assert run.exec_length is not None and run.exec_length <= sa.exec_length
             if name in BEYOND_YAML:
                 assert run.fallback is None and run.extra["agents_used"] >= 2, (name, agents)
@@ -762,7 +737,7 @@ def test_bits_agree_with_the_grounded_model_on_axioms_and_conditional_effects() 
     # shelf: ``take`` needs the derived (not (busy)), ``drop-all`` has conditional effects
     # under a forall; the bits must say what the grounded model says in every state either
     # agent can reach (breadth-first over all of them, from the task's own actions).
-    from tests.test_multiagent import SHELF, SHELF_PROBLEM
+    from tests.examples import SHELF, SHELF_PROBLEM
     from twostep.dealing.encoding import FactSpace
     from twostep.pddl import parse_problem
 

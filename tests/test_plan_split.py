@@ -9,45 +9,30 @@ of the task, with the schedule's parallel steps laid out one action after the ot
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import pytest
 
 from tests.conftest import blocks_problem
-from tests.test_benchmark import make_root
+from tests.examples import (
+    BW,
+    TALL_TOWER,
+    TALL_TOWER_PLAN,
+    TERMES,
+    TERMES_PLAN,
+    TERMES_TOWER,
+    TWO_TOWERS,
+    TWO_TOWERS_PLAN,
+)
+from tests.support.plans import FAST, blocks_task, check_valid_run, copy_task, sa_result
 from twostep.decomposers.base import DecompositionRequest
 from twostep.decomposers.plan_split import PlanSplitDecomposer, split_plan
-from twostep.methods import MethodRequest, RunResult, check_run, run_single_agent, run_twostep
+from twostep.methods import MethodRequest, run_single_agent, run_twostep
 from twostep.pddl import Goal, Problem, parse_goal
-from twostep.planner import PlannerSettings, PlanResult, Status
-from twostep.tasks.benchmark import BenchmarkTask, load_task
-from twostep.verify.validation import validate_schedule
+from twostep.tasks.benchmark import load_task
 
-BW = ["arm-empty", "holding"]
 BARMAN = ["handempty", "holding"]
-TERMES = ["at", "has-block"]
-FAST = PlannerSettings("lama-first", 20)
 
-TWO_TOWERS = blocks_problem(
-    " ".join(f"(on-table {b}) (clear {b})" for b in "abcdef") + " (arm-empty)",
-    "(on a b) (on b c) (on d e) (on e f)",
-    "a b c d e f",
-)
-TWO_TOWERS_PLAN = (
-    "(pickup b)", "(stack b c)", "(pickup a)", "(stack a b)",
-    "(pickup e)", "(stack e f)", "(pickup d)", "(stack d e)",
-)  # fmt: skip
-
-# c on a, d on b; goal: the single tower a-b-c-d
-TALL_TOWER = blocks_problem(
-    "(on c a) (on d b) (on-table a) (on-table b) (clear c) (clear d) (arm-empty)",
-    "(on a b) (on b c) (on c d)",
-)
-TALL_TOWER_PLAN = (
-    "(unstack c a)", "(putdown c)", "(unstack d b)", "(putdown d)",
-    "(pickup c)", "(stack c d)", "(pickup b)", "(stack b c)", "(pickup a)", "(stack a b)",
-)  # fmt: skip
 
 # one cocktail per shaker; each shot is filled, poured and cleaned in turn, then shaken
 BARMAN_PLAN = tuple(
@@ -73,69 +58,16 @@ BARMAN_PLAN = tuple(
     )
 )  # fmt: skip
 
-# a depot d next to p1 and p3; p1 - p2 - p3 in a row; goal: a tower of height 2 on p2
-TERMES_TOWER = """(define (problem tower) (:domain termes)
-  (:objects n0 n1 n2 - numb d p1 p2 p3 - position)
-  (:init (height d n0) (height p1 n0) (height p2 n0) (height p3 n0) (at d) (is-depot d)
-    (succ n1 n0) (succ n2 n1)
-    (neighbor d p1) (neighbor p1 d) (neighbor d p3) (neighbor p3 d)
-    (neighbor p1 p2) (neighbor p2 p1) (neighbor p2 p3) (neighbor p3 p2))
-  (:goal (and (height p2 n2) (height p1 n0) (height p3 n0) (not (has-block)))))"""
-TERMES_PLAN = (
-    "(create-block d)", "(move d p3 n0)", "(place-block p3 p2 n0 n1)",  # the base, from p3
-    "(move p3 d n0)", "(create-block d)", "(place-block d p1 n0 n1)",  # the ramp on p1
-    "(create-block d)", "(move-up d n0 p1 n1)", "(place-block p1 p2 n1 n2)",  # the top
-    "(move-down p1 n1 d n0)", "(remove-block d p1 n1 n0)", "(destroy-block d)",  # ramp away
-)  # fmt: skip
-
-
-def _blocks(tmp_path: Path, problem: str) -> BenchmarkTask:
-    root = make_root(tmp_path)
-    (root / "blocks" / "p05.pddl").write_text(problem)
-    return load_task("blocks", 5, root)
-
-
-def _copy_task(
-    tmp_path: Path, data_root: Path, domain: str, problem: str | None = None
-) -> BenchmarkTask:
-    folder = tmp_path / domain
-    folder.mkdir()
-    shutil.copy(data_root / domain / "domain.pddl", folder / "domain.pddl")
-    (folder / "domain.nl").write_text(domain)
-    text = problem if problem is not None else (data_root / domain / "p01.pddl").read_text()
-    (folder / "p01.pddl").write_text(text)
-    return load_task(domain, 1, tmp_path)
-
 
 def goal(problem: Problem, pddl: str) -> Goal:
     return parse_goal(pddl, problem)
-
-
-def sa_result(plan: tuple[str, ...]) -> PlanResult:
-    return PlanResult(Status.SOLVED, plan, 0.0, 0.0)
-
-
-def up_validate_run(problem: Problem, run: RunResult, agent_predicates: list[str]) -> None:
-    """unified-planning's verdict on the joint schedule, laid out sequentially.
-
-    In the N-agent compilation every action names its agent; actions of one time step do
-    not interfere (the scorer's rule), so any order of them is a valid sequential plan.
-    """
-    verdict = validate_schedule(problem, run.agent_order, run.schedule, agent_predicates)
-    assert verdict.valid, verdict.message
-
-
-def _check(problem: Problem, run: RunResult, agent_predicates: list[str]) -> None:
-    assert run.success
-    check_run(problem, run, agent_predicates)
-    up_validate_run(problem, run, agent_predicates)
 
 
 def test_two_independent_towers(tmp_path: Path) -> None:
     # Pieces (pickup, stack): b-c before a-b (stack b c gives clear b back), e-f before
     # d-e. The first agent builds a-b-c, the second d-e-f: 4 steps instead of 8. The
     # helper keeps what its pieces achieved that the goal wants, and the empty arm.
-    task = _blocks(tmp_path, TWO_TOWERS)
+    task = blocks_task(tmp_path, TWO_TOWERS)
     problem = task.problem
     for agents in (2, 3):  # a third agent finds nothing to do in parallel
         split = split_plan(problem, TWO_TOWERS_PLAN, agents, BW)
@@ -149,7 +81,7 @@ def test_two_independent_towers(tmp_path: Path) -> None:
     )
     assert [s["status"] for s in run.subgoals] == ["accepted"] and run.fallback is None
     assert run.exec_length == 4  # each agent builds one tower, 4 actions each, in parallel
-    _check(problem, run, BW)
+    check_valid_run(problem, run, BW)
 
 
 def test_one_tall_tower_gives_partial_progress(tmp_path: Path) -> None:
@@ -157,7 +89,7 @@ def test_one_tall_tower_gives_partial_progress(tmp_path: Path) -> None:
     # on c, P5 a on b. Order: P1, P2 -> P3 -> P4 -> P5 and P1 -> P5. Only P2 runs beside
     # P1, so the helper clears b: its subgoal is (clear b), a fact no goal literal names
     # (goal-split has nothing to offer here: the goal is one component).
-    task = _blocks(tmp_path, TALL_TOWER)
+    task = blocks_task(tmp_path, TALL_TOWER)
     problem = task.problem
     split = split_plan(problem, TALL_TOWER_PLAN, 2, BW)
     assert [list(r) for r in split.pieces] == [[0, 1], [2, 3], [4, 5], [6, 7], [8, 9]]
@@ -179,7 +111,7 @@ def test_one_tall_tower_gives_partial_progress(tmp_path: Path) -> None:
     )
     assert [s["status"] for s in run.subgoals] == ["accepted"]
     assert run.exec_length is not None and run.exec_length < len(TALL_TOWER_PLAN)
-    _check(problem, run, BW)
+    check_valid_run(problem, run, BW)
 
 
 def test_barman_three_shakers(tmp_path: Path, data_root: Path) -> None:
@@ -187,7 +119,7 @@ def test_barman_three_shakers(tmp_path: Path, data_root: Path) -> None:
     # shake and pour), on its own shot and shaker: three independent chains of 8 + 4
     # actions. Three agents take one cocktail each (12 steps); the helpers keep their
     # cocktail and hand both hands back empty.
-    task = _copy_task(tmp_path, data_root, "barman")
+    task = copy_task(tmp_path, data_root, "barman")
     problem = task.problem
     assert len(BARMAN_PLAN) == 36
     split = split_plan(problem, BARMAN_PLAN, 3, BARMAN)
@@ -214,7 +146,7 @@ def test_barman_three_shakers(tmp_path: Path, data_root: Path) -> None:
     )
     assert [s["status"] for s in run.subgoals] == ["accepted", "accepted"]
     assert run.exec_length is not None and run.exec_length < len(BARMAN_PLAN)
-    _check(problem, run, BARMAN)
+    check_valid_run(problem, run, BARMAN)
 
 
 def test_termes_tower_helper_builds_the_ramp(tmp_path: Path, data_root: Path) -> None:
@@ -223,7 +155,7 @@ def test_termes_tower_helper_builds_the_ramp(tmp_path: Path, data_root: Path) ->
     # base on p2 (built from p3), so a second agent builds it meanwhile; the top needs
     # both, and taking the ramp away needs the top. Helper subgoal: the ramp, height 1 on
     # p1 -- partial progress that is not a goal literal (the goal wants p1 at 0).
-    task = _copy_task(tmp_path, data_root, "termes", TERMES_TOWER)
+    task = copy_task(tmp_path, data_root, "termes", TERMES_TOWER)
     problem = task.problem
     split = split_plan(problem, TERMES_PLAN, 2, TERMES)
     assert [list(r) for r in split.pieces] == [[0, 1, 2], [3], [4, 5], [6, 7, 8], [9], [10, 11]]
@@ -241,27 +173,27 @@ def test_termes_tower_helper_builds_the_ramp(tmp_path: Path, data_root: Path) ->
     run = run_twostep(MethodRequest(task, 2, FAST, TERMES, PlanSplitDecomposer(TERMES), sa_plan=sa_result(TERMES_PLAN), fallback_if_longer=False))  # fmt: skip
     assert [s["status"] for s in run.subgoals] == ["accepted"]
     assert run.plans["agent1"] == ["(create-block d)", "(place-block d p1 n0 n1)"]
-    _check(problem, run, TERMES)
+    check_valid_run(problem, run, TERMES)
     run = run_twostep(
         MethodRequest(
             task, 2, FAST, TERMES, PlanSplitDecomposer(TERMES), sa_plan=sa_result(TERMES_PLAN)
         )
     )
     assert run.exec_length is not None and run.exec_length <= len(TERMES_PLAN)
-    _check(problem, run, TERMES)
+    check_valid_run(problem, run, TERMES)
 
 
 def test_pipeline_plans_sa_itself_when_not_given(tmp_path: Path) -> None:
-    task = _blocks(tmp_path, TWO_TOWERS)
+    task = blocks_task(tmp_path, TWO_TOWERS)
     run = run_twostep(MethodRequest(task, 2, FAST, BW, PlanSplitDecomposer(BW)))
     assert [c.role for c in run.planner_calls][-2:] == ["helper", "main"]
     assert run.sa_length is not None and run.sa_time_included_s is not None
     assert run.planning_time_s >= sum(c.result.planner_time_s for c in run.planner_calls)
-    _check(task.problem, run, BW)
+    check_valid_run(task.problem, run, BW)
 
 
 def test_no_plan_no_helper(tmp_path: Path) -> None:
-    task = _blocks(tmp_path, TWO_TOWERS)
+    task = blocks_task(tmp_path, TWO_TOWERS)
     decomposer = PlanSplitDecomposer(BW)
     assert decomposer.propose(DecompositionRequest(task, 2)) == []
     assert decomposer.propose(DecompositionRequest(task, 1, sa_plan=TWO_TOWERS_PLAN)) == []
@@ -271,7 +203,7 @@ def test_fallback_if_longer(tmp_path: Path) -> None:
     # A helper that builds the d-e-f tower "the long way" (via a detour the scorer cannot
     # hide) cannot beat SA's 4 steps for a one-tower task; with the fallback on, the SA
     # plan comes back and says why, with it off the longer schedule stays.
-    task = _blocks(
+    task = blocks_task(
         tmp_path,
         blocks_problem(
             "(on-table a) (clear a) (on-table b) (clear b) (on-table c) (clear c) (arm-empty)",
@@ -295,13 +227,13 @@ def test_fallback_if_longer(tmp_path: Path) -> None:
         MethodRequest(task, 2, FAST, BW, Wasteful(), sa_plan=sa_plan, fallback_if_longer=False)
     )
     assert kept.exec_length is not None and kept.exec_length > 4 and kept.fallback is None
-    _check(task.problem, kept, BW)
+    check_valid_run(task.problem, kept, BW)
     back = run_twostep(MethodRequest(task, 2, FAST, BW, Wasteful(), sa_plan=sa_plan))
     assert back.exec_length == 4 and list(back.plans) == ["agent0"]
     assert back.fallback == f"joint schedule longer than SA ({kept.exec_length} > 4)"
     assert [s["status"] for s in back.subgoals] == ["unused"]
     assert back.to_dict()["sa_time_included_s"] == round(sa_plan.planner_time_s, 4)
-    _check(task.problem, back, BW)
+    check_valid_run(task.problem, back, BW)
 
 
 @pytest.mark.slow
@@ -315,4 +247,4 @@ def test_real_sa_plans_revalidate(tmp_path: Path, data_root: Path, agents: int) 
                 task, agents, FAST, preds, PlanSplitDecomposer(preds), fallback_if_longer=False
             )
         )
-        _check(task.problem, run, preds)
+        check_valid_run(task.problem, run, preds)

@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import BLOCKS_DOMAIN, blocks_problem
+from tests.examples import DRIVE_OR_FLY, DRIVE_OR_FLY_PROBLEM, ROAD_COSTS
 from twostep.pddl import parse_problem
 from twostep.planner import (
     PlannerSettings,
@@ -177,29 +178,9 @@ def test_read_plan_file_needs_the_cost_trailer_with_its_newline(tmp_path: Path) 
 
 # ------------------------------------------------------------------ action costs
 
-ROADS_DOMAIN = """
-(define (domain roads)
- (:requirements :strips :typing :action-costs)
- (:types place)
- (:predicates (at ?p - place) (road ?a ?b - place))
- (:functions (total-cost) - number)
- (:action drive :parameters (?a ?b - place)
-  :precondition (and (at ?a) (road ?a ?b))
-  :effect (and (not (at ?a)) (at ?b) (increase (total-cost) 5)))
- (:action fly :parameters (?a ?b - place)
-  :precondition (at ?a)
-  :effect (and (not (at ?a)) (at ?b) (increase (total-cost) 12))))
-"""
-ROADS_PROBLEM = """
-(define (problem trip) (:domain roads) (:objects a b c d - place)
- (:init (at a) (road a b) (road b c) (road c d) (= (total-cost) 0))
- (:goal (at d)) (:metric minimize (total-cost)))
-"""
-ROAD_COSTS = {"drive": 5, "fly": 12}
-
 
 def test_domain_with_action_costs_gives_the_plan_cost() -> None:
-    problem = parse_problem(ROADS_DOMAIN, ROADS_PROBLEM)
+    problem = parse_problem(DRIVE_OR_FLY, DRIVE_OR_FLY_PROBLEM)
     # By hand: fly a->d costs 12; driving a->b->c->d costs 3 * 5 = 15; any mix costs more.
     optimal = plan(problem, PlannerSettings("seq-opt-lmcut", 10))
     assert optimal.status is Status.SOLVED

@@ -13,17 +13,16 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import blocks_problem, own_task
-from tests.test_plan_split import (
+from tests.conftest import blocks_problem
+from tests.examples import (
     BW,
-    FAST,
+    CUPS,
+    CUPS_SA_PLAN,
     TALL_TOWER,
     TALL_TOWER_PLAN,
     TWO_TOWERS,
-    _blocks,
-    _check,
-    sa_result,
 )
+from tests.support.plans import FAST, blocks_task, check_valid_run, cups_task, sa_result
 from twostep.decomposers.base import DecompositionRequest, SubgoalProposal
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.methods import MethodRequest
@@ -31,7 +30,7 @@ from twostep.methods.portfolio import Portfolio, run_portfolio
 from twostep.methods.steps import Steps
 from twostep.pddl import Problem
 from twostep.planner import PlannerSettings, PlanResult, Status
-from twostep.tasks.benchmark import BenchmarkTask, load_task
+from twostep.tasks.benchmark import load_task
 
 
 class Scripted:
@@ -48,7 +47,7 @@ def test_portfolio_keeps_the_shortest_candidate(tmp_path: Path) -> None:
     # Two towers a-b-c and d-e-f from blocks on the table (SA: 8 actions). goal-split gives
     # one tower to the helper: 4 steps. The scripted candidate puts a on b first, so the
     # main agent must take a off again before b goes on c: longer than 4.
-    task = _blocks(tmp_path, TWO_TOWERS)
+    task = blocks_task(tmp_path, TWO_TOWERS)
     wasteful = Scripted("wasteful", "(and (on a b) (arm-empty))")
     portfolio = Portfolio(members=[wasteful, GoalSplitDecomposer(BW)], deals=())
     run = run_portfolio(MethodRequest(task, 2, FAST, BW), portfolio)
@@ -61,7 +60,7 @@ def test_portfolio_keeps_the_shortest_candidate(tmp_path: Path) -> None:
     # every candidate's planner time counts, and the SA plan's once
     candidates = sum(r["planning_time_s"] for r in rows)
     assert abs(run.planning_time_s - candidates - (run.sa_time_included_s or 0.0)) < 1e-3
-    _check(task.problem, run, BW)
+    check_valid_run(task.problem, run, BW)
     assert run.to_dict()["candidates"] == rows  # result.json lists them
 
 
@@ -70,7 +69,7 @@ def test_portfolio_finds_partial_progress_and_fewer_agents(tmp_path: Path) -> No
     # goal-split sees one component (no helper: the SA plan), plan-split lets a helper
     # clear b (the same subgoal for 3 agents as for 2). The candidates are the members with
     # 3 agents, then with 2; the repeats are recognised, not planned again.
-    task = _blocks(tmp_path, TALL_TOWER)
+    task = blocks_task(tmp_path, TALL_TOWER)
     sa = sa_result(TALL_TOWER_PLAN)
     run = run_portfolio(MethodRequest(task, 3, FAST, BW, sa_plan=sa), Portfolio())
     rows = run.extra["candidates"]
@@ -97,13 +96,13 @@ def test_portfolio_finds_partial_progress_and_fewer_agents(tmp_path: Path) -> No
     )
     assert run.exec_length == min(r["exec_length"] for r in rows)
     assert run.success and run.exec_length < 10
-    _check(task.problem, run, BW)
+    check_valid_run(task.problem, run, BW)
 
 
 def test_portfolio_falls_back_to_sa_when_every_candidate_is_longer(tmp_path: Path) -> None:
     # One tower a-b-c (SA: 4 actions, nothing to share); the only candidate asks a helper
     # to put c on a, which the main agent has to undo.
-    task = _blocks(
+    task = blocks_task(
         tmp_path,
         blocks_problem(
             "(on-table a) (clear a) (on-table b) (clear b) (on-table c) (clear c) (arm-empty)",
@@ -117,56 +116,20 @@ def test_portfolio_falls_back_to_sa_when_every_candidate_is_longer(tmp_path: Pat
     assert row["exec_length"] > 4
     assert run.exec_length == 4 and list(run.plans) == ["agent0"]
     assert run.fallback == f"joint schedule longer than SA ({row['exec_length']} > 4)"
-    _check(task.problem, run, BW)
+    check_valid_run(task.problem, run, BW)
     kept = run_portfolio(MethodRequest(task, 2, FAST, BW, fallback_if_longer=False), portfolio)
     assert kept.exec_length == row["exec_length"] and kept.fallback is None
-    _check(task.problem, kept, BW)
+    check_valid_run(task.problem, kept, BW)
     one = run_portfolio(MethodRequest(task, 1, FAST, BW), portfolio)
     assert one.extra["candidates"] == [] and one.exec_length == 4
     assert one.fallback == "no candidate (one agent)"
 
 
-# A bar: each cup is taken from the shelf into the agent's hand, filled, served to one
-# guest, washed to be filled again, put back. The agent's hand is its own.
-CUPS_DOMAIN = """(define (domain cups)
-  (:requirements :strips)
-  (:predicates (hand-free) (holding ?c) (shelf ?c) (clean ?c) (full ?c) (used ?c)
-    (thirsty ?g) (served ?g))
-  (:action take :parameters (?c)
-    :precondition (and (shelf ?c) (hand-free))
-    :effect (and (holding ?c) (not (shelf ?c)) (not (hand-free))))
-  (:action fill :parameters (?c)
-    :precondition (and (holding ?c) (clean ?c))
-    :effect (and (full ?c) (not (clean ?c))))
-  (:action serve :parameters (?c ?g)
-    :precondition (and (holding ?c) (full ?c) (thirsty ?g))
-    :effect (and (served ?g) (used ?c) (not (full ?c)) (not (thirsty ?g))))
-  (:action wash :parameters (?c)
-    :precondition (and (holding ?c) (used ?c))
-    :effect (and (clean ?c) (not (used ?c))))
-  (:action put :parameters (?c)
-    :precondition (holding ?c)
-    :effect (and (shelf ?c) (hand-free) (not (holding ?c)))))"""
-CUPS = ["hand-free", "holding"]
-CUPS_TASK = """(define (problem three) (:domain cups)
-  (:objects c1 c2 c3 g1 g2 g3)
-  (:init (hand-free) (shelf c1) (shelf c2) (shelf c3) (clean c1) (clean c2) (clean c3)
-    (thirsty g1) (thirsty g2) (thirsty g3))
-  (:goal (and (served g1) (served g2) (served g3))))"""
-# The SA plan serves every guest from cup c1, washing it in between (the one-glass chain)
-CUPS_SA_PLAN = (
-    "(take c1)", "(fill c1)", "(serve c1 g1)", "(wash c1)", "(fill c1)", "(serve c1 g2)",
-    "(wash c1)", "(fill c1)", "(serve c1 g3)",
-)  # fmt: skip
 # After the helper served g1 from c1, the main agent takes the clean cups c2 and c3
 CUPS_MAIN_PLAN = (
     "(take c2)", "(fill c2)", "(serve c2 g2)", "(put c2)",
     "(take c3)", "(fill c3)", "(serve c3 g3)",
 )  # fmt: skip
-
-
-def _cups(tmp_path: Path) -> BenchmarkTask:
-    return own_task(tmp_path, "cups", CUPS_DOMAIN, CUPS_TASK)
 
 
 def scripted_planner(helper: tuple[str, ...]) -> Steps:
@@ -188,7 +151,7 @@ def test_portfolio_deals_the_twostep_plans_again(tmp_path: Path) -> None:
     # 7 actions with its one hand meanwhile: 7 steps. Concatenated (11 actions, valid: the
     # helper's hand is free again) the three cups are three pieces take-fill-serve(-put),
     # one per agent; the puts do not serve the goal: 3 steps.
-    task = _cups(tmp_path)
+    task = cups_task(tmp_path)
     helper = ("(take c1)", "(fill c1)", "(serve c1 g1)", "(put c1)")
     scripted = Scripted("serve-g1", "(served g1)")
     request = MethodRequest(
@@ -211,11 +174,11 @@ def test_portfolio_deals_the_twostep_plans_again(tmp_path: Path) -> None:
     # the plans came from the helper's and the main agent's planner calls
     assert [c.role for c in run.planner_calls] == ["helper", "main"]
     assert "deal" not in run.extra and run.extra["redeal"][0]["cleaned_sa_length"] == 11
-    _check(task.problem, run, CUPS)
+    check_valid_run(task.problem, run, CUPS)
     # without the re-deal the TwoStep run wins
     alone = run_portfolio(request, Portfolio(members=[scripted], redeal=False, rebind=False))
     assert alone.exec_length == 7 and len(alone.extra["candidates"]) == 3
-    _check(task.problem, alone, CUPS)
+    check_valid_run(task.problem, alone, CUPS)
 
 
 def test_portfolio_skips_a_concatenation_that_does_not_apply(tmp_path: Path) -> None:
@@ -223,7 +186,7 @@ def test_portfolio_skips_a_concatenation_that_does_not_apply(tmp_path: Path) -> 
     # agent has its own hand: 7 steps), but one agent running both plans cannot take c2
     # with c1 in hand, and no walk frees a hand (putting a cup back is no walk: it changes
     # the shelf): that re-deal is skipped with the reason, the TwoStep run wins.
-    task = _cups(tmp_path)
+    task = cups_task(tmp_path)
     helper = ("(take c1)", "(fill c1)", "(serve c1 g1)")
     scripted = Scripted("serve-g1", "(served g1)")
     request = MethodRequest(
@@ -243,7 +206,7 @@ def test_portfolio_skips_a_concatenation_that_does_not_apply(tmp_path: Path) -> 
     assert run.planning_time_s == pytest.approx(own + (run.sa_time_included_s or 0.0), abs=1e-3)
     assert rows[0]["exec_length"] == 7 and rows[2]["exec_length"] == 9
     assert run.exec_length == 7 and run.extra["candidate"] == 0 and run.fallback is None
-    _check(task.problem, run, CUPS)
+    check_valid_run(task.problem, run, CUPS)
 
 
 def test_portfolio_lite_runs_two_members_with_n_agents_beside_plan_deal(data_root: Path) -> None:
@@ -274,7 +237,7 @@ def test_portfolio_lite_runs_two_members_with_n_agents_beside_plan_deal(data_roo
     deal = run_plan_deal(request)
     assert deal.exec_length is not None and run.exec_length is not None
     assert run.exec_length < deal.exec_length
-    _check(task.problem, run, preds)
+    check_valid_run(task.problem, run, preds)
     verdict = IndependentValidator(task.domain_path, task.problem_path).check_schedule(
         run.agent_order, run.plans, run.schedule, preds
     )

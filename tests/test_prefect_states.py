@@ -16,7 +16,8 @@ from typing import Any
 import pytest
 
 from flows.prefect_flow import final_state
-from tests.test_flows import api, make_data
+from tests.support.commands import api
+from tests.support.data import make_data
 
 BASE = {"domain": "blocksworld", "task": 1, "method": "twostep", "agents": 2, "seed": 0}
 

@@ -7,45 +7,15 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import BLOCKS_DOMAIN, REPO, blocks_problem
+from tests.conftest import REPO
+from tests.support.data import DOMAIN_NL, EXAMPLE_NL, TASK_NL, make_blocksworld_data
 from twostep.cli.prompts import main as prompts_main
 from twostep.llm.prompts import TEMPLATES, generator_messages, template, translator_messages
 from twostep.pddl import load_problem, parse_goal
 from twostep.plans.simulate import Grounder, simulate
 from twostep.tasks.benchmark import BenchmarkTask, load_task
 
-DOMAIN_NL = "Blocks sit on a table or on each other; one arm picks up and stacks clear blocks."
-TASK_NL = (
-    "You have 3 blocks: a, b and c.\nb is on top of c.\na and c are on the table.\n"
-    "Your goal is to rearrange the blocks so that:\na should be on top of b.\n"
-    "c should be on top of a."
-)
-EXAMPLE_NL = "You have 2 blocks: a and b.\nYour goal is to rearrange the blocks so that:\nb on a."
 LEFTOVER = re.compile(r"\$\{?[A-Za-z_]|<condition>\s*$")
-
-
-def make_blocksworld_data(root: Path) -> Path:
-    """A one-task blocksworld data root in the LLM+P layout."""
-    folder = root / "blocksworld"
-    folder.mkdir(parents=True)
-    (folder / "domain.pddl").write_text(BLOCKS_DOMAIN)
-    (folder / "domain.nl").write_text(DOMAIN_NL)
-    (folder / "p01.pddl").write_text(
-        blocks_problem(
-            "(arm-empty) (on-table a) (on-table c) (on b c) (clear a) (clear b)",
-            "(on a b) (on c a)",
-            "a b c",
-        )
-    )
-    (folder / "p01.nl").write_text(TASK_NL)
-    (folder / "p_example.pddl").write_text(
-        blocks_problem(
-            "(arm-empty) (on-table a) (on-table b) (clear a) (clear b)", "(on b a)", "a b"
-        )
-    )
-    (folder / "p_example.nl").write_text(EXAMPLE_NL)
-    (folder / "p_example.sol").write_text("(pickup b)\n(stack b a)\n; cost = 2\n")
-    return root
 
 
 @pytest.fixture
@@ -192,7 +162,7 @@ def test_cli_on_generated_data(data_root: Path, capsys: pytest.CaptureFixture[st
 
 
 def test_derived_facts_and_goal_formulas_are_shown_as_pddl_allows() -> None:
-    from tests.test_grounded import GRAPH, GRAPH_PROBLEM
+    from tests.examples import GRAPH, GRAPH_PROBLEM
     from twostep.llm.prompts import goal_block, problem_state_pddl
     from twostep.pddl import Goal, parse_problem
 

@@ -25,8 +25,8 @@ from typing import Any
 import pytest
 
 from bench import results
-from tests.test_docs_site import NUMBER, prose
-from tests.test_plan_split import up_validate_run
+from tests.support.docs import NUMBER, prose
+from tests.support.plans import up_validate_run
 from twostep.methods import check_run
 
 REPO = Path(__file__).resolve().parent.parent

@@ -13,22 +13,13 @@ from pathlib import Path
 
 import pytest
 
-from checkers import IndependentValidator
 from tests.conftest import own_task
-from tests.test_plan_split import FAST, sa_result
-from tests.test_portfolio import CUPS, CUPS_DOMAIN, CUPS_SA_PLAN, CUPS_TASK, _cups
+from tests.examples import CUPS, CUPS_DOMAIN, CUPS_SA_PLAN, CUPS_TASK
+from tests.support.plans import FAST, check_valid_task_run, cups_task, sa_result
 from twostep.dealing.rebind import handling_predicates, rebind
-from twostep.methods import MethodRequest, RunResult, check_run, run_single_agent
+from twostep.methods import MethodRequest, RunResult, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
 from twostep.tasks.benchmark import BenchmarkTask, load_task
-
-
-def _valid(task: BenchmarkTask, run: RunResult, predicates: list[str]) -> None:
-    check_run(task.problem, run, predicates)
-    verdict = IndependentValidator(task.domain_path, task.problem_path).check_schedule(
-        run.agent_order, run.plans, run.schedule, predicates
-    )
-    assert verdict.valid, verdict
 
 
 def test_one_cups_rounds_go_to_the_idle_cups(tmp_path: Path) -> None:
@@ -39,7 +30,7 @@ def test_one_cups_rounds_go_to_the_idle_cups(tmp_path: Path) -> None:
     # take c2 are inserted before it, and put c2, take c1 after it, where (fill c1) needs
     # c1 in hand. Round 2: c2 (its put) and c3 (never) were both mentioned before c1 last
     # was (its take again); c3 longest ago, so it goes to c3.
-    task = _cups(tmp_path)
+    task = cups_task(tmp_path)
     assert handling_predicates(task.problem, CUPS) == {"shelf"}
     assert rebind(task.problem, CUPS_SA_PLAN, CUPS) == CUPS_REBOUND
 
@@ -56,7 +47,7 @@ CUPS_REBOUND = [
 def test_a_single_cup_or_a_plan_without_rounds_is_not_rebound(tmp_path: Path) -> None:
     # With c2 and c3 dirty from the start (used, not clean) no cup is in c1's state when
     # its rounds begin: nothing to rebind. A plan with one serve has no round at all.
-    task = _cups(tmp_path)
+    task = cups_task(tmp_path)
     text = task.problem_path.read_text().replace("(clean c2) (clean c3)", "(used c2) (used c3)")
     task.problem_path.write_text(text)
     dirty = load_task("cups", 1, tmp_path)
@@ -66,7 +57,7 @@ def test_a_single_cup_or_a_plan_without_rounds_is_not_rebound(tmp_path: Path) ->
 
 
 def _dirty_cups(tmp_path: Path) -> BenchmarkTask:
-    task = _cups(tmp_path)
+    task = cups_task(tmp_path)
     text = task.problem_path.read_text().replace("(clean c2) (clean c3)", "(used c2) (used c3)")
     task.problem_path.write_text(text)
     return load_task("cups", 1, tmp_path)
@@ -114,7 +105,7 @@ def _deal_cups(
     assert run.exec_length == length and run.fallback is None
     (chosen,) = [row for row in run.extra["deal"] if row.get("chosen")]
     assert chosen["rebound"] == rebound and chosen["agents_used"] == min(agents, 3)
-    _valid(task, run, CUPS)
+    check_valid_task_run(task, run, CUPS)
     return run, request, chosen
 
 
@@ -132,7 +123,7 @@ def test_plan_deal_deals_the_rebound_plan(tmp_path: Path, agents: int, length: i
     # pieces of 4, 4 and 3 actions. Three agents take one cup each: 3 steps (the puts go
     # in the joint clean-up); two: one agent does two cups, 4 + 3 = 7 steps; a fourth agent
     # has nothing to do. Without rebinding every deal is the one chain: 9 steps.
-    run, request, chosen = _deal_cups(_cups(tmp_path), agents, length, "rounds")
+    run, request, chosen = _deal_cups(cups_task(tmp_path), agents, length, "rounds")
     assert chosen["cleaned_sa_length"] == 11
     assert "rebinding" in run.extra["deal_seconds"]
     plain = run_plan_deal(request, rebind=False)
@@ -157,7 +148,7 @@ def test_barman_glass_rounds_deal_shorter_and_stay_monotone(data_root: Path) -> 
         assert run.exec_length <= plain.exec_length
         if agents > 2:
             assert run.exec_length < plain.exec_length
-        _valid(task, run, preds)
+        check_valid_task_run(task, run, preds)
         lengths[agents] = run.exec_length
     assert lengths[2] >= lengths[3] >= lengths[4]
 
@@ -225,7 +216,7 @@ def test_a_tail_goes_to_the_idle_jug_and_the_jug_is_washed_where_it_stands(
     run = run_plan_deal(request)
     (chosen,) = [row for row in run.extra["deal"] if row.get("chosen")]
     assert run.exec_length == 4 and chosen["rebound"] == "tails"
-    _valid(task, run, JUGS)
+    check_valid_task_run(task, run, JUGS)
     assert run_plan_deal(request, rebind=False).exec_length == 6
 
 
@@ -257,5 +248,5 @@ def test_a_robots_second_trip_goes_to_the_idle_robot_with_its_grippers(data_root
     request = MethodRequest(task, 2, FAST, preds, sa_plan=sa_result(GRIPPERS_SA_PLAN))
     run = run_plan_deal(request)
     assert run.exec_length == 3 and run.fallback is None
-    _valid(task, run, preds)
+    check_valid_task_run(task, run, preds)
     assert run_plan_deal(request, rebind=False, copies=False).exec_length == 4

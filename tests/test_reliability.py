@@ -27,10 +27,10 @@ from flows.locations import write_problem
 from flows.store import JobStore
 from flows.sweep_callback import _refuse_running_sweep
 from flows.sweep_state import SweepState
-from tests.test_flows import make_data
+from tests.support.commands import REPO, compose
+from tests.support.data import make_data
 from twostep.pddl import PDDLError, load_problem, parse_goal
 
-REPO = Path(__file__).resolve().parent.parent
 TWOSTEP = Path(sys.executable).parent / "twostep"
 FAST = ["orchestration.prefect=false", "planner.time_limit_s=20"]
 # A made-up key, assembled here so that secret scanners do not take the repository for
@@ -59,16 +59,6 @@ def one_error_line(done: subprocess.CompletedProcess[str]) -> str:
 
 
 # ----------------------------------------------------------------- finding 5: values
-
-
-def _compose(*overrides: str) -> Any:
-    from hydra import compose, initialize_config_dir
-
-    from flows.config import register
-
-    register()
-    with initialize_config_dir(config_dir=str(REPO / "conf"), version_base="1.3"):
-        return compose("config", overrides=["output.root=/tmp/x", "data.root=/tmp/x", *overrides])
 
 
 @pytest.mark.parametrize(
@@ -103,11 +93,11 @@ def _compose(*overrides: str) -> Any:
     ],
 )
 def test_each_bad_value_is_named_with_what_is_allowed(override: str, expected: str) -> None:
-    assert value_problems(_compose(override)) == [expected]
+    assert value_problems(compose(override)) == [expected]
 
 
 def test_default_config_has_no_bad_value() -> None:
-    assert value_problems(_compose()) == []
+    assert value_problems(compose()) == []
 
 
 def test_bad_score_mode_fails_before_planning_and_stores_nothing(
@@ -487,7 +477,7 @@ def test_an_unquoted_on_in_a_yaml_domain_config_is_named_with_the_fix() -> None:
     from twostep.tasks.benchmark import load_task
 
     task = load_task("blocksworld", 1, REPO / "data")
-    cfg = _compose("domain=blocksworld")
+    cfg = compose("domain=blocksworld")
     unquoted = OmegaConf.merge(cfg, OmegaConf.create("domain:\n  agent_predicates: [on, holding]"))
     with pytest.raises(JobError) as raised:
         check_task(unquoted, task)

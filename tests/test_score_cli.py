@@ -9,9 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.test_execution import BLOCKSWORLD as DOMAIN
-from tests.test_execution import TRACKS
-from tests.test_execution_scaling import STAGGERED, two_hub_tracks_text
+from tests.examples import BLOCKSWORLD as DOMAIN
+from tests.examples import STAGGERED, TRACKS, two_hub_tracks_text
 from twostep.cli.score import EXIT_BAD_INPUT, EXIT_INVALID_PLANS, EXIT_VALID, main
 
 PROBLEM = """

@@ -13,7 +13,7 @@ import pytest
 
 from flows import services
 from flows.servers import is_healthy, pid_alive
-from tests.test_flows import make_data
+from tests.support.data import make_data
 
 REPO = Path(__file__).resolve().parent.parent
 

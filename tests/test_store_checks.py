@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.test_flows import make_data
-from tests.test_task_cache import files
+from tests.examples import task_files
+from tests.support.data import make_data
 from twostep.pddl import load_problem, problem_to_pddl
 
 REPO = Path(__file__).resolve().parent.parent
@@ -120,8 +120,8 @@ def test_another_tasks_cache_entry_is_parsed_again(
     """Row 95: task 2's cache entry copied over task 1's was used as task 1."""
     one, two = tmp_path / "one", tmp_path / "two"
     one.mkdir(), two.mkdir()
-    d1, p1 = files(one)
-    d2, p2 = files(two, goal="(on b a)")
+    d1, p1 = task_files(one)
+    d2, p2 = task_files(two, goal="(on b a)")
     cache = tmp_path / "cache"
     load_problem(d1, p1, cache)
     (entry1,) = cache.glob("*.pickle")

@@ -11,7 +11,6 @@ import json
 import os
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -19,10 +18,10 @@ from typing import Any
 import pytest
 
 from flows.servers import pid_alive, read_info
-from tests.test_flows import make_data
+from tests.support.commands import TWOSTEP, mlflow_experiment, run, summary, sweep_dirs
+from tests.support.data import make_data
 
 REPO = Path(__file__).resolve().parent.parent
-TWOSTEP = Path(sys.executable).parent / "twostep"  # the console script of this venv
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
@@ -41,14 +40,6 @@ def benchmark_data(tmp: Path) -> Path:
     return tmp
 
 
-def run(args: list[str], timeout: float = 600) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([str(TWOSTEP), *args], capture_output=True, text=True, timeout=timeout)
-
-
-def sweep_dirs(out: Path) -> list[Path]:
-    return sorted(p.parent.parent for p in out.glob("multiruns/*/*/.twostep/sweep.json"))
-
-
 def stored_files(out: Path) -> dict[Path, tuple[int, int, bytes]]:
     """Each result and config file of the job store with its inode, modification time (ns)
     and content: a job computed again rewrites them (a new file, atomically)."""
@@ -60,18 +51,6 @@ def job_results(sweep_dir: Path) -> list[dict[str, Any]]:
     """The result.json of each job of a sweep, in job order."""
     paths = sorted(sweep_dir.glob("*/result.json"), key=lambda p: int(p.parent.name.split("_")[0]))
     return [json.loads(p.read_text()) for p in paths]
-
-
-def summary(sweep_dir: Path) -> dict[str, Any]:
-    return dict(json.loads((sweep_dir / ".twostep" / "summary.json").read_text()))
-
-
-def mlflow_experiment(out: Path) -> tuple[Any, list[Any]]:
-    from mlflow.tracking import MlflowClient
-
-    client = MlflowClient(f"sqlite:///{out}/mlflow.db")
-    (experiment,) = [e for e in client.search_experiments() if e.name.startswith("sweep ")]
-    return client, list(client.search_runs([experiment.experiment_id]))
 
 
 def test_four_job_joblib_sweep_then_the_same_command_plans_nothing(tmp_path: Path) -> None:

@@ -23,8 +23,8 @@ import pytest
 
 from flows.launcher import available_cores
 from flows.servers import pid_alive, read_info
-from tests.test_flows import make_data
-from tests.test_sweep import TWOSTEP, mlflow_experiment, run, summary, sweep_dirs
+from tests.support.commands import TWOSTEP, mlflow_experiment, run, summary, sweep_dirs
+from tests.support.data import make_data
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

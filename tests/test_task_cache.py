@@ -7,18 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import BLOCKS_DOMAIN, blocks_problem
+from tests.examples import task_files
 from twostep.pddl import PDDLError, Problem, domain_to_pddl, load_problem, problem_to_pddl
 from twostep.pddl import reader as pddl_reader
-
-
-def files(folder: Path, goal: str = "(on a b)") -> tuple[Path, Path]:
-    domain, problem = folder / "domain.pddl", folder / "p01.pddl"
-    domain.write_text(BLOCKS_DOMAIN)
-    problem.write_text(
-        blocks_problem("(on-table a) (on-table b) (clear a) (clear b) (arm-empty)", goal, "a b")
-    )
-    return domain, problem
 
 
 def same(a: Problem, b: Problem) -> bool:
@@ -35,7 +26,7 @@ def same(a: Problem, b: Problem) -> bool:
 def test_a_cached_problem_is_the_parsed_one_and_skips_parsing(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    domain, problem = files(tmp_path)
+    domain, problem = task_files(tmp_path)
     fresh = load_problem(domain, problem)
     first = load_problem(domain, problem, tmp_path / "cache")
     assert len(list((tmp_path / "cache").glob("*.pickle"))) == 1
@@ -50,16 +41,16 @@ def test_a_cached_problem_is_the_parsed_one_and_skips_parsing(
 
 
 def test_an_edited_file_is_parsed_again(tmp_path: Path) -> None:
-    domain, problem = files(tmp_path)
+    domain, problem = task_files(tmp_path)
     load_problem(domain, problem, tmp_path / "cache")
-    files(tmp_path, goal="(on b a)")
+    task_files(tmp_path, goal="(on b a)")
     edited = load_problem(domain, problem, tmp_path / "cache")
     assert edited.goal.positive == {("on", "b", "a")}
     assert len(list((tmp_path / "cache").glob("*.pickle"))) == 2
 
 
 def test_a_broken_entry_is_parsed_again_and_bad_pddl_still_raises(tmp_path: Path) -> None:
-    domain, problem = files(tmp_path)
+    domain, problem = task_files(tmp_path)
     load_problem(domain, problem, tmp_path / "cache")
     (entry,) = (tmp_path / "cache").glob("*.pickle")
     entry.write_bytes(b"not a pickle")

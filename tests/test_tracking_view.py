@@ -24,7 +24,7 @@ from hydra import compose, initialize_config_dir
 from flows.config import register
 from flows.job import execute_job
 from flows.tracking.runs import JobRunLog
-from tests.test_flows import make_data
+from tests.support.data import make_data
 
 REPO = Path(__file__).resolve().parent.parent
 BIN = Path(sys.executable).parent

@@ -14,10 +14,9 @@ from itertools import pairwise
 from pathlib import Path
 
 from tests.conftest import own_task
+from tests.examples import STORAGE_PROBLEM, storage_init
+from tests.support.plans import FAST, check_valid_task_run, sa_result
 from tests.support.skips import IPC_SAMPLE, needs_ipc_sample
-from tests.test_plan_deal import STORAGE_PROBLEM, _storage_init
-from tests.test_plan_split import FAST, sa_result
-from tests.test_rebind import _valid
 from twostep.dealing import Dealer, ways
 from twostep.dealing.timeline import Timeline
 from twostep.methods import MethodRequest, run_single_agent
@@ -69,7 +68,7 @@ def test_an_agent_with_a_block_waits_beside_the_ramp_not_at_the_depot(
     request = MethodRequest(task, 3, FAST, TERMES, sa_plan=sa_result(LINE_PLAN))
     run = run_plan_deal(request)
     assert run.exec_length == 6
-    _valid(task, run, TERMES)
+    check_valid_task_run(task, run, TERMES)
     # the agent that places C stood on p2 before B raised it: its move onto p2 is at height 0
     (placer,) = [a for a, plan in run.plans.items() if "(place-block p2 p3 n1 n2)" in plan]
     assert "(move p1 p2 n0)" in run.plans[placer]
@@ -96,7 +95,7 @@ def test_no_walking_ahead_where_moves_change_shared_facts(tmp_path: Path, data_r
     # moves change the robot's own ``at`` alone.
     (tmp_path / "storage").mkdir()
     shutil.copy(IPC_SAMPLE / "storage" / "domain.pddl", tmp_path / "storage" / "domain.pddl")
-    (tmp_path / "storage" / "p01.pddl").write_text(STORAGE_PROBLEM % _storage_init())
+    (tmp_path / "storage" / "p01.pddl").write_text(STORAGE_PROBLEM % storage_init())
     storage = load_task("storage", 1, tmp_path)
     sa = run_single_agent(MethodRequest(storage, planner=FAST)).planner_calls[0].result
     assert sa.plan
