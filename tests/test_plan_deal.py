@@ -774,8 +774,8 @@ def test_a_walk_inside_another_piece_is_offloaded_in_plan_order(tmp_path: Path) 
     # the plan's own run, action by action in its order, and hands pieces on from there:
     # two agents deal it, shorter than SA, and the schedule re-validates (check_run, and
     # the independent validator on the files).
-    from bench.bench_deal_generated import gen_storage
     from checkers import IndependentValidator
+    from twostep.generators.ipc_sample import gen_storage
 
     folder = tmp_path / "storage"
     folder.mkdir()

@@ -1,4 +1,5 @@
-"""Tests of bench/bench_deal_generated.py's problem generators for the IPC sample's domains.
+"""Tests of the problem generators for the IPC sample's domains
+(twostep/generators/ipc_sample.py, which bench/bench_deal_generated.py runs).
 
 The generated files are read against the sample's own domain files (read in place, never
 copied into the repository): by twostep's reader and by Fast Downward's translator (the
@@ -14,7 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from bench.bench_deal_generated import (
+from tests.support.skips import IPC_SAMPLE, needs_ipc_sample
+from twostep.generators.ipc_sample import (
     AGENT_PREDICATES,
     SIZES,
     gen_barman,
@@ -25,7 +27,6 @@ from bench.bench_deal_generated import (
     gen_termes,
     gen_visitall,
 )
-from tests.support.skips import IPC_SAMPLE, needs_ipc_sample
 from twostep.pddl import Problem, parse_problem
 from twostep.pddl.translator import translate
 from twostep.planner import PlannerSettings, plan_pddl
