@@ -27,7 +27,7 @@ from flows.locations import write_problem
 from flows.store import JobStore
 from flows.sweep_callback import _refuse_running_sweep
 from flows.sweep_state import SweepState
-from tests.support.commands import REPO, compose
+from tests.support.commands import REPO, compose_config
 from tests.support.data import make_data
 from twostep.pddl import PDDLError, load_problem, parse_goal
 
@@ -93,11 +93,11 @@ def one_error_line(done: subprocess.CompletedProcess[str]) -> str:
     ],
 )
 def test_each_bad_value_is_named_with_what_is_allowed(override: str, expected: str) -> None:
-    assert value_problems(compose(override)) == [expected]
+    assert value_problems(compose_config(override)) == [expected]
 
 
 def test_default_config_has_no_bad_value() -> None:
-    assert value_problems(compose()) == []
+    assert value_problems(compose_config()) == []
 
 
 def test_bad_score_mode_fails_before_planning_and_stores_nothing(
@@ -477,7 +477,7 @@ def test_an_unquoted_on_in_a_yaml_domain_config_is_named_with_the_fix() -> None:
     from twostep.tasks.benchmark import load_task
 
     task = load_task("blocksworld", 1, REPO / "data")
-    cfg = compose("domain=blocksworld")
+    cfg = compose_config("domain=blocksworld")
     unquoted = OmegaConf.merge(cfg, OmegaConf.create("domain:\n  agent_predicates: [on, holding]"))
     with pytest.raises(JobError) as raised:
         check_task(unquoted, task)

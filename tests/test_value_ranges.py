@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from flows.checks import VALUE_RULES, value_problems
-from tests.support.commands import compose
+from tests.support.commands import compose_config
 
 REPO = Path(__file__).resolve().parent.parent
 DOC = REPO / "docs" / "explanations" / "reliability.md"
@@ -51,7 +51,7 @@ def test_the_docs_table_of_ranges_is_value_rules() -> None:
     ],
 )  # fmt: skip
 def test_an_out_of_range_value_is_named_with_what_is_allowed(override: str, expected: str) -> None:
-    assert value_problems(compose("method=twostep", override)) == [expected]
+    assert value_problems(compose_config("method=twostep", override)) == [expected]
 
 
 @pytest.mark.parametrize(
@@ -62,7 +62,7 @@ def test_an_out_of_range_value_is_named_with_what_is_allowed(override: str, expe
      "decomposer.cut=free", "orchestration.prefect_log_level=ERROR"],
 )  # fmt: skip
 def test_the_edges_of_each_range_are_allowed(override: str) -> None:
-    assert value_problems(compose("method=twostep", override)) == []
+    assert value_problems(compose_config("method=twostep", override)) == []
 
 
 def test_an_executor_value_is_refused_before_any_folder(tmp_path: Path) -> None:

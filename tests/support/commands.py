@@ -29,7 +29,8 @@ def run_cli(*overrides: str, cwd: Path = REPO) -> subprocess.CompletedProcess[st
     )  # fmt: skip
 
 
-def compose(*overrides: str) -> Any:
+def compose_config(*overrides: str) -> Any:
+    """The composed job config (conf/) with these overrides, output and data in /tmp/x."""
     from hydra import compose, initialize_config_dir
 
     from flows.config import register
