@@ -21,6 +21,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from twostep.util import outcome
+
 # Records of jobs that failed on a fault and whose record could not be written either
 # (the disk is full): the sweep's summary counts them (flows.sweep_callback).
 UNRECORDED: list[dict[str, Any]] = []
@@ -70,7 +72,7 @@ def _failed(config: Any, error: OSError) -> Any:
         record = {
             "num": num,
             "name": name,
-            "status": JobStatus.FAILED.value,
+            "status": outcome.JobStatus.FAILED.value,  # ours, not Hydra's JobStatus
             "error": line,
             "fault": True,
         }
