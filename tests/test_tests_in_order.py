@@ -19,6 +19,7 @@ STILL_IMPORT_BENCH = {
     "test_bench_heldout.py",
     "test_bench_methods.py",
     "test_bench_portfolio_members.py",
+    "test_bench_record.py",
     "test_conformance.py",
     "test_docs_site.py",
     "test_paper_shaped.py",
