@@ -8,7 +8,9 @@ MLflow parent run ``RUNNING``. :func:`guard_jobs` wraps ``run_job`` (for the lau
 that run jobs in this process: Hydra's basic launcher, and a single run): such a job
 is a ``failed`` job with one line naming the folder and the error, recorded in the
 sweep (or kept here, :data:`UNRECORDED`, when even its record cannot be written), and
-the next job is tried. The same holds for a job that raised ``OSError`` while writing its
+the next job is tried. A job of the twostep launcher's worker processes returns its record
+(:class:`JobFault`); the launching process keeps the ones its worker could not write
+(:func:`adopt_faults`), so the summary counts every job and the exit code says so. The same holds for a job that raised ``OSError`` while writing its
 own files. :func:`quiet_store_errors` keeps MLflow's SQLAlchemy tracebacks off the
 console (the job's ``warning: ...: not logged to MLflow: ...`` line says it), and Python's
 ``--- Logging error ---`` tracebacks of a log file that cannot be written.
@@ -18,6 +20,8 @@ from __future__ import annotations
 
 import logging
 import sys
+from collections.abc import Iterable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +32,31 @@ from twostep.util import outcome
 UNRECORDED: list[dict[str, Any]] = []
 # Set when a job of this process failed on a fault (a single run exits 1).
 FAULTED: list[str] = []
+
+
+@dataclass
+class JobFault:
+    """What a job that met a fault returns: its sweep record, and whether it was written."""
+
+    record: dict[str, Any]
+    recorded: bool
+
+
+def _keep(record: dict[str, Any]) -> None:
+    """Keep a record that could not be written (it replaces the job's earlier one: the
+    fault came after it)."""
+    UNRECORDED[:] = [r for r in UNRECORDED if r.get("num") != record.get("num")]
+    UNRECORDED.append(record)
+
+
+def adopt_faults(returns: Iterable[Any]) -> None:
+    """In the launching process: keep the records of jobs whose worker met a fault and
+    could not write them (:class:`JobFault`)."""
+    for ret in returns:
+        fault = getattr(ret, "_return_value", None)
+        if isinstance(fault, JobFault) and not fault.recorded:
+            _keep(fault.record)
+
 
 _MLFLOW_LOGGERS = ("mlflow.store.db.utils", "alembic.runtime.migration")
 
@@ -65,6 +94,7 @@ def _failed(config: Any, error: OSError) -> Any:
     name = _job_label(config)
     FAULTED.append(line)
     print(f"error: {name}: {line}", file=sys.stderr, flush=True)
+    fault = None
     if config.hydra.mode == RunMode.MULTIRUN:
         from flows.sweep_state import record_job
 
@@ -76,13 +106,15 @@ def _failed(config: Any, error: OSError) -> Any:
             "error": line,
             "fault": True,
         }
+        fault = JobFault(record, recorded=True)
         try:
             record_job(Path(str(config.hydra.sweep.dir)), num, record)
         except OSError:
-            UNRECORDED.append(record)
+            fault.recorded = False
+            _keep(record)
     ret = JobReturn()
     ret.status = JobStatus.COMPLETED  # recorded as failed: the sweep goes on
-    ret.return_value = None
+    ret.return_value = fault
     return ret
 
 

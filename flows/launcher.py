@@ -43,6 +43,7 @@ from hydra.types import HydraContext, TaskFunction
 from omegaconf import DictConfig, open_dict
 
 from flows.compose import SweepComposer
+from flows.faults import adopt_faults
 from flows.run_job import run_job
 
 log = logging.getLogger(__name__)
@@ -353,6 +354,19 @@ def launch(
         argv=list(sys.argv),
     )
     jobs = [(initial_job_idx + i, list(o)) for i, o in enumerate(job_overrides)]
+    returns = _launch(context, jobs, n_jobs, backend, dask_address)
+    adopt_faults(returns)  # records a worker could not write (a full disk): kept here
+    return returns
+
+
+def _launch(
+    context: LaunchContext,
+    jobs: list[tuple[int, list[str]]],
+    n_jobs: int | None,
+    backend: str,
+    dask_address: str | None,
+) -> list[JobReturn]:
+    config = context.config
     if backend == "dask":
         return _launch_dask(context, jobs, n_jobs, dask_address)
     workers = worker_count(n_jobs, len(jobs))

@@ -305,9 +305,11 @@ class SweepCallback(Callback):
             return
         from flows.faults import UNRECORDED
 
-        records = job_records(Path(state.sweep_dir))
-        seen = {r.get("num") for r in records}
-        records += [r for r in UNRECORDED if r.get("num") not in seen]  # disk full: kept here
+        # A job that met a fault after its record was written: its fault record, kept
+        # here when the disk could not take it, replaces that record.
+        kept = {r.get("num"): r for r in UNRECORDED}
+        records = [kept.pop(r.get("num"), r) for r in job_records(Path(state.sweep_dir))]
+        records += kept.values()
         failed = [r for r in records if r.get("status") == JobStatus.FAILED]
         summary: dict[str, Any] = {
             "jobs_total": state.total_jobs,
@@ -359,6 +361,8 @@ class SweepCallback(Callback):
             with contextlib.suppress(Exception):
                 import mlflow.tracking  # noqa: F401
         report = drawing.files() if drawing is not None and written else []
+        if drawing is not None and not written:  # no results file (a full disk): no report
+            drawing.cancel()
         files = [(results, None), *report] if written else []
         self._end_parent_run(state, summary, bool(failed), files)
         for line in _ui_links(state, str(config.output.root)):

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -75,7 +76,7 @@ class Drawing:
         return [(Path(path), folder) for path, folder in listed]
 
     def cancel(self) -> None:
-        """No report: the process ends without drawing."""
+        """No report: the process ends (without drawing, unless :meth:`start` asked)."""
         if self.process is not None:
             self.process.communicate()  # its input closed: it ends
 
@@ -105,7 +106,10 @@ def main(argv: list[str]) -> int:
     if not sys.stdin.readline().strip():
         return 0  # the sweep ended without asking
     files = draw(Path(argv[0]))
-    print(json.dumps([[str(path), folder] for path, folder in files]), flush=True)
+    try:
+        print(json.dumps([[str(path), folder] for path, folder in files]), flush=True)
+    except BrokenPipeError:  # the sweep ended without reading them: nothing to say
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no flush error at exit
     return 0
 
 

@@ -243,6 +243,30 @@ def tagged_runs(tracking_uri: str, experiment_id: str, tag: str, value: str) -> 
     return int(count)
 
 
+def running_sweep_run(tracking_uri: str, experiment: str, sweep_key: str) -> bool:
+    """Whether a SQLite store holds a parent run of this sweep key still ``RUNNING`` in
+    experiment ``experiment`` (one read; False for another store, or when it cannot tell):
+    a sweep that could not end it (a full disk) left it so."""
+    database = sqlite_path(tracking_uri)
+    if database is None or not database.is_file():
+        return False
+    import sqlite3
+    from contextlib import closing
+
+    try:
+        with closing(sqlite3.connect(f"file:{database}?mode=ro", uri=True, timeout=30.0)) as db:
+            (count,) = db.execute(
+                "SELECT count(*) FROM runs JOIN tags ON tags.run_uuid = runs.run_uuid"
+                " JOIN experiments ON experiments.experiment_id = runs.experiment_id"
+                " WHERE experiments.name = ? AND runs.lifecycle_stage = 'active'"
+                " AND runs.status = 'RUNNING' AND tags.key = ? AND tags.value = ?",
+                (experiment, SWEEP_KEY, sweep_key),
+            ).fetchone()
+    except sqlite3.Error:
+        return False
+    return bool(count)
+
+
 def _retry(call: Callable[[], T], attempts: int = 5) -> T:
     """Retry a store write that lost a race for SQLite's lock with a parallel job."""
     for attempt in range(attempts):

@@ -32,6 +32,7 @@ from flows.tracking.client import (
     log_job_run,
     missing_artifacts,
     run_exists,
+    running_sweep_run,
 )
 from flows.tracking.contents import (
     DEFAULT_EXPERIMENT,
@@ -173,9 +174,18 @@ def end_sweep_run(
     files: Iterable[tuple[Path, str | None]] = (),
 ) -> bool:
     """End the sweep's parent run with its summary metrics and the sweep's report files
-    (``files``: (path, artifact folder)); False: no job logged one."""
+    (``files``: (path, artifact folder)); False: no job logged one, and no earlier run of
+    the same sweep left it ``RUNNING`` (a full disk: this run ends it)."""
+    if state.tracking_uri is None:
+        return False
     ids = sweep_run_ids(state)
-    if state.tracking_uri is None or ids is None:
-        return False  # no job logged anything (all reused and recorded before)
+    if ids is None:  # no job logged anything (all reused and recorded before)
+        if state.experiment is None or not running_sweep_run(
+            state.tracking_uri, state.experiment, state.sweep_key
+        ):
+            return False
+        tracker, _, parent = sweep_parent(state)
+        tracker.end_sweep(parent, metrics, failed, files)
+        return True
     Tracker(state.tracking_uri).end_sweep(ids[1], metrics, failed, files)
     return True
