@@ -4,16 +4,17 @@ each, never a traceback, and the sweep goes on to its summary.
 Hydra creates a job's run directory and writes its ``.hydra/*.yaml`` before any callback
 of ours runs (``hydra.core.utils.run_job``); a full disk or a folder made read-only
 mid-sweep made that a traceback that ended the sweep without its summary and left its
-MLflow parent run ``RUNNING``. :func:`guard_jobs` wraps ``run_job`` (for the launchers
-that run jobs in this process: Hydra's basic launcher, and a single run): such a job
-is a ``failed`` job with one line naming the folder and the error, recorded in the
-sweep (or kept here, :data:`UNRECORDED`, when even its record cannot be written), and
-the next job is tried. A job of the twostep launcher's worker processes returns its record
-(:class:`JobFault`); the launching process keeps the ones its worker could not write
-(:func:`adopt_faults`), so the summary counts every job and the exit code says so. The same holds for a job that raised ``OSError`` while writing its
-own files. :func:`quiet_store_errors` keeps MLflow's SQLAlchemy tracebacks off the
-console (the job's ``warning: ...: not logged to MLflow: ...`` line says it), and Python's
-``--- Logging error ---`` tracebacks of a log file that cannot be written.
+MLflow parent run ``RUNNING``. :func:`guard_jobs` wraps ``run_job`` where the launchers
+call it (Hydra's, for its basic launcher and a single run; the twostep launcher's, in its
+worker processes): such a job is a ``failed`` job with one line naming the folder and the
+error, recorded in the sweep, and the next job is tried. The same holds for a job that
+raised ``OSError`` while writing its own files. When even its record cannot be written, it
+is kept here (:data:`UNRECORDED`); a worker process returns it (:class:`JobFault`) and the
+launching process keeps it (:func:`adopt_faults`), so the summary counts every job and the
+exit code says whether one failed. :func:`quiet_store_errors` keeps MLflow's SQLAlchemy
+tracebacks off the console (the job's ``warning: ...: not logged to MLflow: ...`` line
+says it), and Python's ``--- Logging error ---`` tracebacks of a log file that cannot be
+written.
 """
 
 from __future__ import annotations
