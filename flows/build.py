@@ -7,7 +7,9 @@ are the library dataclasses' defaults) and is mapped here once; ``planner.time_l
 is the planner's ``search_time_limit_s``; :func:`llm_settings` maps the ``llm`` group to
 the LLM client's settings; :func:`search_budget` maps ``score_max_nodes`` and
 ``score_time_limit_s`` to the scorer's budget. The method is the registry's
-(:func:`twostep.methods.method_for`), named by ``method`` and ``decomposer``.
+(:func:`twostep.methods.method_for`), named by ``method`` with the keys of its config
+file as its options; ``decomposer`` is TwoStep's subgoal source (the old spelling,
+``method=twostep decomposer=plan-deal``, is respelled first: :mod:`flows.spelling`).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from typing import TYPE_CHECKING, Any, cast
 from flows.checks import JobError, check_values
 from flows.config import TwostepConfig
 from flows.identity import job_input_files
+from flows.spelling import METHOD_KEYS, respell
 from twostep.decomposers.base import Decomposer
 from twostep.embodied import ExecutorSettings
 from twostep.makespan import SearchBudget
@@ -37,7 +40,7 @@ from twostep.methods import (
     method_for,
     run_single_agent,
 )
-from twostep.methods.registry import SUBGOAL_SOURCES
+from twostep.methods.registry import SUBGOAL_SOURCES, reads_subgoals
 from twostep.pddl.translator import GroundingLimits
 from twostep.planner import PlannerSettings
 from twostep.tasks.benchmark import BenchmarkTask, load_task, task_path
@@ -129,6 +132,7 @@ def check_job(cfg: TwostepConfig) -> None:
     """Reject a config that cannot run, before any work (and before any server starts or
     anything heavy is imported): every value in range (one line naming the key and the
     allowed values), and the task's files where the config says they are."""
+    respell(cfg)
     check_values(cfg)
     problem = task_path(cfg.domain.name, int(cfg.task), Path(cfg.data.root))  # BenchmarkError
     config = cast("Mapping[str, Any]", cfg)  # Hydra's DictConfig: a mapping
@@ -136,11 +140,7 @@ def check_job(cfg: TwostepConfig) -> None:
         bad = file_problem(path)
         if bad is not None:
             raise JobError(bad)
-    if (
-        cfg.method.name == MethodName.TWOSTEP
-        and cfg.decomposer.name == "llm"
-        and cfg.llm.mode == "bundle"
-    ):
+    if reads_subgoals(cfg.method.name) and cfg.decomposer.name == "llm" and cfg.llm.mode == "bundle":
         check_replay(cfg, problem)
 
 
@@ -220,8 +220,8 @@ def open_decomposer(cfg: TwostepConfig) -> Iterator[Decomposer | None]:
     """
     name = cfg.decomposer.name
     agent_predicates = list(cfg.domain.agent_predicates)
-    if cfg.method.name != MethodName.TWOSTEP or name not in SUBGOAL_SOURCES:
-        yield None  # sa, ma, and the twostep methods that deal or choose (plan-deal, ...)
+    if not reads_subgoals(cfg.method.name) or name not in SUBGOAL_SOURCES:
+        yield None  # sa, ma, and the methods that deal or choose (plan-deal, ...)
     elif name == "goal-split":
         from twostep.decomposers.goal_split import GoalSplitDecomposer
 
@@ -248,7 +248,7 @@ class Job:
     own steps), whether SA is solved beside it, and the embodied executor (None:
     symbolic)."""
 
-    method_name: MethodName
+    method_name: str  # the registry's (twostep.methods.registry.METHODS)
     method: Method
     request: MethodRequest
     compare_sa: bool
@@ -261,13 +261,13 @@ class Job:
         solved first (its length is reported beside the result, and TwoStep reuses the
         plan), then the embodied executor runs the plans when configured."""
         request = replace(self.request, steps=steps)
-        if self.method_name is MethodName.SA:
+        if self.method_name == MethodName.SA:
             return self.execute(self.method(request))
         sa = run_single_agent(request) if self.compare_sa else None
         if sa is not None:
             request = replace(request, sa_length=sa.sa_length, sa_plan=sa.planner_calls[0].result)
         result = self.method(request)
-        if self.method_name is MethodName.TWOSTEP:
+        if result.method == MethodName.TWOSTEP:  # plan-deal and the portfolios as well
             result.extra["fallback_if_longer"] = request.fallback_if_longer
         if sa is not None:
             # The SA comparison is solved in the same job; its planner time is reported apart.
@@ -305,17 +305,11 @@ class Job:
 def build_job(cfg: TwostepConfig) -> Iterator[Job]:
     """The job of a config, checked (:class:`JobError`) and built once, for the duration
     of the job (the LLM decomposer's client lives as long)."""
-    check_job(cfg)
-    method_name = MethodName(cfg.method.name)
+    check_job(cfg)  # respelled first
+    method_name = str(cfg.method.name)
+    options = {str(k): v for k, v in cfg.method.items() if k not in METHOD_KEYS}
     try:
-        method = method_for(
-            method_name,
-            cfg.decomposer.name,
-            cut=cfg.decomposer.cut,
-            link_degree=cfg.decomposer.link_degree,
-            rebind=bool(cfg.decomposer.rebind),
-            owner_search=bool(cfg.decomposer.owner_search),
-        )
+        method = method_for(method_name, cfg.decomposer.name, **options)
     except ValueError as error:  # UnknownMethod, or an option out of range
         raise JobError(str(error)) from None
     start = time.perf_counter()

@@ -41,12 +41,13 @@ class ValidationError(Exception):
 Check = Callable[[str, Any], "str | None"]
 
 
-def one_of(allowed: Callable[[], Iterable[str]]) -> Check:
-    """A choice among ``allowed()`` (read when checked: the lists live in the library)."""
+def one_of(allowed: Callable[[], Iterable[str]], optional: bool = False) -> Check:
+    """A choice among ``allowed()`` (read when checked: the lists live in the library;
+    ``optional``: or null)."""
 
     def check(key: str, value: Any) -> str | None:
         choices = tuple(allowed())
-        if str(value) in choices:
+        if str(value) in choices or (value is None and optional):
             return None
         return f"{key}={value} is not allowed (allowed: {', '.join(choices)})"
 
@@ -202,8 +203,9 @@ class Rule:
 SECONDS = "> 0, at most 1000000 (seconds)"
 VALUE_RULES: tuple[Rule, ...] = (
     Rule("score_mode", one_of(_score_modes), "exact, paper"),
-    Rule("method.name", one_of(_methods), "sa, ma, twostep", "method"),
-    Rule("decomposer.name", one_of(_decomposers), "the decomposers' names", "decomposer"),
+    Rule("method.name", one_of(_methods), "the methods' names", "method"),
+    Rule("decomposer.name", one_of(_decomposers, optional=True), "the decomposers' names",
+         "decomposer"),  # fmt: skip
     Rule("decomposer.cut", one_of(_cuts), "free, holding, mover, best"),
     Rule("decomposer.link_degree", at_least(0), ">= 0"),
     Rule("llm.mode", one_of(_llm_modes), "live, replay, scripted"),
@@ -235,7 +237,9 @@ VALUE_RULES: tuple[Rule, ...] = (
 def rule_applies(rule: Rule, cfg: Any) -> bool:
     """Whether the job reads the rule's key (``decomposer.*`` only TwoStep does)."""
     if rule.key.startswith("decomposer."):
-        return str(cfg.method.name) == "twostep"
+        from twostep.methods.registry import reads_subgoals
+
+        return reads_subgoals(str(cfg.method.name))
     return True
 
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextlib
 import difflib
 import enum
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field, fields, is_dataclass
 from importlib import resources
@@ -44,21 +45,34 @@ class DomainConfig:
     agent_predicates: list[str] = field(default_factory=list)
 
 
+# OmegaConf deprecates a structured config that subclasses Dict (MethodConfig, below) but
+# supports it: it is how a group keeps its common keys typed and takes each option's own.
+warnings.filterwarnings("ignore", message="Class `MethodConfig` subclasses `Dict`")
+
+
 @dataclass
-class MethodConfig:
-    name: str = "twostep"  # sa | ma | twostep
-    # TwoStep: a joint schedule longer than the SA plan gives way to it (run_twostep's own
-    # parameter of the same name); ignored by sa and ma.
+class MethodConfig(dict[str, Any]):
+    """The method (``conf/method/<name>.yaml``, a name of
+    :data:`twostep.methods.registry.METHODS`) and its options: the keys of the method's
+    file besides these, checked against the method's run function by the registry."""
+
+    name: str = "plan-deal"  # sa | ma | twostep | plan-deal | portfolio | portfolio-lite
+    # A joint schedule longer than the SA plan gives way to it (run_twostep's own
+    # parameter of the same name; plan-deal's and the portfolios' too); ignored by sa and ma.
     fallback_if_longer: bool = True
 
 
 @dataclass
 class DecomposerConfig:
-    name: str = "plan-deal"  # goal-split | expert | llm | plan-split | plan-deal | portfolio
+    """TwoStep's subgoal source (read by ``method=twostep`` only)."""
+
+    name: str | None = None  # goal-split | expert | llm | plan-split (null: none chosen)
     link_degree: int = 2
-    cut: str = "best"  # plan-deal: free | holding | mover | best (every cut, the shortest kept)
-    rebind: bool = True  # plan-deal (and the portfolios' plan-deal): deal the rebound plan too
-    owner_search: bool = True  # plan-deal (and the portfolios'): search its deals' owners
+    # The old spelling's (method=twostep decomposer=plan-deal decomposer.cut=free), for one
+    # more release: plan-deal's and the portfolios' options, now theirs under method.*.
+    cut: str = "best"
+    rebind: bool = True
+    owner_search: bool = True
 
 
 class ExecutorName(enum.StrEnum):

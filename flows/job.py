@@ -44,6 +44,7 @@ from flows.identity import job_name
 from flows.services import running_prefect_api
 from flows.status import JobStatus, job_status
 from flows.step_stats import StepStats, counting_steps
+from flows.spelling import respell
 from flows.store import JobEntry, JobStore, job_config, job_inputs, job_key
 from flows.sweep_state import SweepState
 from flows.tracking.context import run_context_tags
@@ -243,6 +244,9 @@ def execute_job(
     is logged.
     """
     start, started_at = time.perf_counter(), time.time()
+    said = respell(cfg)  # the old spelling (method=twostep decomposer=plan-deal), once
+    if said and sweep is None:  # a sweep says it once, at its start (flows.sweep_callback)
+        print(said, file=sys.stderr, flush=True)
     config = job_config(cfg)
     inputs = job_inputs(config)
     key = job_key(config, inputs)

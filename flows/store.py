@@ -39,8 +39,12 @@ SEAL_FORMAT = 1
 
 
 def job_config(cfg: Any) -> dict[str, Any]:
-    """The job's resolved config as plain data, without ``hydra``."""
+    """The job's resolved config as plain data, without ``hydra``, as it is recorded
+    (:func:`flows.spelling.recorded`: plan-deal and the portfolios as the old spelling
+    named them, so that their keys and names stay)."""
     from omegaconf import DictConfig, OmegaConf
+
+    from flows.spelling import recorded
 
     if isinstance(cfg, DictConfig):
         data = OmegaConf.to_container(cfg, resolve=True, enum_to_str=True)
@@ -48,7 +52,7 @@ def job_config(cfg: Any) -> dict[str, Any]:
         data = dict(cfg)
     assert isinstance(data, dict)
     data.pop("hydra", None)
-    return {str(k): v for k, v in data.items()}
+    return recorded({str(k): v for k, v in data.items()})
 
 
 def job_inputs(config: Mapping[str, Any]) -> dict[str, str]:

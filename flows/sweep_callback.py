@@ -50,6 +50,7 @@ from flows.servers import (
 )
 from flows.sweep_report import Drawing
 from flows.sweep_results import RESULTS_CSV, format_results, result_rows, write_results_csv
+from flows.spelling import sweep_notice
 from flows.sweep_state import (
     SweepState,
     count_jobs,
@@ -238,6 +239,9 @@ class SweepCallback(Callback):
         sweep_dir = Path(str(config.hydra.sweep.dir)).resolve()
         _check_before_writing(config, sweep_dir)
         _refuse_running_sweep(sweep_dir)
+        said = sweep_notice(config)  # the old spelling of a method, once per sweep
+        if said:
+            print(said, file=sys.stderr, flush=True)
         overrides = sweep_overrides(config)
         state = SweepState(
             sweep_dir=str(sweep_dir),

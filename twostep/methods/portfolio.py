@@ -178,6 +178,23 @@ class Portfolio:
         ]
 
 
+def run_full_portfolio(
+    request: MethodRequest, link_degree: int = 2, rebind: bool = True, owner_search: bool = True
+) -> RunResult:
+    """``method=portfolio``: :func:`run_portfolio` with every member of
+    :func:`default_members` (``link_degree`` for goal-split's) and N, N-1, ..., 2 agents;
+    ``rebind`` and ``owner_search`` are its plan-deal's."""
+    portfolio = Portfolio(link_degree, rebind=rebind, owner_search=owner_search)
+    return run_portfolio(request, portfolio)
+
+
+def run_portfolio_lite(
+    request: MethodRequest, link_degree: int = 2, rebind: bool = True, owner_search: bool = True
+) -> RunResult:
+    """``method=portfolio-lite``: :func:`run_portfolio` with :meth:`Portfolio.lite`."""
+    return run_portfolio(request, Portfolio.lite(link_degree, rebind, owner_search))
+
+
 def run_portfolio(request: MethodRequest, portfolio: Portfolio | None = None) -> RunResult:
     """Every candidate of ``portfolio`` (default: :class:`Portfolio`); the shortest
     schedule wins (module docstring)."""

@@ -38,8 +38,10 @@ from twostep.util.outcome import RunStatus as RunStatus
 
 
 class MethodName(StrEnum):
-    """The methods as result.json's ``method`` names them (plan-deal and the portfolio are
-    TwoStep runs: their ``decomposer`` says which)."""
+    """The paper's methods as result.json's ``method`` names them. plan-deal and the
+    portfolios are recorded as TwoStep runs (their ``decomposer`` says which), as they
+    always were; a method added since records its own name (any string: the registry's,
+    :data:`twostep.methods.registry.METHODS`)."""
 
     SA = "sa"
     MA = "ma"
@@ -121,7 +123,7 @@ class RunResult:
 
     domain: str
     task: int
-    method: MethodName
+    method: str  # a MethodName, or the registry name of a method added since
     agents: int
     seed: int = 0
     success: bool = False
@@ -158,7 +160,7 @@ class RunResult:
         return {
             "domain": self.domain,
             "task": self.task,
-            "method": self.method.value,
+            "method": str(self.method),
             "agents": self.agents,
             "seed": self.seed,
             "success": self.success,
@@ -187,12 +189,13 @@ class RunResult:
         }
 
 
-def new_run(request: MethodRequest, method: MethodName) -> RunResult:
-    """An empty run of ``method`` on the request's task (a single-agent run has 1 agent)."""
-    agents = 1 if method is MethodName.SA else request.agents
+def new_run(request: MethodRequest, method: str) -> RunResult:
+    """An empty run of ``method`` (a :class:`MethodName`, or a method's registry name) on
+    the request's task (a single-agent run has 1 agent)."""
+    agents = 1 if method == MethodName.SA else request.agents
     task = request.task
     run = RunResult(task.domain_name, task.task_id, method, agents, request.seed)
-    run.sa_length = request.sa_length if method is not MethodName.SA else None
+    run.sa_length = request.sa_length if method != MethodName.SA else None
     return run
 
 
