@@ -140,7 +140,11 @@ def check_job(cfg: TwostepConfig) -> None:
         bad = file_problem(path)
         if bad is not None:
             raise JobError(bad)
-    if reads_subgoals(cfg.method.name) and cfg.decomposer.name == "llm" and cfg.llm.mode == "bundle":
+    if (
+        reads_subgoals(cfg.method.name)
+        and cfg.decomposer.name == "llm"
+        and cfg.llm.mode == "bundle"
+    ):
         check_replay(cfg, problem)
 
 

@@ -204,8 +204,7 @@ SECONDS = "> 0, at most 1000000 (seconds)"
 VALUE_RULES: tuple[Rule, ...] = (
     Rule("score_mode", one_of(_score_modes), "exact, paper"),
     Rule("method.name", one_of(_methods), "the methods' names", "method"),
-    Rule("decomposer.name", one_of(_decomposers, optional=True), "the decomposers' names",
-         "decomposer"),  # fmt: skip
+    Rule("decomposer.name", one_of(_decomposers, True), "the decomposers' names", "decomposer"),
     Rule("decomposer.cut", one_of(_cuts), "free, holding, mover, best"),
     Rule("decomposer.link_degree", at_least(0), ">= 0"),
     Rule("llm.mode", one_of(_llm_modes), "live, replay, scripted"),

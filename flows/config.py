@@ -237,13 +237,14 @@ HYDRA_GROUP_PREFIX = "hydra"
 
 def schema_keys(node: type = TwostepConfig, prefix: str = "") -> dict[str, bool]:
     """Every dotted key of the schema -> whether it holds any value (``Any``: keys below
-    it are its own, e.g. ``experiment``)."""
+    it are its own, e.g. ``experiment``; a group that is a dict as well: its options,
+    ``method``)."""
     keys: dict[str, bool] = {}
     hints = get_type_hints(node)
     for item in fields(node):  # type: ignore[arg-type]
         name = f"{prefix}{item.name}"
         kind = hints[item.name]
-        keys[name] = kind is Any
+        keys[name] = kind is Any or (isinstance(kind, type) and issubclass(kind, dict))
         if is_dataclass(kind):
             keys.update(schema_keys(kind, f"{name}."))  # type: ignore[arg-type]
     return keys
@@ -342,9 +343,38 @@ def override_problem(arguments: Sequence[str]) -> str | None:
                 if value not in options:
                     return f"unknown {key} '{value}' (choices: {', '.join(options)})"
             continue
+        if key.startswith(f"{METHOD_GROUP}.") and key not in keys and not override.is_add():
+            known = method_option_keys(_chosen(overrides, METHOD_GROUP), config_dirs)
+            if key not in known:
+                return did_you_mean(key, sorted({*known, f"{METHOD_GROUP}.name"}))
+            continue
         if key in keys or any(key.startswith(f"{k}.") for k, open_ in keys.items() if open_):
             if override.is_add() and not override.is_force_add() and key in keys:
                 return f"{key} is a key already: set it without '+' ({key}=...)"
             continue
         return did_you_mean(key, [*keys, *groups])
     return None
+
+
+METHOD_GROUP = "method"  # its options are the keys of the chosen method's file
+
+
+def _chosen(overrides: Sequence[Any], group: str) -> list[str]:
+    """The options a command line chooses for ``group`` (none: its default)."""
+    chosen = [v for o in overrides if o.key_or_group == group for v in _option_values(o)]
+    return chosen or [str(TwostepConfig().method.name)]
+
+
+def method_option_keys(methods: Sequence[str], config_dirs: Sequence[str] = ()) -> set[str]:
+    """``method.<key>`` of every key the files of ``methods`` (``conf/method/<name>.yaml``,
+    and those of ``--config-dir`` folders) set: the options a command line may set."""
+    import yaml
+
+    keys: set[str] = set()
+    for method in methods:
+        for folder in [resources.files("flows.conf"), *(Path(d) for d in config_dirs)]:
+            with contextlib.suppress(OSError, yaml.YAMLError):
+                data = yaml.safe_load((folder / METHOD_GROUP / f"{method}.yaml").read_text())
+                if isinstance(data, dict):
+                    keys |= {f"{METHOD_GROUP}.{k}" for k in data}
+    return keys

@@ -42,9 +42,9 @@ from flows.config import TwostepConfig, agents_run, typed
 from flows.console import one_line
 from flows.identity import job_name
 from flows.services import running_prefect_api
+from flows.spelling import respell
 from flows.status import JobStatus, job_status
 from flows.step_stats import StepStats, counting_steps
-from flows.spelling import respell
 from flows.store import JobEntry, JobStore, job_config, job_inputs, job_key
 from flows.sweep_state import SweepState
 from flows.tracking.context import run_context_tags

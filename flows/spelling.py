@@ -59,7 +59,7 @@ def notice(method: str | None, decomposer: str | None) -> str | None:
     return (
         f"note: method=twostep decomposer={name} is the old spelling of method={name} "
         f"(it still runs, for one more release): write method={name}"
-        + (f" and method.<option> for decomposer.<option>" if RECORDED_AS_TWOSTEP[name] else "")
+        + (" and method.<option> for decomposer.<option>" if RECORDED_AS_TWOSTEP[name] else "")
     )
 
 

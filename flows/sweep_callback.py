@@ -48,9 +48,9 @@ from flows.servers import (
     read_info,
     stop_sweep_server,
 )
+from flows.spelling import sweep_notice
 from flows.sweep_report import Drawing
 from flows.sweep_results import RESULTS_CSV, format_results, result_rows, write_results_csv
-from flows.spelling import sweep_notice
 from flows.sweep_state import (
     SweepState,
     count_jobs,

@@ -20,7 +20,7 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from twostep.dealing import CUTS, Deal, Dealer, DealError, Way, ways
 from twostep.dealing.model import SearchKey, cpu_seconds
@@ -56,8 +56,9 @@ objects too: where no object is ready for a round, it is the plan the deal can s
 over the objects that are left used (barman's shakers)."""
 
 BEST = "best"
-DealCut = Literal["free", "holding", "mover", "best"]
-"""plan-deal's ``cut`` option: one of :data:`~twostep.dealing.CUTS`, or :data:`BEST` (each)."""
+DealCut = Annotated[str, Literal["free", "holding", "mover", "best"]]
+"""plan-deal's ``cut`` option: one of :data:`~twostep.dealing.CUTS`, or :data:`BEST` (each);
+the registry checks an option against the ``Literal`` of its annotation."""
 """The default cut: every cut of :data:`twostep.dealing.CUTS`, the shorter schedule kept."""
 
 DEAL_WORK = 2_000_000

@@ -10,8 +10,9 @@ The library, ``flows/`` and ``bench/`` all ask here.
 Adding a method is one module with its run function, one line in :data:`METHODS` and
 one config file (``conf/method/<name>.yaml``, its ``name`` and options). Its options are
 the run function's keyword parameters (after the request), checked against their
-annotations (``bool``, ``int``, ``float``, ``str`` or a ``Literal``) when the method is
-picked, so a wrong option is an error before any work.
+annotations (``bool``, ``int``, ``float``, ``str``, a ``Literal``, or ``Annotated[str,
+Literal[...]]`` for a string of a few choices) when the method is picked, so a wrong
+option is an error before any work.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
-from typing import Any, Literal, Union, get_args, get_origin, get_type_hints
+from typing import Annotated, Any, Literal, Union, get_args, get_origin, get_type_hints
 
 from twostep.methods.request import MethodRequest
 from twostep.methods.result import RunResult
@@ -118,7 +119,7 @@ def method_for(method: str, decomposer: str | None = None, **options: Any) -> Me
             f"(its options: {', '.join(known) or 'none'})"
         )
     given = {key: value for key, value in options.items() if key in known}
-    hints = get_type_hints(function)
+    hints = get_type_hints(function, include_extras=True)
     for key, value in given.items():
         problem = _type_problem(value, hints.get(key, Any))
         if problem:
@@ -129,8 +130,12 @@ def method_for(method: str, decomposer: str | None = None, **options: Any) -> Me
 def _type_problem(value: Any, kind: Any) -> str | None:
     """Why ``value`` is not of the annotation ``kind`` (None: it is, or the annotation is
     not one of the simple kinds checked)."""
+    if get_origin(kind) is Annotated:  # Annotated[str, Literal[...]]: the Literal's choices
+        choices = [c for extra in kind.__metadata__ if get_origin(extra) is Literal
+                   for c in get_args(extra)]  # fmt: skip
+        kind = get_args(kind)[0] if not choices else Literal[tuple(choices)]
     kinds = get_args(kind) if get_origin(kind) is Union else (kind,)
-    choices: list[Any] = []
+    choices = []
     for one in kinds:
         if get_origin(one) is Literal:
             choices += get_args(one)
