@@ -44,7 +44,7 @@ deps: | $(UV)
 	$(UV) $(SYNC) --no-install-project
 
 demo: setup
-	$(VENV)/bin/twostep domain=blocksworld task=6 method=twostep agents=2
+	$(VENV)/bin/twostep domain=blocksworld task=6 method=plan-deal agents=2
 
 test: setup
 	$(VENV)/bin/pytest -q

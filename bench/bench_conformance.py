@@ -14,8 +14,8 @@ For every problem of a corpus:
   Fast Downward's translator plus a simulator written apart from twostep everywhere)? Also
   checked: ``sa_length`` is the plan's action count, ``sa_cost`` its cost.
 * with ``--agents FILE`` (YAML: ``domain: [agent predicates]``), for the domains it lists:
-  **MA** (``method=ma agents=2``) and **TwoStep plan-deal** (``method=twostep
-  decomposer=plan-deal agents=2``). A schedule is valid when each agent's actions in it are
+  **MA** (``method=ma agents=2``) and **plan-deal** (``method=plan-deal agents=2``). A
+  schedule is valid when each agent's actions in it are
   its plan, in order, and (check_run's job, done independently) its time steps replay on the
   original task's grounding with each agent owning a copy of the agent-specific facts
   (every order of a step's actions must run and reach the same state), and
@@ -318,7 +318,7 @@ def check_problem(
     failures += row["sa"].pop("failures")
     for label, key, overrides in (
         ("MA", "ma", ["method=ma", "compare_sa=false"]),
-        ("plan-deal", "deal", ["method=twostep", "decomposer=plan-deal"]),
+        ("plan-deal", "deal", ["method=plan-deal"]),
     ):
         if agent_predicates is None or not row["sa"]["loaded"]:
             row[key] = None

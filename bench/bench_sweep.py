@@ -124,9 +124,8 @@ def grid(jobs: int) -> list[str]:
     return [
         f"seed=range(0,{seeds})",
         "domain=blocksworld,grippers",
-        "method=sa,twostep",
+        "method=sa,plan-deal",
         f"task=range(1,{tasks + 1})",
-        "decomposer=plan-deal",
         "agents=2",
     ]
 

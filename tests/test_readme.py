@@ -5,7 +5,7 @@
   (``check_run``) and, as a sequential plan of the N-agent compilation, by
   unified-planning's validator.
 * The demo's output in the README (and on the site's home page) is what the demo's command
-  prints today: ``twostep domain=blocksworld task=6 method=twostep agents=2`` is run as a
+  prints today: ``twostep domain=blocksworld task=6 method=plan-deal agents=2`` is run as a
   user runs it, and every line must equal the README's, but for the planning time (a
   timing) and the run directory's date and time.
 * The README's prose holds no results number: its numbers are the generated headline table
@@ -33,7 +33,7 @@ REPO = Path(__file__).resolve().parent.parent
 README = REPO / "README.md"
 TUTORIAL = REPO / "docs" / "tutorial" / "index.md"
 HOME = REPO / "docs" / "index.md"
-DEMO = "twostep domain=blocksworld task=6 method=twostep agents=2"
+DEMO = "twostep domain=blocksworld task=6 method=plan-deal agents=2"
 
 
 def library_example() -> str:
