@@ -1,9 +1,10 @@
 """Methods by name, and the old spelling that named three of them by ``decomposer``.
 
 ``method=plan-deal|portfolio|portfolio-lite`` runs that method; the old spelling,
-``method=twostep decomposer=plan-deal`` (and ``method=twostep`` without a decomposer,
-whose default was plan-deal), still runs it for one release, with a one-line notice
-(:func:`respell`, :func:`notice`).
+``method=twostep decomposer=plan-deal``, still runs it for one release, with a one-line
+notice (:func:`respell`, :func:`notice`); ``method=twostep`` without a decomposer (whose
+default was plan-deal) runs plan-deal as it did, without one (its commands' output stays
+as it was; the docs and the changelog say it).
 
 Such a job is *recorded* as the old spelling recorded it (:func:`recorded`): its job key,
 its name (``blocksworld-p06-twostep-plan-deal-n2-s0``), its stored ``config.json`` and its
@@ -46,16 +47,11 @@ def new_spelling(method: str | None, decomposer: str | None) -> str | None:
 
 
 def notice(method: str | None, decomposer: str | None) -> str | None:
-    """The one-line notice for an old spelling (None: not one)."""
+    """The one-line notice for an old spelling (None: not one, or ``method=twostep``
+    without a decomposer, which says nothing this release)."""
     name = new_spelling(method, decomposer)
-    if name is None:
+    if name is None or decomposer is None:
         return None
-    if decomposer is None:
-        return (
-            f"note: method=twostep without decomposer= runs {name} (the old default) for one "
-            f"more release: write method={name}, or method=twostep decomposer=goal-split|"
-            "plan-split|expert|llm for TwoStep's hand-off"
-        )
     return (
         f"note: method=twostep decomposer={name} is the old spelling of method={name} "
         f"(it still runs, for one more release): write method={name}"

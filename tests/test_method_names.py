@@ -150,8 +150,7 @@ def test_the_notice_names_the_new_spelling_in_one_line() -> None:
     assert notice("twostep", "goal-split") is None and notice("plan-deal", None) is None
     text = notice("twostep", "plan-deal")
     assert text is not None and "write method=plan-deal" in text and "\n" not in text
-    default = notice("twostep", None)
-    assert default is not None and "method=plan-deal" in default and "goal-split" in default
+    assert notice("twostep", None) is None  # the old default: runs plan-deal, says nothing
 
 
 def test_a_sweep_says_the_notice_once_for_its_old_spelling(conf: None) -> None:
@@ -164,8 +163,7 @@ def test_a_sweep_says_the_notice_once_for_its_old_spelling(conf: None) -> None:
     assert sweep_notice(sweep("method=sa,ma,plan-deal")) is None
     said = sweep_notice(sweep("method=twostep", "decomposer=goal-split,portfolio"))
     assert said is not None and "write method=portfolio" in said
-    said = sweep_notice(sweep("method=sa,twostep"))  # twostep without a decomposer
-    assert said is not None and "the old default" in said
+    assert sweep_notice(sweep("method=sa,twostep")) is None  # the old default, silent
 
 
 def test_the_old_spelling_runs_with_a_notice_and_reuses_what_the_new_stored(

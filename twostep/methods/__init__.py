@@ -12,7 +12,7 @@ module            what it is for
 ``twostep``       TwoStep: propose -> check -> plan helpers -> progress -> plan main -> score
 ``plan_deal``     plan-deal: the SA plan dealt to N agents (:mod:`twostep.dealing`)
 ``portfolio``     several decompositions, the shortest schedule kept
-``registry``      :func:`method_for`: the one place that picks a method by name
+``registry``      ``METHODS`` and :func:`method_for`: picks a method by name
 ================  ============================================================
 
     from twostep.methods import MethodRequest, method_for
@@ -20,6 +20,7 @@ module            what it is for
     request = MethodRequest(task, agents=3, planner=settings, agent_predicates=facts,
                             decomposer=GoalSplitDecomposer(facts))
     run = method_for("twostep", "goal-split")(request)
+    deal = method_for("plan-deal", cut="free")(MethodRequest(task, agents=3, planner=settings))
 
 plan-deal and the portfolio load on first use (:func:`method_for`, or their modules), so that
 importing the package stays light.
