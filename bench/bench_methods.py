@@ -104,9 +104,12 @@ def agent_predicates(domain: str) -> list[str]:
 
 
 def offline_default() -> str:
-    """The decomposer the default config uses (conf/config.yaml's defaults list)."""
+    """The method the default config runs (conf/config.yaml's defaults list: its method,
+    or its decomposer when the method is ``twostep``), as this bench names methods."""
     defaults = yaml.safe_load((CONF / "config.yaml").read_text())["defaults"]
-    return next(str(d["decomposer"]) for d in defaults if isinstance(d, dict) and "decomposer" in d)
+    chosen = {k: v for d in defaults if isinstance(d, dict) for k, v in d.items()}
+    method = str(chosen["method"])
+    return str(chosen["decomposer"]) if method == "twostep" else method
 
 
 def data_label(root: Path) -> str:
