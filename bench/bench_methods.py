@@ -104,12 +104,15 @@ def agent_predicates(domain: str) -> list[str]:
 
 
 def offline_default() -> str:
-    """The method the default config runs (conf/config.yaml's defaults list: its method,
-    or its decomposer when the method is ``twostep``), as this bench names methods."""
+    """The method the default config runs (conf/config.yaml's defaults list), as this bench
+    names methods: TwoStep by its decomposer, the others by their name."""
+    from flows.spelling import new_spelling
+
     defaults = yaml.safe_load((CONF / "config.yaml").read_text())["defaults"]
     chosen = {k: v for d in defaults if isinstance(d, dict) for k, v in d.items()}
-    method = str(chosen["method"])
-    return str(chosen["decomposer"]) if method == "twostep" else method
+    method, decomposer = str(chosen["method"]), chosen.get("decomposer")
+    named = new_spelling(method, None if decomposer is None else str(decomposer))
+    return named or (str(decomposer) if method == "twostep" else method)
 
 
 def data_label(root: Path) -> str:

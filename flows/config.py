@@ -56,7 +56,7 @@ class MethodConfig(dict[str, Any]):
     :data:`twostep.methods.registry.METHODS`) and its options: the keys of the method's
     file besides these, checked against the method's run function by the registry."""
 
-    name: str = "plan-deal"  # sa | ma | twostep | plan-deal | portfolio | portfolio-lite
+    name: str = "twostep"  # sa | ma | twostep | plan-deal | portfolio | portfolio-lite
     # A joint schedule longer than the SA plan gives way to it (run_twostep's own
     # parameter of the same name; plan-deal's and the portfolios' too); ignored by sa and ma.
     fallback_if_longer: bool = True
@@ -344,7 +344,7 @@ def override_problem(arguments: Sequence[str]) -> str | None:
                     return f"unknown {key} '{value}' (choices: {', '.join(options)})"
             continue
         if key.startswith(f"{METHOD_GROUP}.") and key not in keys and not override.is_add():
-            known = method_option_keys(_chosen(overrides, METHOD_GROUP), config_dirs)
+            known = method_option_keys(_methods_chosen(overrides), config_dirs)
             if key not in known:
                 return did_you_mean(key, sorted({*known, f"{METHOD_GROUP}.name"}))
             continue
@@ -359,10 +359,23 @@ def override_problem(arguments: Sequence[str]) -> str | None:
 METHOD_GROUP = "method"  # its options are the keys of the chosen method's file
 
 
-def _chosen(overrides: Sequence[Any], group: str) -> list[str]:
+def _chosen(overrides: Sequence[Any], group: str, default: str | None) -> list[str | None]:
     """The options a command line chooses for ``group`` (none: its default)."""
     chosen = [v for o in overrides if o.key_or_group == group for v in _option_values(o)]
-    return chosen or [str(TwostepConfig().method.name)]
+    return list(chosen) or [default]
+
+
+def _methods_chosen(overrides: Sequence[Any]) -> list[str]:
+    """The methods a command line runs (``method=twostep`` without a decomposer, the
+    default, is plan-deal: :func:`flows.spelling.new_spelling`)."""
+    from flows.spelling import new_spelling
+
+    methods = _chosen(overrides, METHOD_GROUP, TwostepConfig().method.name)
+    decomposers = _chosen(overrides, "decomposer", None)
+    return sorted(
+        {str(new_spelling(m, d) or m) for m in methods for d in decomposers}
+        | set(map(str, methods))
+    )
 
 
 def method_option_keys(methods: Sequence[str], config_dirs: Sequence[str] = ()) -> set[str]:

@@ -74,7 +74,8 @@ def respell(cfg: Any) -> str | None:
     with open_dict(cfg.method):
         cfg.method.name = name
         for option in RECORDED_AS_TWOSTEP[name]:
-            cfg.method[option] = cfg.decomposer[option]
+            if option not in cfg.method:  # method.cut=free beside the old default: kept
+                cfg.method[option] = cfg.decomposer[option]
     return text
 
 
@@ -85,7 +86,7 @@ def respelled(config: Mapping[str, Any]) -> dict[str, Any]:
     if name is None or not isinstance(method, Mapping):
         return dict(config)
     fields = decomposer if isinstance(decomposer, Mapping) else {}
-    options = {k: fields[k] for k in RECORDED_AS_TWOSTEP[name] if k in fields}
+    options = {k: fields[k] for k in RECORDED_AS_TWOSTEP[name] if k in fields and k not in method}
     return {**config, "method": {**method, "name": name, **options}}
 
 
