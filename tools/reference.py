@@ -235,24 +235,6 @@ def config_keys() -> list[ConfigKey]:
                 comment=comment,
             )
         )
-    # A group's keys beyond the schema: the default method's options (``method.cut``, ...:
-    # the keys of conf/method/plan-deal.yaml), typed by their value
-    known = {key.name for key in keys}
-    for name, value in composed.items():
-        if name in known or name.split(".")[0] not in groups or name.startswith("hydra"):
-            continue
-        comment = yaml_comments.get(name, "")
-        hint = type(value) if value is not None else type(None)
-        keys.append(
-            ConfigKey(
-                name=name,
-                type=f"{_type_name(hint)} (the default method's option)",
-                allowed=_allowed(hint, comment),
-                schema_default=_plain(value),
-                default=_plain(value),
-                comment=comment,
-            )
-        )
     return keys
 
 
