@@ -70,9 +70,9 @@ class DecomposerConfig:
     link_degree: int = 2
     # The old spelling's (method=twostep decomposer=plan-deal decomposer.cut=free), for one
     # more release: plan-deal's and the portfolios' options, now theirs under method.*.
-    cut: str = "best"
-    rebind: bool = True
-    owner_search: bool = True
+    cut: str = "best"  # free | holding | mover | best (now method.cut)
+    rebind: bool = True  # now method.rebind
+    owner_search: bool = True  # now method.owner_search
 
 
 class ExecutorName(enum.StrEnum):
