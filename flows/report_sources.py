@@ -26,6 +26,7 @@ from typing import Any
 import pandas as pd
 
 from flows.identity import is_identity_key, is_relevant
+from flows.spelling import recorded
 from flows.tracking.params import flatten_config
 from twostep.report.runs import (
     PARAM_PREFIX,
@@ -74,7 +75,11 @@ def _read_hydra_config(job_dir: Path) -> dict[str, str]:
         loaded = read_yaml_file(path)
     except FileFormatError:
         return {}
-    return flatten_config(loaded) if isinstance(loaded, Mapping) else {}
+    if not isinstance(loaded, Mapping):
+        return {}
+    # as the job was recorded (flows.spelling): method=plan-deal's params are the old
+    # spelling's, so that the runs of both spellings are one series
+    return flatten_config(recorded({str(k): v for k, v in loaded.items()}))
 
 
 def _job_dirs(root: Path) -> Iterable[Path]:

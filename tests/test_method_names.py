@@ -23,9 +23,9 @@ from hydra.core.global_hydra import GlobalHydra
 from omegaconf import OmegaConf
 
 from flows.config import register
+from flows.identity import job_name
 from flows.spelling import notice, respell, sweep_notice
 from flows.store import job_config, job_inputs, job_key
-from twostep.jobs.identity import job_name
 from twostep.methods.registry import METHODS, MethodEntry, UnknownMethod, method_for
 
 REPO = Path(__file__).resolve().parent.parent
@@ -68,7 +68,8 @@ def conf() -> Iterator[None]:
 
 def _raw(*overrides: str) -> dict[str, object]:
     """The composed config as plain data, as Hydra composes it (nothing respelled)."""
-    data = OmegaConf.to_container(compose("config", overrides=[*PLACES, *overrides]), resolve=True)
+    cfg = compose("config", overrides=[*PLACES, *overrides])
+    data = OmegaConf.to_container(cfg, resolve=True, enum_to_str=True)
     assert isinstance(data, dict)
     return {str(k): v for k, v in data.items()}
 
@@ -280,3 +281,34 @@ def test_plan_deals_cut_choices_are_the_dealers_cuts_and_best() -> None:
 
     (choices,) = DealCut.__metadata__
     assert get_args(choices) == (*CUTS, BEST)
+
+
+def test_a_sweep_dir_of_both_spellings_is_one_series(conf: None, tmp_path: Path) -> None:
+    """A report over job directories of both spellings (``.hydra/config.yaml`` as Hydra
+    wrote it) gives their runs the same params, so they are one series, as in MLflow."""
+    import yaml
+
+    from flows.report_sources import load_runs_from_sweep_dir
+
+    for task, spelling in (
+        (1, ["method=twostep", "decomposer=plan-deal"]),
+        (2, ["method=plan-deal"]),
+    ):
+        job = tmp_path / f"{task}_job"
+        (job / ".hydra").mkdir(parents=True)
+        config = _raw(*spelling, f"task={task}")
+        (job / ".hydra" / "config.yaml").write_text(yaml.safe_dump(config))
+        result = {"domain": "blocksworld", "task": task, "method": "twostep", "agents": 2,
+                  "seed": 0, "decomposer": "plan-deal", "success": True, "status": "solved",
+                  "exec_length": 5, "sa_length": 8, "planning_time_s": 0.1}  # fmt: skip
+        (job / "result.json").write_text(json.dumps(result))
+    runs = load_runs_from_sweep_dir(tmp_path)
+    params = runs.filter(like="param.").drop(columns=["param.task"], errors="ignore")
+    assert not [
+        c
+        for c in params.columns
+        if c.startswith("param.method.") and c != "param.method.fallback_if_longer"
+    ]
+    first, second = (params.iloc[i].to_dict() for i in range(2))
+    assert first == second
+    assert list(runs["decomposer"]) == ["plan-deal", "plan-deal"]
