@@ -27,7 +27,7 @@ time by package (Hydra/OmegaConf, Prefect, MLflow, the library, waits).
 
     .venv/bin/python bench/bench_sweep.py --save docs/bench/sweep.txt --json docs/bench/sweep.json
     .venv/bin/python bench/bench_sweep.py --jobs 20 100 400 --variants on off --launchers all basic \
-        --basic-max-jobs 20 --on-max-jobs 100 --no-small-scaling \
+        --basic-max-jobs 20 --on-max-jobs 400 --no-small-scaling \
         --save docs/bench/sweep.txt --json docs/bench/sweep.json        # the docs' run (shared machine)
     .venv/bin/python bench/bench_sweep.py --quick                      # 20 and 100 jobs, fewer variants
     .venv/bin/python bench/bench_sweep.py --jobs 100 --variants on off --launchers all one

@@ -181,6 +181,15 @@ PAGES: tuple[Page, ...] = (
         "record:printed_page",
     ),
     Page(
+        "structure",
+        "The library's shape",
+        "issue 40's before and after: modules at the root of twostep/, import cycles, config "
+        "keys named in the library, status vocabularies, bare status comparisons, and the "
+        "places a new method touches",
+        ("structure.json",),
+        "record:printed_page",
+    ),
+    Page(
         "refusals",
         "Commands refused before any work",
         "commands the tool must refuse (a value out of range, an unknown task, a typo in a "
@@ -247,8 +256,8 @@ BENCH_FILES: tuple[BenchFile, ...] = (
     BenchFile("methods_n2.txt", "python bench/bench_methods.py --report docs/bench/methods_n2.json", "the printed report of methods_n2.json"),
     BenchFile("methods_n34.txt", "python bench/bench_methods.py --report docs/bench/methods_n34.json", "the printed report of methods_n34.json"),
     BenchFile("methods_portfolio.txt", "python bench/bench_methods.py --report docs/bench/methods_portfolio.json", "the printed report of the portfolio's rows"),
-    BenchFile("structure.txt", "python bench/bench_structure.py --layout", "the library's shape before and after issue 40: root modules, import cycles, config mentions, status vocabularies, places a new method touches (cited by the README)"),
-    BenchFile("sweep.txt", "python bench/bench_sweep.py --jobs 20 100 400 --variants on off --launchers all basic --basic-max-jobs 20 --on-max-jobs 100 --no-small-scaling --save docs/bench/sweep.txt --json docs/bench/sweep.json", "the printed output of sweep.json, with the phases of a job"),
+    BenchFile("structure.txt", "python bench/bench_structure.py --layout", "the printed output of structure.json"),
+    BenchFile("sweep.txt", "python bench/bench_sweep.py --jobs 20 100 400 --variants on off --launchers all basic --basic-max-jobs 20 --on-max-jobs 400 --no-small-scaling --save docs/bench/sweep.txt --json docs/bench/sweep.json", "the printed output of sweep.json, with the phases of a job"),
     BenchFile("sweep_grid.txt", "python bench/bench_sweep.py --jobs --scaling --servers 0 --paper-grid blocksworld --save docs/bench/sweep_grid.txt --json docs/bench/sweep_grid.json", "the printed output of sweep_grid.json"),
 )  # fmt: skip
 ARCHIVE = BENCH / "archive"
