@@ -142,7 +142,7 @@ def test_mlflow_run_keeps_its_shape(name: str, tmp_path: Path, data_root: Path) 
     # mlflow-record.json: what was logged, for a re-run that restores a lost run
     # (docs/tracking.md, "The store is a view of the job store")
     assert {p.name for p in stored.iterdir()} == {
-        "config.json", "mlflow.json", "mlflow-record.json", "result.json"
+        "config.json", "mlflow.json", "mlflow-record.json", "result.json", "seal.json"
     }  # fmt: skip
     client = MlflowClient(f"sqlite:///{tmp_path}/mlflow.db")
     (experiment,) = [e for e in client.search_experiments() if e.name == "twostep"]
