@@ -43,6 +43,10 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from tools.status_scan import bare_status_comparisons
+
 
 @dataclass(frozen=True)
 class Function:
@@ -226,38 +230,6 @@ STATUS_WORDS = {"success", "failed", "running", "error", "timeout"}
 NOT_ONLY_STATUS = {"none"}  # also the LLM's answer kind and a CLI value
 
 
-def _literals(node: ast.expr) -> list[object]:
-    if isinstance(node, ast.Constant):
-        return [node.value]
-    if isinstance(node, ast.Tuple | ast.List | ast.Set):
-        return [e.value for e in node.elts if isinstance(e, ast.Constant)]
-    return []
-
-
-def _status_comparisons(tree: ast.AST, values: set[str]) -> Iterator[tuple[int, str]]:
-    """(line, word) of each comparison of a value with a bare status word: ``==``, ``!=``,
-    ``is``; ``in`` a literal tuple, list or set (``"error" in result`` asks for a key);
-    ``.isin([...])`` and ``.count(...)``."""
-    for node in ast.walk(tree):
-        hits: list[object] = []
-        if isinstance(node, ast.Compare):
-            operands = [node.left, *node.comparators]
-            for op, left, right in zip(node.ops, operands, operands[1:], strict=False):
-                if isinstance(op, ast.Eq | ast.NotEq | ast.Is | ast.IsNot):
-                    hits += [x.value for x in (left, right) if isinstance(x, ast.Constant)]
-                elif isinstance(op, ast.In | ast.NotIn) and not isinstance(right, ast.Constant):
-                    hits += _literals(right)
-        elif (
-            isinstance(node, ast.Call)
-            and isinstance(node.func, ast.Attribute)
-            and node.func.attr in ("isin", "count")
-        ):
-            hits += [v for arg in node.args for v in _literals(arg)]
-        for hit in hits:
-            if isinstance(hit, str) and hit in values:
-                yield node.lineno, hit
-
-
 def status_vocabularies(root: Path) -> tuple[list[str], list[tuple[str, int, str]]]:
     """The status vocabularies of the library and ``flows/`` (``module.Name``), and the
     comparisons with a bare string that is one of their values (module, line, string),
@@ -288,7 +260,7 @@ def status_vocabularies(root: Path) -> tuple[list[str], list[tuple[str, int, str
         (module, line, word)
         for module, tree in trees.items()
         if not (len(owners) == 1 and module in owners)
-        for line, word in _status_comparisons(tree, values)
+        for line, word in bare_status_comparisons(tree, values)
     ]
     return vocabularies, sorted(bare)
 

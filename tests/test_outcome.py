@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from tools.status_scan import bare_status_comparisons
 from twostep.util import outcome
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -28,38 +29,6 @@ def _status_words() -> set[str]:
         if isinstance(value, type) and issubclass(value, StrEnum) and value is not StrEnum:
             words |= {m.value for m in value}
     return words - NOT_ONLY_STATUS
-
-
-def _literals(node: ast.expr) -> list[object]:
-    if isinstance(node, ast.Constant):
-        return [node.value]
-    if isinstance(node, ast.Tuple | ast.List | ast.Set):
-        return [e.value for e in node.elts if isinstance(e, ast.Constant)]
-    return []
-
-
-def bare_status_comparisons(source: str, words: set[str]) -> list[tuple[int, str]]:
-    """(line, word) of every comparison of a value with a bare status word: ``==``, ``!=``,
-    ``is`` with a word; ``in`` a literal tuple, list or set holding one (``"error" in
-    result`` asks for a key and is not one); ``.isin([...])`` and ``.count(...)`` of one."""
-    found = []
-    for node in ast.walk(ast.parse(source)):
-        hits: list[object] = []
-        if isinstance(node, ast.Compare):
-            operands = [node.left, *node.comparators]
-            for op, left, right in zip(node.ops, operands, operands[1:], strict=False):
-                if isinstance(op, ast.Eq | ast.NotEq | ast.Is | ast.IsNot):
-                    hits += [x.value for x in (left, right) if isinstance(x, ast.Constant)]
-                elif isinstance(op, ast.In | ast.NotIn) and not isinstance(right, ast.Constant):
-                    hits += _literals(right)
-        elif (
-            isinstance(node, ast.Call)
-            and isinstance(node.func, ast.Attribute)
-            and node.func.attr in ("isin", "count")
-        ):
-            hits += [v for arg in node.args for v in _literals(arg)]
-        found += [(node.lineno, str(h)) for h in hits if isinstance(h, str) and h in words]
-    return sorted(found)
 
 
 def test_no_bare_status_comparison_outside_the_outcome_module() -> None:
