@@ -221,9 +221,9 @@ def _unsynced_connection(connection: Any, record: Any) -> None:
         pass
 
 
-def tagged_runs(tracking_uri: str, experiment_id: str, tag: str, value: str) -> int | None:
-    """How many active runs of the experiment carry ``tag=value``, asked with one read
-    of a SQLite store (None: not a SQLite store, or it cannot be read: ask MLflow)."""
+def _sqlite_count(tracking_uri: str, query: str, parameters: tuple[Any, ...]) -> int | None:
+    """``query``'s count, asked with one read-only read of a SQLite store (None: not a
+    SQLite store, or it cannot be read)."""
     database = sqlite_path(tracking_uri)
     if database is None or not database.is_file():
         return None
@@ -232,38 +232,40 @@ def tagged_runs(tracking_uri: str, experiment_id: str, tag: str, value: str) -> 
 
     try:
         with closing(sqlite3.connect(f"file:{database}?mode=ro", uri=True, timeout=30.0)) as db:
-            (count,) = db.execute(
-                "SELECT count(*) FROM runs JOIN tags ON tags.run_uuid = runs.run_uuid"
-                " WHERE runs.experiment_id = ? AND runs.lifecycle_stage = 'active'"
-                " AND tags.key = ? AND tags.value = ?",
-                (int(experiment_id), tag, value),
-            ).fetchone()
+            (count,) = db.execute(query, parameters).fetchone()
     except (sqlite3.Error, ValueError):
         return None
     return int(count)
+
+
+def tagged_runs(tracking_uri: str, experiment_id: str, tag: str, value: str) -> int | None:
+    """How many active runs of the experiment carry ``tag=value``, asked with one read
+    of a SQLite store (None: not a SQLite store, or it cannot be read: ask MLflow)."""
+    try:
+        experiment = int(experiment_id)
+    except ValueError:
+        return None
+    return _sqlite_count(
+        tracking_uri,
+        "SELECT count(*) FROM runs JOIN tags ON tags.run_uuid = runs.run_uuid"
+        " WHERE runs.experiment_id = ? AND runs.lifecycle_stage = 'active'"
+        " AND tags.key = ? AND tags.value = ?",
+        (experiment, tag, value),
+    )
 
 
 def running_sweep_run(tracking_uri: str, experiment: str, sweep_key: str) -> bool:
     """Whether a SQLite store holds a parent run of this sweep key still ``RUNNING`` in
     experiment ``experiment`` (one read; False for another store, or when it cannot tell):
     a sweep that could not end it (a full disk) left it so."""
-    database = sqlite_path(tracking_uri)
-    if database is None or not database.is_file():
-        return False
-    import sqlite3
-    from contextlib import closing
-
-    try:
-        with closing(sqlite3.connect(f"file:{database}?mode=ro", uri=True, timeout=30.0)) as db:
-            (count,) = db.execute(
-                "SELECT count(*) FROM runs JOIN tags ON tags.run_uuid = runs.run_uuid"
-                " JOIN experiments ON experiments.experiment_id = runs.experiment_id"
-                " WHERE experiments.name = ? AND runs.lifecycle_stage = 'active'"
-                " AND runs.status = 'RUNNING' AND tags.key = ? AND tags.value = ?",
-                (experiment, SWEEP_KEY, sweep_key),
-            ).fetchone()
-    except sqlite3.Error:
-        return False
+    count = _sqlite_count(
+        tracking_uri,
+        "SELECT count(*) FROM runs JOIN tags ON tags.run_uuid = runs.run_uuid"
+        " JOIN experiments ON experiments.experiment_id = runs.experiment_id"
+        " WHERE experiments.name = ? AND runs.lifecycle_stage = 'active'"
+        " AND runs.status = 'RUNNING' AND tags.key = ? AND tags.value = ?",
+        (experiment, SWEEP_KEY, sweep_key),
+    )
     return bool(count)
 
 
