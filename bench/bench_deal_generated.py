@@ -45,7 +45,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench import record
+from tools import record
 from bench.bench_deal_ipc import (
     deal_seconds,
     deal_within,
@@ -191,7 +191,7 @@ def problems(
 
 
 def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
-    """The results page of plan-deal beyond the benchmark (bench.results): a figure of this
+    """The results page of plan-deal beyond the benchmark (tools.results): a figure of this
     bench's rows (plan-deal's length against the SA plan's, per N), then what each of the
     records printed (this bench's, bench_deal_ipc's, bench_deal_budget's, bench_dealing's)."""
     from matplotlib.figure import Figure

@@ -25,7 +25,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench import record
+from tools import record
 from bench.bench_methods import agent_predicates, data_label, task_ids
 from twostep.dealing import CUTS, ORDERS, Dealer, DealError, Way, ways
 from twostep.generators import DOMAINS

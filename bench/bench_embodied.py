@@ -24,7 +24,7 @@ real    Our FloorPlan14 problem (``tests/fixtures/alfred_scene``, AlfWorld's for
         AlfWorld's own engine on every trace when ``make alfworld-engine`` has run.
 
 Every section prints the machine's load average beside its timings. ``--json FILE`` also
-writes every section's rows as a bench record (:mod:`bench.record`); :func:`page` turns it
+writes every section's rows as a bench record (:mod:`tools.record`); :func:`page` turns it
 into the results page (``make results``):
 
     .venv/bin/python bench/bench_embodied.py --json docs/bench/embodied.json
@@ -49,7 +49,7 @@ import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench import record as bench_record
+from tools import record as bench_record
 from checkers.trace_check import TraceReport, check_trace, read_kitchen_file, who_plays
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.embodied import (
@@ -295,7 +295,7 @@ def real(seeds: int, recorded: Rows | None = None) -> None:
 
 
 def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
-    """The results page of a ``--json`` record (bench.results): a part per section run."""
+    """The results page of a ``--json`` record (tools.results): a part per section run."""
     from matplotlib.figure import Figure
 
     (data,) = records

@@ -5,7 +5,7 @@
     .venv/bin/python bench/bench_execution.py --json docs/bench/execution.json
     .venv/bin/python bench/bench_execution.py --scaling --json docs/bench/execution_scaling.json
 
-``--json FILE`` also writes the table's rows as a bench record (:mod:`bench.record`);
+``--json FILE`` also writes the table's rows as a bench record (:mod:`tools.record`);
 :func:`page` turns the two records into the results page (``make results``).
 
 ``--scaling`` prints only the scaling table: exact mode for N = 2..16 agents and 30, 60
@@ -54,7 +54,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench import record
+from tools import record
 from twostep.makespan import ParallelExecution, parallel_length
 from twostep.makespan.compiled import compile_task
 from twostep.makespan.model import DEFAULT_MAX_NODES, DEFAULT_TIME_LIMIT_S
@@ -496,7 +496,7 @@ def scaling(
 
 def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
     """The results page of the two ``--json`` records, the comparison and ``--scaling``
-    (bench.results)."""
+    (tools.results)."""
     from matplotlib.figure import Figure
 
     comparison, scaled = records

@@ -67,7 +67,7 @@ from typing import Any
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from bench import record as bench_record  # noqa: E402
+from tools import record as bench_record  # noqa: E402
 from tests import bad_files  # noqa: E402
 from tests.llm_standin import Fault, Reply, standin_server  # noqa: E402
 
@@ -760,7 +760,7 @@ def table(rows: list[Row]) -> list[str]:
 
 
 def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
-    """The results page of a ``--json`` record (bench.results)."""
+    """The results page of a ``--json`` record (tools.results)."""
     data, *printed = records  # the later ones: runs of some scenarios, kept as printed
     rows = [Row(**r) for r in data["rows"]]
     settings = data.get("settings", {})

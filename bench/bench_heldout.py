@@ -401,7 +401,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.validate:
         if args.rows is None:
             parser.error("--validate needs --rows")
-        from bench import record
+        from tools import record
 
         counts = validate(args.validate, record.rows_of(args.rows), tuple(args.agents))
         for what, n in sorted(counts.items()):

@@ -5,7 +5,7 @@ Run: .venv/bin/python bench/bench_llm_client.py [--calls 200] [--json docs/bench
 Measures ``LLMClient.complete`` on a prompt of the generator's size for: a cache hit in
 live mode, a replay hit, a scripted answer, and (for scale) an uncached call answered by
 litellm's ``mock_response``, which goes through litellm without any network. ``--json
-FILE`` also writes every call's time as a bench record (:mod:`bench.record`), which
+FILE`` also writes every call's time as a bench record (:mod:`tools.record`), which
 ``make results`` renders (:func:`page`).
 """
 
@@ -24,7 +24,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench import record
+from tools import record
 from twostep.llm.client import LLMClient, LLMSettings
 from twostep.llm.prompts import template
 
@@ -94,7 +94,7 @@ def main() -> int:
 
 
 def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
-    """The results page of a ``--json`` record (bench.results)."""
+    """The results page of a ``--json`` record (tools.results)."""
     from matplotlib.figure import Figure
 
     (data,) = records

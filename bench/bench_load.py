@@ -24,7 +24,7 @@ machine's load: the load average is printed before and after.
     .venv/bin/python bench/bench_load.py --corpus ../shared/ipc-sample --repeats 3
     .venv/bin/python bench/bench_load.py --alfworld-only --repeats 5
 
-``--out`` writes the rows as a bench record (:mod:`bench.record`); :func:`section` is the
+``--out`` writes the rows as a bench record (:mod:`tools.record`); :func:`section` is the
 part of the conformance results page made from it (``make results``).
 """
 
@@ -43,7 +43,7 @@ from typing import Any
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from bench import record  # noqa: E402
+from tools import record  # noqa: E402
 from bench.bench_conformance import ProblemFiles, find_problems  # noqa: E402
 from checkers import fast_downward as fd  # noqa: E402
 

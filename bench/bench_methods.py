@@ -25,7 +25,7 @@ and time limit (and, for TwoStep, the same ``fallback_if_longer``).
         --reuse docs/bench/methods_deal.json --out outputs/bench/methods_all.json
     .venv/bin/python bench/bench_methods.py --report outputs/bench/methods_all.json
 
-``--out`` is a bench record (:mod:`bench.record`: the rows with the command, date, commit,
+``--out`` is a bench record (:mod:`tools.record`: the rows with the command, date, commit,
 machine and load of the run; rows files of earlier runs, bare lists, are read as well);
 :func:`page_plan_deal`, :func:`page_heldout` and :func:`page_methods` turn records into
 the results pages (``make results``).
@@ -52,7 +52,7 @@ import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench import record
+from tools import record
 from twostep.dealing import PHASES as DEALER_PHASES
 from twostep.dealing.cleanup import clean_plan
 from twostep.decomposers.base import Decomposer
@@ -746,7 +746,7 @@ def plot_methods(
 
 # ---------------------------------------------------------------------------- pages
 
-Figure = Callable[[Any, str, str], str]  # bench.results: (figure, name, alt) -> Markdown
+Figure = Callable[[Any, str, str], str]  # tools.results: (figure, name, alt) -> Markdown
 
 
 def _rows_of_records(records: Sequence[Mapping[str, Any]]) -> list[Row]:

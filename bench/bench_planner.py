@@ -11,7 +11,7 @@ median ratio (goal: at most 1.10) and validates every plan with unified-planning
     .venv/bin/python bench/bench_planner.py --domains blocksworld --tasks 1-5 --repeats 3
     .venv/bin/python bench/bench_planner.py --json docs/bench/planner.json   # the results page's rows
 
-``--json FILE`` also writes the rows as a bench record (:mod:`bench.record`);
+``--json FILE`` also writes the rows as a bench record (:mod:`tools.record`);
 :func:`page` turns it into the results page (``make results``).
 """
 
@@ -28,7 +28,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench import record
+from tools import record
 from twostep.planner import ALIASES, PlannerSettings, Status, driver_path, plan
 from twostep.tasks.benchmark import DEFAULT_DATA_ROOT, list_domains, list_tasks, load_task
 from twostep.verify.validation import validate_plan
@@ -57,7 +57,7 @@ GOAL_RATIO = 1.10  # wrapper wall time / direct driver wall time, median over th
 
 
 def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
-    """The results page of a ``--json`` record (bench.results): the summary, the slowest
+    """The results page of a ``--json`` record (tools.results): the summary, the slowest
     tasks, per-domain medians, a figure of planner time by domain, every task's row."""
     from matplotlib.figure import Figure
 

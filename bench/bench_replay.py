@@ -28,7 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import yaml
 
-from bench import record
+from tools import record
 from checkers import IndependentValidator
 from twostep.methods import check_run
 from twostep.methods.result import RunResult
@@ -49,7 +49,7 @@ FIG_THREE = "../report/replay/replay_fig3.png"  # from docs/results/
 
 
 def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
-    """The results page (bench.results): what the replay bench printed, then the replay
+    """The results page (tools.results): what the replay bench printed, then the replay
     report's Table I (``docs/report/replay/replay_table1.csv``, written by ``twostep-report``
     from the same sweep) as a table, and its Fig. 3."""
     import csv

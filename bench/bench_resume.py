@@ -31,7 +31,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench import record
+from tools import record
 
 REPO = Path(__file__).resolve().parent.parent
 TWOSTEP = Path(sys.executable).parent / "twostep"

@@ -11,7 +11,7 @@ outside; CPU is the child's user + system time, which the other jobs on a shared
 do not inflate. The ``engines imported`` row imports unified-planning's engine factory
 first (what reading PDDL cost before the lazy environment of
 :mod:`twostep.verify.up_environment`). ``--json FILE`` also writes the rows (every run's wall
-and CPU seconds) as a bench record (:mod:`bench.record`), which ``make results`` renders
+and CPU seconds) as a bench record (:mod:`tools.record`), which ``make results`` renders
 (:func:`page`).
 """
 
@@ -36,7 +36,7 @@ from bench_execution import AGENT_PREDICATES, CASES, PLAN_LENGTH, SINGLE_AGENT_D
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench import record
+from tools import record
 
 GOAL_S = 1.5  # the command's wall time when it reads and grounds the PDDL (no cache)
 
@@ -125,7 +125,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
-    """The results page of a ``--json`` record (bench.results): medians per command, the
+    """The results page of a ``--json`` record (tools.results): medians per command, the
     goal for the uncached read, and a figure of every run."""
     from matplotlib.figure import Figure
 

@@ -42,7 +42,7 @@ imported from DIR, this environment), e.g. the main branch's for a before/after.
 
     .venv/bin/python bench/bench_startup.py --repeat 5 --scenarios refusals [--source DIR]
 
-``--json FILE`` also writes the scenarios' rows as a bench record (:mod:`bench.record`);
+``--json FILE`` also writes the scenarios' rows as a bench record (:mod:`tools.record`);
 :func:`page` turns it into the results page (``make results``).
 """
 
@@ -62,7 +62,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench import record
+from tools import record
 from flows.environment import DEFAULTS
 
 REPO = Path(__file__).resolve().parent.parent
@@ -257,7 +257,7 @@ def _medians(row: dict[str, Any]) -> tuple[float, float, float, float]:
 
 
 def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
-    """The results page of a ``--json`` record (bench.results)."""
+    """The results page of a ``--json`` record (tools.results)."""
     from matplotlib.figure import Figure
 
     (data,) = records

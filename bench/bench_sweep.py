@@ -63,7 +63,7 @@ from typing import Any
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from bench import record as bench_record  # noqa: E402
+from tools import record as bench_record  # noqa: E402
 from bench.bench_orchestration import server_startup  # noqa: E402
 
 TWOSTEP = Path(sys.executable).parent / "twostep"
@@ -493,7 +493,7 @@ def targets(rows: list[dict[str, Any]]) -> list[str]:
 
 
 def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
-    """The results page of a ``--json`` record (bench.results): the sweeps' figures, the
+    """The results page of a ``--json`` record (tools.results): the sweeps' figures, the
     Prefect server's start, the workers' scaling, the targets."""
     (data,) = records
     rows = data["rows"]

@@ -17,7 +17,7 @@ from typing import Any
 import pytest
 
 from bench import bench_methods as bm
-from bench import record
+from tools import record
 from tests.conftest import DATA, REPO
 from twostep.cli.data import compare_files
 from twostep.generators import scale_files

@@ -1,4 +1,4 @@
-"""bench/record.py's printed-output records: a bench's printed tables read back as rows
+"""tools/record.py's printed-output records: a bench's printed tables read back as rows
 (``|`` tables and space-aligned ones), its other lines kept in order, a live run captured
 with ``--json`` and printed output kept from before converted once (``--from-txt``).
 
@@ -15,7 +15,7 @@ import pytest
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from bench import record  # noqa: E402
+from tools import record  # noqa: E402
 
 PIPES = """\
 # bench/bench_x.py --seeds 2

@@ -29,7 +29,7 @@ from typing import Any
 import pytest
 import yaml
 
-from bench import results
+from tools import results
 from tests.support.docs import NUMBER, prose
 from tools import reference
 
@@ -313,7 +313,7 @@ def test_each_results_page_names_its_rows_and_has_a_figure(page: results.Page) -
     for figure in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", text):
         assert (DOCS / "results" / figure).is_file(), figure
     # faults: a table of counts, all 0 when they pass; a printed output: its tables and text
-    if page.slug not in ("faults",) and page.render != "record:printed_page":
+    if page.slug not in ("faults",) and page.render != "tools.record:printed_page":
         assert "![" in text
 
 

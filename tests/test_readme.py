@@ -24,7 +24,7 @@ from typing import Any
 
 import pytest
 
-from bench import results
+from tools import results
 from tests.support.docs import NUMBER, prose
 from tests.support.plans import up_validate_run
 from twostep.methods import check_run

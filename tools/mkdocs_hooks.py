@@ -5,7 +5,7 @@ commands' ``--help`` and one library API page per package; they are added to the
 generated files (nothing is written into ``docs/``). The nav entry
 ``reference/api/index.md`` becomes a section holding the API index and every package's
 page, so a package added or a module moved needs no edit of mkdocs.yml; the entry
-``results/index.md`` is followed by every results page of :data:`bench.results.PAGES`.
+``results/index.md`` is followed by every results page of :data:`tools.results.PAGES`.
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ def _api_section(nav: list[Any]) -> bool:
 
 def _results_pages(nav: list[Any]) -> bool:
     """After the results index's nav entry, one entry per results page (in place)."""
-    from bench.results import PAGES
+    from tools.results import PAGES
 
     for i, item in enumerate(nav):
         value = next(iter(item.values())) if isinstance(item, dict) else item

@@ -4,7 +4,7 @@ Every bench that writes JSON (``--json FILE``, or ``--out FILE`` where a bench h
 before) writes ``{"run": {...}, "rows": [...], ...}``: ``run`` says what ran and where
 (the command line, the date, the git commit, the machine, the load average at the start
 and at the end), ``rows`` what it measured, one dict per measurement; a bench may add
-summary keys of its own. ``bench/results.py`` turns the records in ``docs/bench/`` into
+summary keys of its own. ``tools/results.py`` turns the records in ``docs/bench/`` into
 the site's results pages. Rows files written before records existed (a bare JSON list)
 still load, with no ``run``.
 
@@ -165,7 +165,7 @@ def run_lines(run: Mapping[str, Any] | None, source: str, printed: Path | None =
         lines += [
             f"- date: {run['date']} ({run.get('date_from')})",
             f"- made once from its printed output, `{run['converted_from']}`{at} (git "
-            "history; `python -m bench.record --from-txt`); the machine was not recorded in it",
+            "history; `python -m tools.record --from-txt`); the machine was not recorded in it",
         ]
         if run.get("load_end"):
             shown = " / ".join(f"{x:.2f}" for x in run["load_end"])
@@ -206,7 +206,7 @@ def svg(figure: Any, path: Path) -> Path:
 # columns and which rows; anything else: its lines), so that :func:`printed_page` shows
 # what the run printed, its tables as Markdown tables. Live runs write it with
 # :func:`capture` (``--json FILE``); printed output kept from before is converted once
-# with ``python -m bench.record --from-txt FILE ...`` (:func:`from_printed`).
+# with ``python -m tools.record --from-txt FILE ...`` (:func:`from_printed`).
 
 
 def _cells(line: str) -> list[str]:
