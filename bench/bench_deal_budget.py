@@ -19,8 +19,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from evaluation.methods import agent_predicates
 from tools import record
-from bench.bench_methods import agent_predicates
 from twostep.dealing import Dealer
 from twostep.methods import MethodRequest
 from twostep.methods.plan_deal import run_plan_deal

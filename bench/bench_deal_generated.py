@@ -45,7 +45,6 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from tools import record
 from bench.bench_deal_ipc import (
     deal_seconds,
     deal_within,
@@ -54,6 +53,7 @@ from bench.bench_deal_ipc import (
     our_verdict,
 )
 from checkers import IndependentValidator
+from tools import record
 from twostep.generators.ipc_sample import AGENT_PREDICATES, SIZES, Generated
 from twostep.methods import MethodRequest, run_single_agent
 from twostep.planner import PlannerSettings

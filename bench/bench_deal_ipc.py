@@ -41,8 +41,8 @@ from types import FrameType
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from tools import record
 from checkers import IndependentValidator
+from tools import record
 from twostep.methods import MethodRequest, RunResult, check_run, run_single_agent
 from twostep.methods.plan_deal import run_plan_deal
 from twostep.planner import PlannerSettings

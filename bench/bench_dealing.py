@@ -25,8 +25,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from evaluation.methods import agent_predicates, data_label, task_ids
 from tools import record
-from bench.bench_methods import agent_predicates, data_label, task_ids
 from twostep.dealing import CUTS, ORDERS, Dealer, DealError, Way, ways
 from twostep.generators import DOMAINS
 from twostep.methods import MethodRequest, run_single_agent

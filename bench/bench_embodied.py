@@ -49,8 +49,8 @@ import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from tools import record as bench_record
 from checkers.trace_check import TraceReport, check_trace, read_kitchen_file, who_plays
+from tools import record as bench_record
 from twostep.decomposers.goal_split import GoalSplitDecomposer
 from twostep.embodied import (
     ExecutorSettings,

@@ -67,9 +67,9 @@ from typing import Any
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from tools import record as bench_record  # noqa: E402
 from tests import bad_files  # noqa: E402
 from tests.llm_standin import Fault, Reply, standin_server  # noqa: E402
+from tools import record as bench_record  # noqa: E402
 
 BIN = Path(sys.executable).parent
 TWOSTEP = BIN / "twostep"

@@ -43,9 +43,9 @@ from typing import Any
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from tools import record  # noqa: E402
 from bench.bench_conformance import ProblemFiles, find_problems  # noqa: E402
 from checkers import fast_downward as fd  # noqa: E402
+from tools import record  # noqa: E402
 
 ALFWORLD_SHAPE = REPO / "tests" / "fixtures" / "constructs" / "exists_goal"
 EXIT_BAD_INPUT = 2  # twostep-score: the files do not load

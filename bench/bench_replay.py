@@ -28,8 +28,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import yaml
 
-from tools import record
 from checkers import IndependentValidator
+from tools import record
 from twostep.methods import check_run
 from twostep.methods.result import RunResult
 from twostep.tasks.benchmark import load_task

@@ -62,8 +62,8 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from tools import record
 from flows.environment import DEFAULTS
+from tools import record
 
 REPO = Path(__file__).resolve().parent.parent
 BIN = Path(sys.executable).parent

@@ -63,8 +63,8 @@ from typing import Any
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from tools import record as bench_record  # noqa: E402
 from bench.bench_orchestration import server_startup  # noqa: E402
+from tools import record as bench_record  # noqa: E402
 
 TWOSTEP = Path(sys.executable).parent / "twostep"
 COMMAND = TWOSTEP  # --command: another build's twostep (e.g. to compare two versions)

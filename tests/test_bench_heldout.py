@@ -15,9 +15,9 @@ from pathlib import Path
 
 import pytest
 
-from bench import bench_methods as bm
-from bench.bench_heldout import heldout_predicates, prepare, validate
 from checkers import IndependentValidator, fast_downward
+from evaluation import methods as runs
+from evaluation.heldout import heldout_predicates, prepare, validate
 from tests.conftest import DATA
 
 # Two blocks on the table, b1 to go on b2: two steps for any planner (pick up, stack).
@@ -97,13 +97,13 @@ def test_agent_predicates_given_for_a_domain_conf_does_not_have(tmp_path: Path) 
     (tmp_path / "grips").mkdir()
     for name in ("domain.pddl", "p01.pddl"):
         shutil.copyfile(DATA / "grippers" / name, tmp_path / "grips" / name)
-    job = bm.Job(str(tmp_path), str(tmp_path), "grips", 1, (1, 2), ("plan-deal",), "lama-first",
+    job = runs.Job(str(tmp_path), str(tmp_path), "grips", 1, (1, 2), ("plan-deal",), "lama-first",
                  10.0, True, (), ("at-robby", "free", "carry"))  # fmt: skip
-    rows = {(r["method"], r["agents"]): r for r in bm.run_job(job)}
+    rows = {(r["method"], r["agents"]): r for r in runs.run_job(job)}
     assert rows[("sa", 1)]["valid"] and rows[("plan-deal", 2)]["valid"]
     assert rows[("plan-deal", 2)]["exec_length"] < rows[("sa", 1)]["exec_length"]
     with pytest.raises(FileNotFoundError):
-        bm.run_job(bm.Job(str(tmp_path), str(tmp_path), "grips", 1, (1, 2), ("plan-deal",),
+        runs.run_job(runs.Job(str(tmp_path), str(tmp_path), "grips", 1, (1, 2), ("plan-deal",),
                           "lama-first", 10.0, True, ()))  # fmt: skip
 
 

@@ -16,11 +16,13 @@ from typing import Any
 
 import pytest
 
-from bench import bench_methods as bm
-from tools import record
+from evaluation import method_tables as tables
+from evaluation import methods as runs
 from tests.conftest import DATA, REPO
+from tools import record
 from twostep.cli.data import compare_files
 from twostep.generators import scale_files
+from twostep.tasks.benchmark import list_tasks
 
 LARGE = [("blocksworld", 30, 3), ("grippers", 40, 3), ("tyreworld", 40, 1)]
 
@@ -50,43 +52,43 @@ ROWS = [
 
 
 def test_macro_is_the_mean_over_domains_of_the_per_task_mean() -> None:
-    table = bm.summarise(ROWS, ["ma", "goal-split", "plan-split"], [1, 2])
+    table = tables.summarise(ROWS, ["ma", "goal-split", "plan-split"], [1, 2])
     # MA: A = (0.5 + 1.0) / 2 = 0.75, B = 0.8; macro (0.75 + 0.8) / 2 = 0.775, not the
     # pooled mean over the three tasks (2.3 / 3 = 0.767)
     assert table[("A", 2, "ma")].ratio == pytest.approx(0.75)
-    assert bm.macro_ratio(table, "ma", 2) == pytest.approx(0.775)
+    assert tables.macro_ratio(table, "ma", 2) == pytest.approx(0.775)
     assert table[("A", 2, "ma")].length == pytest.approx(12.5)
     assert table[("A", 2, "ma")].time_s == pytest.approx(4.0)
     # an invalid row counts as invalid, never as a length or a ratio
     ps = table[("A", 2, "plan-split")]
     assert (ps.tasks, ps.failed, ps.ratio, ps.length) == (2, 1, pytest.approx(0.75), 15)
     assert table[("B", 2, "plan-split")].longer_than_sa == 1
-    assert bm.macro_ratio(table, "plan-split", 2) == pytest.approx((0.75 + 1.2) / 2)
+    assert tables.macro_ratio(table, "plan-split", 2) == pytest.approx((0.75 + 1.2) / 2)
 
 
 def test_domains_no_longer_than_ma() -> None:
-    table = bm.summarise(ROWS, ["ma", "goal-split", "plan-split"], [2])
+    table = tables.summarise(ROWS, ["ma", "goal-split", "plan-split"], [2])
     # goal-split: A 0.75 = MA 0.75 (a tie counts), B 0.9 > 0.8
-    assert bm.no_longer_than_ma(table, "goal-split", 2) == (["A"], 2)
+    assert tables.no_longer_than_ma(table, "goal-split", 2) == (["A"], 2)
     # plan-split: A 0.75 <= 0.75, B 1.2 > 0.8
-    assert bm.no_longer_than_ma(table, "plan-split", 2) == (["A"], 2)
-    assert bm.no_longer_than_ma(table, "ma", 2) == (["A", "B"], 2)
+    assert tables.no_longer_than_ma(table, "plan-split", 2) == (["A"], 2)
+    assert tables.no_longer_than_ma(table, "ma", 2) == (["A", "B"], 2)
     # where MA solves nothing, a method that solves is no longer than it
     failed = [r for r in ROWS if not (r["domain"] == "B" and r["method"] == "ma")]
     failed.append(row("B", 1, "ma", 2, None, 10, valid=False, time_s=90.0))
-    table = bm.summarise(failed, ["ma", "goal-split"], [2])
-    assert bm.no_longer_than_ma(table, "goal-split", 2) == (["A", "B"], 2)
-    assert math.isnan(bm.macro_ratio(table, "ma", 2))
+    table = tables.summarise(failed, ["ma", "goal-split"], [2])
+    assert tables.no_longer_than_ma(table, "goal-split", 2) == (["A", "B"], 2)
+    assert math.isnan(tables.macro_ratio(table, "ma", 2))
     assert table[("B", 2, "ma")].time_s == 90.0  # a timeout's time counts
 
 
 def test_single_agent_rows_are_the_sa_plan_for_every_method() -> None:
-    table = bm.summarise(ROWS, ["ma", "goal-split"], [1, 2])
+    table = tables.summarise(ROWS, ["ma", "goal-split"], [1, 2])
     for method in ("sa", "ma", "goal-split"):
         one = table[("A", 1, method)]
         assert (one.length, one.ratio, one.time_s, one.tasks) == (15, 1.0, 2.0, 2)
-    assert bm.macro_ratio(table, "goal-split", 1) == 1.0
-    text = bm.report(ROWS, ["ma", "goal-split"], [1, 2], targets={2: 0.7})
+    assert tables.macro_ratio(table, "goal-split", 1) == 1.0
+    text = tables.report(ROWS, ["ma", "goal-split"], [1, 2], targets={2: 0.7})
     lines = {tuple(c.strip() for c in line.strip("|").split("|")) for line in text.splitlines()}
     # domain, N, tasks, SA len, SA (cleaned) len (no plan-deal rows: none), lengths, ratios,
     # SA time, times, goal-split/MA time, longer, inexact, failed
@@ -102,7 +104,7 @@ def test_single_agent_rows_are_the_sa_plan_for_every_method() -> None:
 def test_a_task_without_its_sa_row_is_left_out() -> None:
     # every cell covers the same tasks: a TwoStep row whose SA row is missing does not count
     rows = [*ROWS, row("B", 2, "ma", 2, 1, 10)]
-    table = bm.summarise(rows, ["ma"], [2])
+    table = tables.summarise(rows, ["ma"], [2])
     assert table[("B", 2, "ma")].tasks == 1
 
 
@@ -116,26 +118,26 @@ def test_reuse_keys_on_root_domain_task_agents_method_and_settings() -> None:
         row("A", 1, "goal-split", 2, 9, 10, fallback_if_longer=False),
         row("A", 1, "plan-split", 2, 9, 10),
     ]
-    known = bm.reusable_rows(rows, ("sa", "ma", "goal-split"), "lama-first", 60.0, True)
+    known = runs.reusable_rows(rows, ("sa", "ma", "goal-split"), "lama-first", 60.0, True)
     assert {k: r["exec_length"] for k, r in known.items()} == {
         ("data", "A", 1, 2, "ma"): 5,
         ("data/large", "A", 1, 2, "ma"): 6,
         ("data", "A", 1, 3, "ma"): 7,
     }
     # fallback_if_longer changes TwoStep rows, never SA or MA ones
-    without = bm.reusable_rows(rows, ("ma", "goal-split"), "lama-first", 60.0, False)
+    without = runs.reusable_rows(rows, ("ma", "goal-split"), "lama-first", 60.0, False)
     assert ("data", "A", 1, 2, "goal-split") in without
     assert ("data", "A", 1, 2, "ma") in without
 
 
 def test_data_label_is_relative_to_the_repository() -> None:
-    assert bm.data_label(DATA) == "data"
-    assert bm.data_label(REPO / "data" / "large") == "data/large"
-    assert bm.data_label(Path("/somewhere/else")) == "/somewhere/else"
+    assert runs.data_label(DATA) == "data"
+    assert runs.data_label(REPO / "data" / "large") == "data/large"
+    assert runs.data_label(Path("/somewhere/else")) == "/somewhere/else"
 
 
-def _job(known: tuple[dict[str, Any], ...], methods: tuple[str, ...]) -> bm.Job:
-    return bm.Job(str(DATA), "data", "blocksworld", 1, (1, 2), methods, "lama-first", 60.0,
+def _job(known: tuple[dict[str, Any], ...], methods: tuple[str, ...]) -> runs.Job:
+    return runs.Job(str(DATA), "data", "blocksworld", 1, (1, 2), methods, "lama-first", 60.0,
                   True, known)  # fmt: skip
 
 
@@ -143,17 +145,19 @@ def test_known_rows_are_not_planned_again() -> None:
     common = {"data": "data", "alias": "lama-first", "time_limit_s": 60.0}
     sa = row("blocksworld", 1, "sa", 1, 999, 999, plan=["(pick-up b1)"], **common)
     ma = row("blocksworld", 1, "ma", 2, 999, 999, **common)
-    rows = bm.run_job(_job((sa, ma), ("ma",)))
+    rows = runs.run_job(_job((sa, ma), ("ma",)))
     assert rows == [sa, ma]  # N = 1 is never run, and nothing is re-planned
 
 
 def test_twostep_reads_the_plan_of_a_reused_sa_row() -> None:
     sa = row("blocksworld", 1, "sa", 1, 999, 999, plan=["(pick-up b1)"])
-    plan = bm._sa_plan(sa)
+    plan = runs.stored_sa_plan(sa)
     assert plan is not None and plan.plan == ("(pick-up b1)",) and plan.planner_time_s == 1.0
     # an SA row without its plan (older runs) or unsolved gives none: SA is planned again
-    assert bm._sa_plan(row("blocksworld", 1, "sa", 1, 9, 9)) is None
-    assert bm._sa_plan(row("blocksworld", 1, "sa", 1, None, 9, valid=False, plan=None)) is None
+    assert runs.stored_sa_plan(row("blocksworld", 1, "sa", 1, 9, 9)) is None
+    assert (
+        runs.stored_sa_plan(row("blocksworld", 1, "sa", 1, None, 9, valid=False, plan=None)) is None
+    )
 
 
 def test_resume_keeps_the_rows_of_tasks_outside_the_run(tmp_path: Path) -> None:
@@ -178,7 +182,7 @@ def test_resume_keeps_the_rows_of_tasks_outside_the_run(tmp_path: Path) -> None:
 
 
 def test_overview_has_a_row_per_method_and_n_with_the_domains_across() -> None:
-    text = bm.report(ROWS, ["ma", "goal-split"], [1, 2])
+    text = tables.report(ROWS, ["ma", "goal-split"], [1, 2])
     lines = {tuple(c.strip() for c in line.strip("|").split("|")) for line in text.splitlines()}
     # method, N, A, B, macro, macro / cleaned SA (no plan-deal rows: none), macro planning
     # time, its ratio to MA's
@@ -196,7 +200,7 @@ def test_large_tasks_are_what_the_documented_command_writes(
     # data/large/README.md: twostep-data scale --domain D --size S --count C (seed 0)
     folder = DATA / "large" / domain
     assert compare_files(folder, scale_files(domain, size, count)) == []
-    assert bm.list_tasks(domain, DATA / "large") == list(range(1, count + 1))
+    assert list_tasks(domain, DATA / "large") == list(range(1, count + 1))
 
 
 # plan-deal rows of domain A (SA 10 and 20): the cleaned SA plans are 8 and 20 long.
@@ -215,15 +219,15 @@ DEAL_ROWS = [
 
 
 def test_the_cleaned_sa_plan_and_the_lower_bound() -> None:
-    table = bm.summarise(DEAL_ROWS, ["plan-deal"], [1, 2, 3])
+    table = tables.summarise(DEAL_ROWS, ["plan-deal"], [1, 2, 3])
     # SA (cleaned): 8/10 and 20/20, mean 0.9
     cleaned = table[("A", 1, "sa-cleaned")]
     assert (cleaned.length, cleaned.ratio) == (14.0, pytest.approx(0.9))
     # N = 2: ⌈9 / 2⌉ = 5 and ⌈20 / 2⌉ = 10; exec / cleaned (5/8 + 20/20) / 2
     two = table[("A", 2, "plan-deal")]
     assert two.bound == 7.5 and two.ratio_cleaned == pytest.approx((5 / 8 + 1) / 2)
-    assert bm.macro_ratio(table, "plan-deal", 2, cleaned=True) == pytest.approx(0.8125)
-    text = bm.report(DEAL_ROWS, ["plan-deal"], [1, 2, 3], default="plan-deal")
+    assert tables.macro_ratio(table, "plan-deal", 2, cleaned=True) == pytest.approx(0.8125)
+    text = tables.report(DEAL_ROWS, ["plan-deal"], [1, 2, 3], default="plan-deal")
     lines = {tuple(c.strip() for c in line.strip("|").split("|")) for line in text.splitlines()}
     assert ("sa (cleaned)", "1", "0.900", "0.900", "1.000", "1.00", "") in lines
     # plan-deal at N = 3: lengths 4 and 10 ([⌈10/3⌉ = 4, ⌈20/3⌉ = 7])
@@ -243,15 +247,15 @@ def test_the_cleaned_sa_plan_without_plan_deal_rows_comes_from_the_sa_plan() -> 
     # cleaned now (6 of 8 actions), and a plan-deal row's recorded length is kept as it is
     sa = row("grippers", 1, "sa", 1, 8, 8, data="data", plan=HAND_PLAN)
     portfolio = row("grippers", 1, "portfolio", 2, 3, 8, data="data")
-    rows = bm.with_cleaned([sa, portfolio])
+    rows = tables.with_cleaned([sa, portfolio])
     assert [r["cleaned"] for r in rows] == [6, 6]
-    table = bm.summarise([sa, portfolio], ["portfolio"], [1, 2])
+    table = tables.summarise([sa, portfolio], ["portfolio"], [1, 2])
     assert table[("grippers", 1, "sa-cleaned")].length == 6
     assert table[("grippers", 2, "portfolio")].ratio_cleaned == pytest.approx(3 / 6)
     recorded = row("grippers", 1, "plan-deal", 2, 3, 8, data="data", cleaned_sa_length=7)
-    assert {r["cleaned"] for r in bm.with_cleaned([sa, recorded])} == {7}
+    assert {r["cleaned"] for r in tables.with_cleaned([sa, recorded])} == {7}
     # a stored plan that does not apply (grippers has no pick-up) gives no cleaned length
-    assert bm.cleaned_length({**sa, "plan": ["(pick-up ball1)"]}) is None
+    assert tables.cleaned_length({**sa, "plan": ["(pick-up ball1)"]}) is None
 
 
 def test_a_task_whose_goal_holds_at_the_start_counts_in_the_cleaned_length() -> None:
@@ -260,14 +264,14 @@ def test_a_task_whose_goal_holds_at_the_start_counts_in_the_cleaned_length() -> 
     rows = [row("A", 1, "sa", 1, 0, 0), row("A", 2, "sa", 1, 10, 10),
             row("A", 1, "plan-deal", 2, 0, 0, cleaned_sa_length=0),
             row("A", 2, "plan-deal", 2, 5, 10, cleaned_sa_length=8)]  # fmt: skip
-    table = bm.summarise(rows, ["plan-deal"], [1, 2])
+    table = tables.summarise(rows, ["plan-deal"], [1, 2])
     cleaned, sa = table[("A", 1, "sa-cleaned")], table[("A", 1, "sa")]
     assert (cleaned.length, sa.length) == (4.0, 5.0)
     assert cleaned.ratio == pytest.approx(0.8)
 
 
 def test_plan_deal_in_detail() -> None:
-    lines = bm.deal_report(DEAL_ROWS, [2, 3, 4], "plan-deal")
+    lines = tables.deal_report(DEAL_ROWS, [2, 3, 4], "plan-deal")
     text = "\n".join(lines)
     # one fallback (task 2, N = 2: one agent), three runs with an idle agent
     assert "(fallback): 1 of 6; no deal shorter than the cleaned SA plan: 1" in text
@@ -281,22 +285,22 @@ def test_plan_deal_in_detail() -> None:
 
 def test_tyreworld_one_jack_floor_line() -> None:
     # data/tyreworld/p03 has three hubs (the-hub1..3 in its goal): 6 * 3 + 6 = 24 steps.
-    assert bm.tyreworld_floor("data", 3) == 24
-    assert bm.tyreworld_floor("no/such/root", 3) is None
+    assert tables.tyreworld_floor("data", 3) == 24
+    assert tables.tyreworld_floor("no/such/root", 3) is None
     rows = [
         {**row("tyreworld", 3, "sa", 1, 40, 40), "data": "data"},
         {**row("tyreworld", 3, "plan-deal", 2, 24, 40), "data": "data"},
         {**row("tyreworld", 3, "plan-deal", 3, 25, 40), "data": "data"},
     ]
-    (line,) = bm.one_jack_floor(rows, rows[1:])
+    (line,) = tables.one_jack_floor(rows, rows[1:])
     assert "reached in 1 of 2 runs" in line and "floor / SA, mean over tasks: 0.600" in line
 
 
 def test_the_plot_draws_the_macro_against_n_and_against_planning_time(tmp_path: Path) -> None:
     methods = ["ma", "goal-split", "plan-split"]
-    table = bm.summarise(ROWS, methods, [1, 2])
+    table = tables.summarise(ROWS, methods, [1, 2])
     path = tmp_path / "methods.png"
-    figure = bm.plot_methods(table, methods, [1, 2], {2: 0.55}, "goal-split", path)
+    figure = tables.plot_methods(table, methods, [1, 2], {2: 0.55}, "goal-split", path)
     assert path.read_bytes().startswith(b"\x89PNG")
     by_n, by_time = figure.axes
     lines = {line.get_label(): line for line in by_n.get_lines()}

@@ -29,9 +29,8 @@ from typing import Any
 import pytest
 import yaml
 
-from tools import results
 from tests.support.docs import NUMBER, prose
-from tools import reference
+from tools import reference, results
 
 REPO = Path(__file__).resolve().parent.parent
 DOCS = REPO / "docs"

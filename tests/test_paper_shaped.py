@@ -138,7 +138,7 @@ def test_the_cross_check_reads_both_domains_and_checks_each_plan_on_the_other(
     """bench_heldout --cross on a root in the paper's layout: grippers with our domain as
     "theirs", tyreworld with ours less its constants (the paper's shape: only the problems
     declare the tools), blocksworld without a domain file (read with ours alone)."""
-    from bench.bench_heldout import cross_check, cross_table
+    from evaluation.heldout import cross_check, cross_table
 
     ours_tyreworld = (REPO / "data" / "tyreworld" / "domain.pddl").read_text()
     theirs_tyreworld = ours_tyreworld.replace("(:constants wrench jack pump - tool)", "")

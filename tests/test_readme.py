@@ -24,9 +24,9 @@ from typing import Any
 
 import pytest
 
-from tools import results
 from tests.support.docs import NUMBER, prose
 from tests.support.plans import up_validate_run
+from tools import results
 from twostep.methods import check_run
 
 REPO = Path(__file__).resolve().parent.parent

@@ -58,7 +58,7 @@ PAGES: tuple[Page, ...] = (
         "exec length / SA length of the offline default, N = 1..4, on the 100 tasks, the "
         "stress set and data/large; its dealing time against the SA planner",
         ("methods_deal.json",),
-        "bench.bench_methods:page_plan_deal",
+        "evaluation.method_tables:page_plan_deal",
     ),
     Page(
         "methods",
@@ -72,7 +72,7 @@ PAGES: tuple[Page, ...] = (
             "methods_lite.json",
             "methods_deal.json",
         ),
-        "bench.bench_methods:page_methods",
+        "evaluation.method_tables:page_methods",
         ("methods_faithful.txt", "methods_faithful.png"),
     ),
     Page(
@@ -81,14 +81,14 @@ PAGES: tuple[Page, ...] = (
         "MA, goal-split, plan-split and plan-deal on data/large (blocksworld 30 blocks, "
         "grippers 40 balls, tyreworld 40 hubs)",
         ("methods_large_faithful.json",),
-        "bench.bench_methods:page_methods",
+        "evaluation.method_tables:page_methods",
     ),
     Page(
         "heldout",
         "plan-deal on the paper's own task files (held out)",
         "plan-deal on the LLM+P benchmark files the paper used (not shipped here), N = 1..4",
         ("methods_heldout.json",),
-        "bench.bench_methods:page_heldout",
+        "evaluation.method_tables:page_heldout",
     ),
     Page(
         "planner",
@@ -417,7 +417,7 @@ HEADLINE_END = "<!-- /headline -->"
 def headline_block(bench: Path = BENCH) -> str:
     """The README's headline table, from the rows of the methods page (the same rows and
     the same means as ``docs/results/methods.md``), with the page's run header."""
-    from bench.bench_methods import headline
+    from evaluation.method_tables import headline
 
     page = next(p for p in PAGES if p.slug == "methods")
     records = [record.load(bench / name) for name in page.sources]
