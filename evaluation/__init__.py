@@ -6,3 +6,5 @@ with twostep; ``bench/bench_*.py`` are their command lines: arguments, timing, p
   pages and the README's headline;
 * :mod:`evaluation.heldout`: the LLM+P files as a held-out data root, re-validated and
   cross-checked against our domains;
+* :mod:`evaluation.portfolio_members`: smaller portfolios replayed from a portfolio's rows.
+"""

@@ -7,7 +7,7 @@ from typing import Any
 
 import pytest
 
-from bench.bench_portfolio_members import evaluate, members, replay
+from evaluation.portfolio_members import evaluate, members, replay
 
 
 def run(domain: str, agents: int, sa: int, candidates: list[dict[str, Any]]) -> dict[str, Any]:
