@@ -152,7 +152,7 @@ PAGES: tuple[Page, ...] = (
         "30 IPC domains read, planned and validated as Fast Downward does; twostep's load "
         "time beside Fast Downward's translator",
         ("conformance.json", "load.json"),
-        "bench.bench_conformance:page",
+        "evaluation.conformance:page",
     ),
     Page(
         "embodied",
