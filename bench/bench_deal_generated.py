@@ -45,14 +45,14 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench.bench_deal_ipc import (
+from checkers import IndependentValidator
+from evaluation.deal_checks import (
     deal_seconds,
     deal_within,
     fallback_text,
     independent_verdict,
     our_verdict,
 )
-from checkers import IndependentValidator
 from tools import record
 from twostep.generators.ipc_sample import AGENT_PREDICATES, SIZES, Generated
 from twostep.methods import MethodRequest, run_single_agent
