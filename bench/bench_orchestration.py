@@ -40,6 +40,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from evaluation.prefect_server import server_startup
 from tools import record
 
 REPO = Path(__file__).resolve().parent.parent
@@ -82,20 +83,6 @@ def import_seconds(statement: str, env: dict[str, str], repeats: int) -> float:
         )
         times.append(float(done.stdout.strip().splitlines()[-1]))
     return statistics.median(times)
-
-
-def server_startup(home: Path, env: dict[str, str]) -> float:
-    """Seconds from spawning ``prefect server start`` to a healthy API (then stopped)."""
-    code = (
-        "import os, time, sys; from flows.servers import ServerSettings, spawn_server, "
-        "stop_server, wait_until_healthy; t = time.perf_counter(); "
-        f"info = spawn_server(ServerSettings(home={str(home)!r}, startup_timeout_s=600), os.getpid()); "
-        "wait_until_healthy(info); print(time.perf_counter() - t); stop_server(info)"
-    )
-    done = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=REPO, check=True
-    )
-    return float(done.stdout.strip().splitlines()[-1])
 
 
 def run_sweep(

@@ -436,10 +436,41 @@ SWEEP_BEGIN = (
 SWEEP_END = "<!-- /sweep-cost -->"
 
 
+def cost_lines(records: list[dict[str, Any]]) -> list[str]:
+    """The README's lines on what a sweep costs, from the rows of ``sweep.json`` and
+    ``sweep_grid.json``: the 100-job sweeps' overhead per job, the paper's grid."""
+    rows = [r for data in records for r in data["rows"]]
+    said = []
+    for variant, what in (("on", "with Prefect and MLflow on"), ("off", "with both off")):
+        row = next((r for r in rows if r.get("grid") == "small" and r["variant"] == variant
+                    and r["jobs"] == 100 and r["launcher"] == "all"), None)  # fmt: skip
+        if row is not None:
+            said.append(
+                f"{row['overhead_median_s']:.2f} s {what} (median; end to end "
+                f"{row['end_to_end_per_job_s']:.2f} s, load {row['load_before'][0]:.1f})"
+            )
+    lines = []
+    if said:
+        lines.append(
+            "What a sweep adds per job beyond planning, end to end (`bench/bench_sweep.py`: "
+            "100 small jobs on every core of 2): " + "; ".join(said) + "."
+        )
+    for row in (r for r in rows if r.get("grid") == "paper"):
+        t = row["timing"]
+        domain = next((o.split("=", 1)[1] for o in row["command"].split()
+                       if o.startswith("domain=")), "?")  # fmt: skip
+        lines.append(
+            f"The paper's grid on {domain} (`experiment=paper`, {t['jobs']} jobs, offline): "
+            f"{t['wall_s'] / 60:.1f} min on {t['workers']} workers for "
+            f"{t['planner_s'] / 60:.1f} min of Fast Downward, "
+            f"{100 * t['overhead_share']:.0f} % of the workers' time beyond it (load "
+            f"{row['load_before'][0]:.1f})."
+        )
+    return lines
+
+
 def sweep_block(bench: Path = BENCH) -> str:
     """The README's lines on a sweep's cost, from the rows of the sweep pages."""
-    from bench.bench_sweep import cost_lines
-
     records = [record.load(bench / n) for n in ("sweep.json", "sweep_grid.json")
                if (bench / n).is_file()]  # fmt: skip
     return "\n".join([SWEEP_BEGIN, *cost_lines(records), SWEEP_END])
