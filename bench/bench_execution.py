@@ -54,6 +54,19 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from evaluation.tracks import (
+    AGENT_PREDICATES,
+    AGENTS,
+    CASES,
+    PLAN_LENGTH,
+    TRACKS,
+    TRACKS_MA,
+    Case,
+    Instance,
+    build,
+    shared_case,
+    staggered_case,
+)
 from tools import record
 from twostep.makespan import ParallelExecution, parallel_length
 from twostep.makespan.compiled import compile_task
@@ -62,107 +75,6 @@ from twostep.makespan.parallel import _parallel_length
 from twostep.makespan.symmetry import Symmetry
 from twostep.pddl import Problem, parse_problem
 from twostep.plans.simulate import GroundAction, Grounder
-
-AGENTS = 4
-PLAN_LENGTH = 60
-
-SINGLE_AGENT_DOMAIN = """
-(define (domain tracks)
- (:requirements :strips :typing)
- (:types cart cell)
- (:predicates (at ?c - cart ?p - cell) (next ?p - cell ?q - cell) (free ?p - cell) (ready))
- (:action move :parameters (?c - cart ?p - cell ?q - cell)
-  :precondition (and (ready) (at ?c ?p) (next ?p ?q) (free ?q))
-  :effect (and (not (at ?c ?p)) (not (free ?q)) (at ?c ?q) (free ?p))))
-"""
-
-MULTI_AGENT_DOMAIN = """
-(define (domain tracks-ma)
- (:requirements :strips :typing)
- (:types agent cart cell)
- (:predicates (at ?c - cart ?p - cell) (next ?p - cell ?q - cell) (free ?p - cell)
-              (ready ?a - agent))
- (:action move :parameters (?a - agent ?c - cart ?p - cell ?q - cell)
-  :precondition (and (ready ?a) (at ?c ?p) (next ?p ?q) (free ?q))
-  :effect (and (not (at ?c ?p)) (not (free ?q)) (at ?c ?q) (free ?p))))
-"""
-
-AGENT_PREDICATES = ("ready",)
-
-
-@dataclass(frozen=True)
-class Case:
-    name: str
-    shared_cells: dict[str, dict[int, float]]
-    """Shared cell -> {cart: position as a fraction of the track}."""
-
-
-CASES = (
-    Case("independent", {}),
-    Case(
-        "shared",
-        {
-            "hub": {0: 1 / 3, 1: 1 / 3, 2: 1 / 3, 3: 1 / 3},
-            "x01": {0: 2 / 3, 1: 2 / 3},
-            "x23": {2: 3 / 4, 3: 3 / 4},
-        },
-    ),
-)
-
-
-def shared_case(agents: int) -> Case:
-    """The ``shared`` case for any N: every track crosses the hub a third of the way,
-    and carts 2p, 2p+1 share a crossing at 2/3 (p even) or 3/4 (p odd) of their tracks."""
-    cells: dict[str, dict[int, float]] = {"hub": dict.fromkeys(range(agents), 1 / 3)}
-    for first in range(0, agents - 1, 2):
-        at = 2 / 3 if first % 4 == 0 else 3 / 4
-        cells[f"x{first}{first + 1}"] = {first: at, first + 1: at}
-    return Case("shared", cells)
-
-
-@dataclass(frozen=True)
-class Instance:
-    single_agent_problem: str
-    multi_agent_problem: str
-    plans: list[list[str]]
-
-
-def build(case: Case, length: int, agents: int = AGENTS) -> Instance:
-    """Tracks of ``length`` moves per cart; each agent's plan drives its cart to the end."""
-    cells: list[str] = []
-    facts: list[str] = []
-    goal: list[str] = []
-    plans: list[list[str]] = []
-    for cart in range(agents):
-        track = [f"k{cart}-{i}" for i in range(length + 1)]
-        for cell, positions in case.shared_cells.items():
-            if cart in positions:
-                track[max(1, min(length - 1, round(positions[cart] * length)))] = cell
-        cells += [c for c in track if c not in cells]
-        facts.append(f"(at c{cart} {track[0]})")
-        facts += [f"(next {p} {q})" for p, q in itertools.pairwise(track)]
-        goal.append(f"(at c{cart} {track[-1]})")
-        plans.append([f"(move c{cart} {p} {q})" for p, q in itertools.pairwise(track)])
-    facts += [f"(free {c})" for c in cells if not c.endswith("-0")]
-    carts = " ".join(f"c{i}" for i in range(agents))
-    agent_names = " ".join(f"a{i}" for i in range(agents))
-    body = " ".join(sorted(set(facts)))
-    goal_text = f"(:goal (and {' '.join(goal)}))"
-    single = (
-        f"(define (problem tracks-{case.name}) (:domain tracks)\n"
-        f" (:objects {carts} - cart {' '.join(cells)} - cell)\n"
-        f" (:init (ready) {body})\n {goal_text})"
-    )
-    ready = " ".join(f"(ready a{i})" for i in range(agents))
-    multi = (
-        f"(define (problem tracks-{case.name}-ma) (:domain tracks-ma)\n"
-        f" (:objects {agent_names} - agent {carts} - cart {' '.join(cells)} - cell)\n"
-        f" (:init {ready} {body})\n {goal_text})"
-    )
-    return Instance(single, multi, plans)
-
-
-# ------------------------------------------------------------ unified-planning baseline
 
 
 class BudgetExceeded(Exception):
@@ -178,7 +90,7 @@ def up_parallel_length(instance: Instance, mode: str, budget: float) -> tuple[in
     from unified_planning.plans import ActionInstance
     from unified_planning.shortcuts import SequentialSimulator
 
-    problem = PDDLReader().parse_problem_string(MULTI_AGENT_DOMAIN, instance.multi_agent_problem)
+    problem = PDDLReader().parse_problem_string(TRACKS_MA, instance.multi_agent_problem)
     simulator = SequentialSimulator(problem)
     move = problem.action("move")
     plans = [
@@ -265,8 +177,6 @@ def up_parallel_length(instance: Instance, mode: str, budget: float) -> tuple[in
     raise RuntimeError("the baseline found no schedule")
 
 
-# ------------------------------------------------------------------------ timing
-
 UP_SIZES = (8, 15, 30, PLAN_LENGTH)
 """Plan lengths tried for the UP baseline, smallest first; the largest that fits is kept."""
 
@@ -298,7 +208,7 @@ class Row:
 def measure_ours(case: Case, length: int, mode: str, repeats: int) -> Row:
     """Median times of parallel_length and of the plain search, from grounded plans."""
     instance = build(case, length)
-    problem = parse_problem(SINGLE_AGENT_DOMAIN, instance.single_agent_problem)
+    problem = parse_problem(TRACKS, instance.single_agent_problem)
     grounder = Grounder(problem)
     plans = [grounder.ground_plan(plan) for plan in instance.plans]
 
@@ -357,7 +267,7 @@ def up_call_costs() -> str:
     from unified_planning.shortcuts import SequentialSimulator
 
     instance = build(CASES[0], PLAN_LENGTH)
-    problem = PDDLReader().parse_problem_string(MULTI_AGENT_DOMAIN, instance.multi_agent_problem)
+    problem = PDDLReader().parse_problem_string(TRACKS_MA, instance.multi_agent_problem)
     simulator = SequentialSimulator(problem)
     state = simulator.get_initial_state()
     args = [problem.object(o) for o in instance.plans[0][0].strip("()").split()[1:]]
@@ -373,22 +283,8 @@ def up_call_costs() -> str:
     )
 
 
-# ------------------------------------------------------------------ scaling with N
-
 SCALING_AGENTS = (2, 4, 6, 8, 10, 12, 14, 16)
 SCALING_LENGTHS = (30, 60, 100)
-
-
-def staggered_case(agents: int) -> Case:
-    """Two shared cells every cart crosses, at positions that differ by cart, so carts
-    reach them at different times and the greedy order is not always optimal."""
-    return Case(
-        "staggered",
-        {
-            "hub": {cart: (2 + cart % 3) / 8 for cart in range(agents)},
-            "hub2": {cart: (5 + (2 * cart) % 3) / 8 for cart in range(agents)},
-        },
-    )
 
 
 def class_sizes(plans: Sequence[Sequence[GroundAction]], problem: Problem) -> str:
@@ -432,7 +328,7 @@ def scaling(
             for length in SCALING_LENGTHS:
                 case = make(agents)
                 instance = build(case, length, agents)
-                problem = parse_problem(SINGLE_AGENT_DOMAIN, instance.single_agent_problem)
+                problem = parse_problem(TRACKS, instance.single_agent_problem)
                 grounder = Grounder(problem)
                 plans = [grounder.ground_plan(plan) for plan in instance.plans]
                 start, cpu_start = time.perf_counter(), time.process_time()

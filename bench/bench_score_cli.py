@@ -30,12 +30,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from bench_execution import AGENT_PREDICATES, CASES, PLAN_LENGTH, SINGLE_AGENT_DOMAIN, build
-
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from evaluation.tracks import AGENT_PREDICATES, CASES, PLAN_LENGTH, TRACKS, build
 from tools import record
 
 GOAL_S = 1.5  # the command's wall time when it reads and grounds the PDDL (no cache)
@@ -47,7 +44,7 @@ ENGINES_FIRST = "import unified_planning.engines; " + SCORE
 def write_instance(folder: Path) -> list[str]:
     """Domain, problem and four plan files in ``folder``; the command's arguments."""
     instance = build(CASES[0], PLAN_LENGTH)
-    (folder / "domain.pddl").write_text(SINGLE_AGENT_DOMAIN)
+    (folder / "domain.pddl").write_text(TRACKS)
     (folder / "problem.pddl").write_text(instance.single_agent_problem)
     plans = []
     for agent, plan in enumerate(instance.plans):

@@ -8,6 +8,7 @@ import itertools
 from collections.abc import Sequence
 from pathlib import Path
 
+from evaluation.tracks import TRACKS
 from tests.conftest import BLOCKS_DOMAIN, blocks_problem
 from twostep.pddl import Problem, parse_problem
 from twostep.plans.simulate import GroundAction, Grounder
@@ -60,17 +61,6 @@ TOY_AGENT = ("h",)
 
 
 TOY_PROBLEM = "(define (problem toy-1) (:domain toy) (:objects o1 o2) (:init) (:goal (and)))"
-
-
-TRACKS = """
-(define (domain tracks)
- (:requirements :strips :typing)
- (:types cart cell)
- (:predicates (at ?c - cart ?p - cell) (next ?p - cell ?q - cell) (free ?p - cell) (ready))
- (:action move :parameters (?c - cart ?p - cell ?q - cell)
-  :precondition (and (ready) (at ?c ?p) (next ?p ?q) (free ?q))
-  :effect (and (not (at ?c ?p)) (not (free ?q)) (at ?c ?q) (free ?p))))
-"""
 
 
 def tracks_problem(
