@@ -60,13 +60,14 @@ import tempfile
 import threading
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
+from evaluation.pages.faults import COLUMNS, Row, records  # noqa: E402
 from tests import bad_files  # noqa: E402
 from tests.llm_standin import Fault, Reply, standin_server  # noqa: E402
 from tools import record as bench_record  # noqa: E402
@@ -83,33 +84,6 @@ P01_PLAN = "".join(
                  "stack b2 b3", "pickup b1", "stack b1 b2")
 )  # fmt: skip
 OFFLINE = ["method=twostep", "decomposer=goal-split", "agents=2", "planner.time_limit_s=20"]
-
-
-@dataclass
-class Row:
-    """One scenario's line of the table (None: not measured there)."""
-
-    scenario: str
-    jobs: int
-    completed: int
-    recomputed: int | None = None
-    runs: int | None = None
-    duplicates: int | None = None
-    missing: int | None = None
-    stored_failures: int | None = None
-    tracebacks: int = 0
-    notes: list[str] = field(default_factory=list)
-
-
-# ----------------------------------------------------------------- reading the records
-
-
-def records(out: Path) -> list[dict[str, Any]]:
-    found = []
-    for path in sorted(out.glob("multiruns/*/*/.twostep/jobs/*.json")):
-        with contextlib.suppress(OSError, ValueError):  # a record being written
-            found.append(json.loads(path.read_text()))
-    return found
 
 
 def computed(out: Path) -> int:
@@ -167,9 +141,6 @@ def run(command: list[str], **kwargs: Any) -> subprocess.CompletedProcess[str]:
 
 def sweep(out: Path, *extra: str) -> list[str]:
     return [str(TWOSTEP), "-m", f"data.root={DATA}", f"output.root={out}", *OFFLINE, *extra]
-
-
-# ----------------------------------------------------------------- llm-faults
 
 
 class FaultyLLM:
@@ -256,9 +227,6 @@ def llm_faults(root: Path, args: argparse.Namespace) -> Row:
     return row
 
 
-# ----------------------------------------------------------------- a lost MLflow store
-
-
 def lost_store(root: Path, scenario: str, lose: Callable[[Path], None]) -> Row:
     out = root / "out"
     command = sweep(out, "domain=blocksworld,grippers", "task=1,2,3")
@@ -280,9 +248,6 @@ def deleted_store(root: Path, args: argparse.Namespace) -> Row:
 
 def truncated_store(root: Path, args: argparse.Namespace) -> Row:
     return lost_store(root, "truncated-store", lambda store: store.write_bytes(b""))
-
-
-# ----------------------------------------------------------------- concurrent sweeps
 
 
 def two_sweeps_at_once(out: Path, scenario: str, *extra: str) -> Row:
@@ -318,9 +283,6 @@ def concurrent_services(root: Path, args: argparse.Namespace) -> Row:
         run([str(services), "down", "--root", str(out)])
     row.tracebacks += (up.stdout + up.stderr).count("Traceback")
     return row
-
-
-# ----------------------------------------------------------------- bad files
 
 
 @dataclass(frozen=True)
@@ -451,8 +413,6 @@ def bad_files_row(root: Path, args: argparse.Namespace) -> Row:
             notes.append(f"bad-files: {case.name}: exit {done.returncode}: {shown}")
     return Row("bad-files", len(cases), answered, tracebacks=tracebacks, notes=notes)
 
-
-# ----------------------------------------------------------------- hostile inputs
 
 BOOM_DOMAIN = """(define (domain boom) (:requirements :strips)
   (:predicates (p ?a) (q ?a ?b ?c ?d ?e) (done))
@@ -727,8 +687,6 @@ def _running(pid: int) -> bool:
         return False
 
 
-# ----------------------------------------------------------------- the table
-
 SCENARIOS: dict[str, Callable[[Path, argparse.Namespace], Row]] = {
     "llm-faults": llm_faults,
     "deleted-store": deleted_store,
@@ -739,8 +697,6 @@ SCENARIOS: dict[str, Callable[[Path, argparse.Namespace], Row]] = {
     "hostile-inputs": hostile_row,
     "orphans": orphans_row,
 }
-COLUMNS = ("jobs", "completed", "recomputed", "MLflow runs", "duplicates", "missing",
-           "stored failures", "tracebacks")  # fmt: skip
 
 
 def table(rows: list[Row]) -> list[str]:
@@ -757,44 +713,6 @@ def table(rows: list[Row]) -> list[str]:
     lines = ["  ".join(text.ljust(w) if i == 0 else text.rjust(w) for i, (text, w) in
                        enumerate(zip(row, widths, strict=True))) for row in [header, *values]]  # fmt: skip
     return [lines[0], "-" * len(lines[0]), *lines[1:]]
-
-
-def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
-    """The results page of a ``--json`` record (tools.results)."""
-    data, *printed = records  # the later ones: runs of some scenarios, kept as printed
-    rows = [Row(**r) for r in data["rows"]]
-    settings = data.get("settings", {})
-    lines = [
-        "## Records after each mishap",
-        "",
-        "One row per scenario, each in an output root of its own; the columns come from the "
-        "sweeps' job records, the job store and the MLflow store (read with MLflow's own "
-        f"client). llm-faults: {settings.get('jobs')} jobs through a stand-in LLM server "
-        f"that fails at random ({settings.get('fault_rate')} per fault kind), killed with "
-        f"SIGKILL {settings.get('kills')} times, then run to the end (seed "
-        f"{settings.get('seed')}).",
-        "",
-        "| " + " | ".join(["scenario", *COLUMNS]) + " |",
-        "|" + "---|" * (len(COLUMNS) + 1),
-    ]
-    for row in rows:
-        cells = [row.jobs, row.completed, row.recomputed, row.runs, row.duplicates, row.missing,
-                 row.stored_failures, row.tracebacks]  # fmt: skip
-        lines.append(
-            f"| {row.scenario} | " + " | ".join("-" if c is None else str(c) for c in cells) + " |"
-        )
-    lines += [
-        "",
-        "Goals: recomputed, duplicates, missing, stored failures and tracebacks all 0. "
-        "Bad-files: cases answered with one line naming the file (or read as the file "
-        "without its byte-order mark).",
-        "",
-        "## What each scenario printed",
-        "",
-        *(f"- {' '.join(note.split())}" for row in rows for note in row.notes),  # one line each
-        "",
-    ]
-    return lines + bench_record.printed_page(printed, figure)
 
 
 def main() -> None:

@@ -43,7 +43,7 @@ imported from DIR, this environment), e.g. the main branch's for a before/after.
     .venv/bin/python bench/bench_startup.py --repeat 5 --scenarios refusals [--source DIR]
 
 ``--json FILE`` also writes the scenarios' rows as a bench record (:mod:`tools.record`);
-:func:`page` turns it into the results page (``make results``).
+:func:`evaluation.pages.startup.page` turns it into the results page (``make results``).
 """
 
 from __future__ import annotations
@@ -62,14 +62,12 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from evaluation.pages.startup import GOALS, JOB, REFUSAL_GOAL_S
 from flows.environment import DEFAULTS
 from tools import record
 
 REPO = Path(__file__).resolve().parent.parent
 BIN = Path(sys.executable).parent
-JOB = ["method=sa", "domain=grippers", "task=9"]
-GOALS = {"default": 3.0, "services": 5.0}
-
 DRIVER = """
 import json, resource, sys, time
 def cpu(who=resource.RUSAGE_SELF):
@@ -238,102 +236,6 @@ def runs_against_goal(
     return {"scenario": name, "overhead_s": overhead, "runs": runs}
 
 
-SCENARIO_TEXT = {
-    "default": "a re-run, its MLflow run already in the store (nothing to log)",
-    "logged": "a job new to the warm store (its MLflow run created and logged)",
-    "cold": "the first run on a fresh output.root (a new store)",
-    "services": "with `twostep-services up` and orchestration.prefect=true (a Prefect flow)",
-}
-
-
-def _medians(row: dict[str, Any]) -> tuple[float, float, float, float]:
-    """(wall, planner, wall - planner, CPU) medians of a scenario's command runs."""
-    if "runs" in row:
-        runs = row["runs"]
-        wall = statistics.median(r[0] for r in runs)
-        planner = statistics.median(r[1] for r in runs)
-        return wall, planner, row["overhead_s"], statistics.median(r[2] for r in runs)
-    return row["wall_s"], row["planner_s"], row["overhead_s"], row["cpu_s"]
-
-
-def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
-    """The results page of a ``--json`` record (tools.results)."""
-    from matplotlib.figure import Figure
-
-    (data,) = records
-    every, goals = data["rows"], data.get("goals", GOALS)
-    rows = [r for r in every if r["scenario"] != "refusals"]
-    refused = [r for r in every if r["scenario"] == "refusals"]
-    job = " ".join(data.get("job", JOB))
-    lines = [
-        "## Summary",
-        "",
-        f"`twostep {job}`, a warm install; medians of {data.get('repeat')} runs of the "
-        "command each (wall time from outside the process; planner: its wall time from "
-        "result.json; CPU: user + system of the command and the processes it waits for).",
-        "",
-    ]
-    table = []
-    for row in rows:
-        wall, planner, overhead, cpu = _medians(row)
-        goal = goals.get(row["scenario"], goals["default"])
-        table.append([row["scenario"], SCENARIO_TEXT.get(row["scenario"], ""), f"{wall:.2f}",
-                      f"{planner:.2f}", f"**{overhead:.2f}**", f"<= {goal:g}",
-                      "met" if overhead <= goal else "missed", f"{cpu:.1f}"])  # fmt: skip
-    lines += record.table(
-        ["scenario", "what it is", "wall s", "planner s", "wall - planner s", "goal s", "goal",
-         "CPU s"], table,
-    )  # fmt: skip
-    detailed = [r for r in rows if "breakdown" in r]
-    if detailed:
-        lines += ["", "## Where the time goes", "",
-                  "The same job in a driver process that times its phases (medians):", ""]  # fmt: skip
-        head = ["phase"]
-        for r in detailed:
-            head += [f"{r['scenario']} wall s"]
-        parts = list(detailed[0]["breakdown"])
-        lines += record.table(
-            head, [[p, *(f"{r['breakdown'].get(p, 0.0):.2f}" for r in detailed)] for p in parts]
-        )
-        lines += ["", "CPU seconds by phase (what a shared machine's load does not inflate):", ""]
-        cpu_parts = list(detailed[0]["cpu_breakdown"])
-        lines += record.table(
-            ["phase", *(f"{r['scenario']} CPU s" for r in detailed)],
-            [[p, *(f"{r['cpu_breakdown'].get(p, 0.0):.2f}" for r in detailed)] for p in cpu_parts],
-        )
-    for row in refused:
-        lines += ["", "## Refusals", "",
-                  f"Commands refused before any work (goal: exit 2 in under {REFUSAL_GOAL_S:g} "
-                  "s, one line, nothing written); medians.", ""]  # fmt: skip
-        lines += record.table(
-            ["command", "exit", "stderr lines", "written", "wall s", "CPU s"],
-            [[f"`twostep {' '.join(r['command'])}`", ", ".join(map(str, r["codes"])),
-              str(r["lines"]), "yes" if r["written"] else "no",
-              f"{statistics.median(r['walls']):.2f}", f"{statistics.median(r['cpus']):.2f}"]
-             for r in row["rows"]],
-        )  # fmt: skip
-    fig = Figure(figsize=(7.0, 2.8), layout="constrained")
-    axes = fig.subplots()
-    names = [r["scenario"] for r in rows]
-    overheads = [_medians(r)[2] for r in rows]
-    axes.barh(names, overheads, color="C0")
-    for i, name in enumerate(names):
-        goal = goals.get(name, goals["default"])
-        axes.plot([goal, goal], [i - 0.4, i + 0.4], color="black", linewidth=2)
-    axes.invert_yaxis()
-    axes.set_xlabel("wall - planner s (median); black: the goal")
-    axes.set_title("What a single run costs besides planning")
-    axes.grid(alpha=0.3, axis="x")
-    lines += [
-        "",
-        "## Figure",
-        "",
-        figure(fig, "overhead", "Wall minus planner time per scenario"),
-        "",
-    ]
-    return lines
-
-
 # Commands the tool must refuse before any work (issue 37), with what the refusal names.
 REFUSALS: tuple[tuple[str, ...], ...] = (
     ("task=99",),
@@ -343,7 +245,6 @@ REFUSALS: tuple[tuple[str, ...], ...] = (
     ("+agnets=3", "method=twostep", "decomposer=goal-split"),
     ("domain=nosuch",),
 )
-REFUSAL_GOAL_S = 1.0
 # The `twostep` console script's entry point, imported from the current directory (the
 # checkout the refusals scenario runs).
 RUN_COMMAND = "import sys; sys.argv[0] = 'twostep'; from flows.command import main; main()"

@@ -96,7 +96,7 @@ PAGES: tuple[Page, ...] = (
         "read and plan times of the 104 tasks with lama-first, every plan validated, and our "
         "wrapper against the Fast Downward driver called directly",
         ("planner.json",),
-        "bench.bench_planner:page",
+        "evaluation.pages.planner:page",
     ),
     Page(
         "startup",
@@ -104,7 +104,7 @@ PAGES: tuple[Page, ...] = (
         "what one `twostep` run costs besides planning: default, logged, cold and with the "
         "services up; where the time goes",
         ("startup.json",),
-        "bench.bench_startup:page",
+        "evaluation.pages.startup:page",
     ),
     Page(
         "sweep",
@@ -112,7 +112,7 @@ PAGES: tuple[Page, ...] = (
         "what a `twostep -m` sweep costs per job beyond planning, with Prefect and MLflow on "
         "and off, from 20 to 400 jobs; the Prefect server's start; 1 and 2 workers, Dask",
         ("sweep.json",),
-        "bench.bench_sweep:page",
+        "evaluation.pages.sweep:page",
     ),
     Page(
         "paper-grid",
@@ -120,7 +120,7 @@ PAGES: tuple[Page, ...] = (
         "`twostep -m experiment=paper` one domain at a time (720 jobs each, offline): wall "
         "time, Fast Downward's time and the share beyond it, and the same work on more cores",
         ("sweep_grid.json",),
-        "bench.bench_sweep:page_grid",
+        "evaluation.pages.sweep:page_grid",
     ),
     Page(
         "execution",
@@ -128,7 +128,7 @@ PAGES: tuple[Page, ...] = (
         "the exact scorer against a straightforward search on unified-planning's simulator, "
         "and its scaling to 16 agents",
         ("execution.json", "execution_scaling.json"),
-        "bench.bench_execution:page",
+        "evaluation.pages.execution:page",
     ),
     Page(
         "score-cli",
@@ -136,7 +136,7 @@ PAGES: tuple[Page, ...] = (
         "the `twostep-score` command's wall and CPU time on four 60-step plans: reading the "
         "PDDL, from its parsed-task cache, and with unified-planning's engines imported",
         ("score_cli.json",),
-        "bench.bench_score_cli:page",
+        "evaluation.pages.score_cli:page",
     ),
     Page(
         "llm-client",
@@ -144,7 +144,7 @@ PAGES: tuple[Page, ...] = (
         "what the LLM client costs per call when the answer is cached, replayed or scripted, "
         "beside a mocked litellm call",
         ("llm_client.json",),
-        "bench.bench_llm_client:page",
+        "evaluation.pages.llm_client:page",
     ),
     Page(
         "conformance",
@@ -160,7 +160,7 @@ PAGES: tuple[Page, ...] = (
         "execution speed on the kitchen tasks, the independent trace check over many seeds, "
         "the pictures' render time, a real AlfWorld problem",
         ("embodied.json",),
-        "bench.bench_embodied:page",
+        "evaluation.pages.embodied:page",
     ),
     Page(
         "faults",
@@ -168,7 +168,7 @@ PAGES: tuple[Page, ...] = (
         "LLM faults with kills, a deleted or truncated MLflow store, concurrent sweeps, bad "
         "files: recomputed jobs, duplicate or missing runs, tracebacks",
         ("faults.json", "faults_round4.json", "faults_hostile.json"),
-        "bench.bench_faults:page",
+        "evaluation.pages.faults:page",
     ),
     Page(
         "resume",
@@ -216,7 +216,7 @@ PAGES: tuple[Page, ...] = (
             "deal_budget.json",
             "dealing_ways.json",
         ),
-        "bench.bench_deal_generated:page",
+        "evaluation.pages.deal_beyond:page",
     ),
     Page(
         "replay",
@@ -224,7 +224,7 @@ PAGES: tuple[Page, ...] = (
         "the replay sweep's schedules re-validated and its job times, the rules translator "
         "against the official logs' helper costs, and the replay's Table I and Fig. 3",
         ("replay.json",),
-        "bench.bench_replay:page",
+        "evaluation.pages.replay:page",
     ),
 )
 
