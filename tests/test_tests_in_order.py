@@ -1,7 +1,7 @@
 """The tests in order: no test module imports another test module (shared helpers live in
-tests/examples.py, tests/support/ or conftest.py), and no test imports a bench script
-(what a test needs lives in the library, checkers/ or tests/support/, and the bench
-imports it from there).
+tests/examples.py, tests/support/ or conftest.py), no test imports a bench script (what a
+test needs lives in the library, checkers/, evaluation/, tools/ or tests/support/, and the
+bench imports it from there), and no bench script imports another one.
 
 Imports are read with :mod:`ast` (module level and inside functions); each rule is shown
 to catch a planted import."""
@@ -12,19 +12,8 @@ import ast
 from pathlib import Path
 
 TESTS = Path(__file__).resolve().parent
-
-# Test files that still import bench modules as libraries (what they test is the bench's
-# own code: its tables, its records, the results pages); the list only shrinks.
-STILL_IMPORT_BENCH = {
-    "test_bench_heldout.py",
-    "test_bench_methods.py",
-    "test_bench_portfolio_members.py",
-    "test_bench_record.py",
-    "test_conformance.py",
-    "test_docs_site.py",
-    "test_paper_shaped.py",
-    "test_readme.py",
-}
+REPO = TESTS.parent
+BENCH = REPO / "bench"
 
 
 def imported_modules(source: str, package: str = "tests") -> set[str]:
@@ -50,6 +39,13 @@ def bench_module_names(names: set[str]) -> set[str]:
     return {n for n in names if n == "bench" or n.startswith("bench.")}
 
 
+def bench_script_names(names: set[str]) -> set[str]:
+    """The bench scripts among ``names``: ``bench``, ``bench.<x>``, or ``bench_<x>`` (a
+    script beside it, imported by name once ``bench/`` is on the path)."""
+    scripts = {p.stem for p in BENCH.glob("*.py")}
+    return bench_module_names(names) | {n for n in names if n.split(".")[0] in scripts}
+
+
 def _sources() -> dict[str, str]:
     return {p.relative_to(TESTS).as_posix(): p.read_text() for p in sorted(TESTS.rglob("*.py"))}
 
@@ -64,9 +60,37 @@ def test_no_test_module_imports_another() -> None:
 
 
 def test_no_test_imports_a_bench_script() -> None:
-    importing = {n for n, text in _sources().items() if bench_module_names(imported_modules(text))}
-    assert importing - STILL_IMPORT_BENCH == set()
-    assert STILL_IMPORT_BENCH - importing == set(), "a file left the list: take it out"
+    importing = {
+        name: sorted(bench_module_names(imported_modules(text)))
+        for name, text in _sources().items()
+        if bench_module_names(imported_modules(text))
+    }
+    assert not importing, importing
+
+
+def test_no_bench_script_imports_another() -> None:
+    found = {}
+    for path in sorted(BENCH.glob("*.py")):
+        names = bench_script_names(imported_modules(path.read_text(), package="bench"))
+        if names:
+            found[path.name] = sorted(names)
+    assert not found, found
+
+
+def test_the_repository_code_beside_the_benches_imports_none() -> None:
+    """evaluation/, tools/ and checkers/ serve the benches and the tests: none imports a
+    bench script (a results page's renderer included: :data:`tools.results.PAGES` names
+    its module)."""
+    from tools.results import PAGES
+
+    found = {}
+    for folder in ("evaluation", "tools", "checkers"):
+        for path in sorted((REPO / folder).rglob("*.py")):
+            names = bench_module_names(imported_modules(path.read_text(), package=folder))
+            if names:
+                found[path.relative_to(REPO).as_posix()] = sorted(names)
+    assert not found, found
+    assert not bench_module_names({page.render.partition(":")[0] for page in PAGES})
 
 
 def test_the_rules_catch_a_planted_import() -> None:
@@ -87,4 +111,17 @@ def test_the_rules_catch_a_planted_import() -> None:
     }  # fmt: skip
     assert bench_module_names(names) == {
         "bench.bench_methods", "bench.bench_methods.summarise", "bench", "bench.results"
+    }  # fmt: skip
+    in_bench = (
+        "from bench_execution import CASES\n"
+        "from bench import record\n"
+        "from .bench_sweep import targets\n"
+        "def f():\n"
+        "    import bench.bench_load\n"
+        "from evaluation.tracks import build\n"
+        "from tools import record\n"
+    )
+    assert bench_script_names(imported_modules(in_bench, package="bench")) == {
+        "bench_execution", "bench_execution.CASES", "bench", "bench.record",
+        "bench.bench_sweep", "bench.bench_sweep.targets", "bench.bench_load",
     }  # fmt: skip
