@@ -135,7 +135,8 @@ def without_domain_constants(domain: Path, problem: Path, out_dir: Path) -> Path
 
     domain_expr, problem_expr = read_sexp(domain.read_text()), read_sexp(problem.read_text())
     constants = {str(n).lower() for n in part(domain_expr, ":constants")[1:] if n != "-"}
-    objects, kept, pending = part(problem_expr, ":objects"), [":objects"], []
+    objects, kept = part(problem_expr, ":objects"), [":objects"]
+    pending: list[Any] = []
     items = objects[1:]
     index = 0
     while index < len(items):

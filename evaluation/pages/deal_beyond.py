@@ -26,7 +26,8 @@ def page(records: list[dict[str, Any]], figure: Any) -> list[str]:
                   if r.get("SA", "").isdigit() and r.get(column, "").count("/") == len(agents) - 1]  # fmt: skip
         if points:
             top = max(top, *(sa for sa, _ in points))
-            axes.scatter(*zip(*points, strict=True), s=12, alpha=0.6, label=f"N = {n}")
+            xs, ys = zip(*points, strict=True)
+            axes.scatter(xs, ys, s=12, alpha=0.6, label=f"N = {n}")
     axes.plot([0, top], [0, top], color="grey", linewidth=0.8, label="as long as SA")
     axes.set_xlabel("SA plan length")
     axes.set_ylabel("plan-deal exec length")
