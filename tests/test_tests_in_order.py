@@ -9,6 +9,7 @@ to catch a planted import."""
 from __future__ import annotations
 
 import ast
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 TESTS = Path(__file__).resolve().parent
@@ -46,34 +47,30 @@ def bench_script_names(names: set[str]) -> set[str]:
     return bench_module_names(names) | {n for n in names if n.split(".")[0] in scripts}
 
 
-def _sources() -> dict[str, str]:
-    return {p.relative_to(TESTS).as_posix(): p.read_text() for p in sorted(TESTS.rglob("*.py"))}
+def offenders(
+    paths: Iterable[Path], rule: Callable[[set[str]], set[str]], package: str
+) -> dict[str, list[str]]:
+    """Each file among ``paths`` whose imports ``rule`` picks, with what it picks."""
+    found = {}
+    for path in paths:
+        names = rule(imported_modules(path.read_text(), package))
+        if names:
+            found[path.relative_to(REPO).as_posix()] = sorted(names)
+    return found
 
 
 def test_no_test_module_imports_another() -> None:
-    found = {
-        name: sorted(module_names_of_tests(imported_modules(text)))
-        for name, text in _sources().items()
-        if module_names_of_tests(imported_modules(text))
-    }
+    found = offenders(sorted(TESTS.rglob("*.py")), module_names_of_tests, "tests")
     assert not found, found
 
 
 def test_no_test_imports_a_bench_script() -> None:
-    importing = {
-        name: sorted(bench_module_names(imported_modules(text)))
-        for name, text in _sources().items()
-        if bench_module_names(imported_modules(text))
-    }
-    assert not importing, importing
+    found = offenders(sorted(TESTS.rglob("*.py")), bench_module_names, "tests")
+    assert not found, found
 
 
 def test_no_bench_script_imports_another() -> None:
-    found = {}
-    for path in sorted(BENCH.glob("*.py")):
-        names = bench_script_names(imported_modules(path.read_text(), package="bench"))
-        if names:
-            found[path.name] = sorted(names)
+    found = offenders(sorted(BENCH.glob("*.py")), bench_script_names, "bench")
     assert not found, found
 
 
@@ -83,13 +80,9 @@ def test_the_repository_code_beside_the_benches_imports_none() -> None:
     its module)."""
     from tools.results import PAGES
 
-    found = {}
     for folder in ("evaluation", "tools", "checkers"):
-        for path in sorted((REPO / folder).rglob("*.py")):
-            names = bench_module_names(imported_modules(path.read_text(), package=folder))
-            if names:
-                found[path.relative_to(REPO).as_posix()] = sorted(names)
-    assert not found, found
+        found = offenders(sorted((REPO / folder).rglob("*.py")), bench_module_names, folder)
+        assert not found, found
     assert not bench_module_names({page.render.partition(":")[0] for page in PAGES})
 
 
