@@ -24,8 +24,9 @@ machine's load: the load average is printed before and after.
     .venv/bin/python bench/bench_load.py --corpus ../shared/ipc-sample --repeats 3
     .venv/bin/python bench/bench_load.py --alfworld-only --repeats 5
 
-``--out`` writes the rows as a bench record (:mod:`tools.record`); :func:`section` is the
-part of the conformance results page made from it (``make results``).
+``--out`` writes the rows as a bench record (:mod:`tools.record`);
+:func:`evaluation.load_time.section` is the part of the conformance results page made from
+it (``make results``).
 """
 
 from __future__ import annotations
