@@ -316,7 +316,9 @@ def test_each_results_page_names_its_rows_and_has_a_figure(page: results.Page) -
         assert "![" in text
 
 
-PATH_IN_CODE = re.compile(r"`((?:twostep|flows|bench|evaluation|tests|tools|conf|data|docs)/[\w./-]*\w)`")
+PATH_IN_CODE = re.compile(
+    r"`((?:twostep|flows|bench|evaluation|tests|tools|conf|data|docs)/[\w./-]*\w)`"
+)
 
 
 def test_every_repository_path_the_readme_and_pages_name_exists() -> None:
