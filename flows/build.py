@@ -6,7 +6,9 @@ Each library setting has one name in the config (``flows/config.py``, whose defa
 are the library dataclasses' defaults) and is mapped here once; ``planner.time_limit_s``
 is the planner's ``search_time_limit_s``; :func:`llm_settings` maps the ``llm`` group to
 the LLM client's settings; :func:`search_budget` maps ``score_max_nodes`` and
-``score_time_limit_s`` to the scorer's budget. The method is the registry's
+``score_time_limit_s`` to the scorer's budget; a resource limit the library reports
+(:class:`~twostep.programs.processes.LimitReached`, naming the library's parameter) is
+worded with the config key that raises it (:func:`limit_message`, :data:`LIMIT_KEYS`). The method is the registry's
 (:func:`twostep.methods.method_for`), named by ``method`` with the keys of its config
 file as its options; ``decomposer`` is TwoStep's subgoal source (the old spelling,
 ``method=twostep decomposer=plan-deal``, is respelled first: :mod:`flows.spelling`).
@@ -41,8 +43,11 @@ from twostep.methods import (
     run_single_agent,
 )
 from twostep.methods.registry import SUBGOAL_SOURCES, reads_subgoals
+from twostep.methods.steps import SA_CALL, PlanCall
+from twostep.pddl import Problem
 from twostep.pddl.translator import GroundingLimits
-from twostep.planner import PlannerSettings
+from twostep.planner import PlannerSettings, PlanResult
+from twostep.programs.processes import Limit, LimitReached
 from twostep.tasks.benchmark import BenchmarkTask, load_task, task_path
 from twostep.util.files import exists, file_problem, yaml_problem
 from twostep.util.outcome import EmbodiedStatus
@@ -67,6 +72,36 @@ def grounding_limits(cfg: TwostepConfig) -> GroundingLimits:
         memory_mb=cfg.planner.memory_limit_mb,
         time_s=float(cfg.planner.time_limit_s if seconds is None else seconds),
     )
+
+
+LIMIT_KEYS = {
+    Limit.MEMORY: "planner.memory_limit_mb",
+    Limit.GROUNDING_TIME: "planner.grounding_time_limit_s",
+}
+"""The config key that raises each resource limit (:func:`planner_settings`,
+:func:`grounding_limits`)."""
+
+
+def limit_message(reached: LimitReached) -> str:
+    """What a job says of a limit it reached: the library's words, naming the config key."""
+    return reached.message(LIMIT_KEYS[reached.limit])
+
+
+def keyed_plan_result(result: PlanResult) -> PlanResult:
+    """A planner call's result as a job records it: a limit's message names its key."""
+    if result.limit is None:
+        return result
+    return replace(result, message=limit_message(result.limit))
+
+
+def keyed_steps(steps: Steps) -> Steps:
+    """``steps`` whose planner calls return :func:`keyed_plan_result`."""
+    plan = steps.plan
+
+    def keyed(problem: Problem, settings: PlannerSettings, call: PlanCall = SA_CALL) -> PlanResult:
+        return keyed_plan_result(plan(problem, settings, call))
+
+    return replace(steps, plan=keyed)
 
 
 def search_budget(cfg: TwostepConfig) -> SearchBudget:
@@ -264,7 +299,7 @@ class Job:
         """The method's result through ``steps``; with ``compare_sa`` the SA plan is
         solved first (its length is reported beside the result, and TwoStep reuses the
         plan), then the embodied executor runs the plans when configured."""
-        request = replace(self.request, steps=steps)
+        request = replace(self.request, steps=keyed_steps(steps))
         if self.method_name == MethodName.SA:
             return self.execute(self.method(request))
         sa = run_single_agent(request) if self.compare_sa else None

@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from flows.artifacts import write_job_files
-from flows.build import Job, build_job, check_job
+from flows.build import Job, build_job, check_job, limit_message
 from flows.checks import JobError
 from flows.config import TwostepConfig, agents_run, typed
 from flows.console import one_line
@@ -339,8 +339,9 @@ def _run_or_reuse(
             result, compute_timings = compute_job(cfg, config, name, sweep, stats)
         except INPUT_ERRORS as exc:
             error, input_error = one_line(exc, name_type=False), True
-        except ResourceLimitError as exc:  # names the limit and its key; never stored
-            error, status = one_line(exc, name_type=False), RunStatus.RESOURCE_LIMIT.value
+        except ResourceLimitError as exc:  # worded with the limit's key; never stored
+            worded = RuntimeError(limit_message(exc.reached))
+            error, status = one_line(worded, name_type=False), RunStatus.RESOURCE_LIMIT.value
         except Exception as exc:
             error, details = one_line(exc), traceback.format_exc()
         store_start = time.perf_counter()

@@ -77,6 +77,7 @@ from prefect.settings import (
 from prefect.states import Completed, Failed, Pending
 from prefect.utilities.annotations import quote
 
+from flows.build import keyed_plan_result
 from flows.console import format_summary
 from flows.identity import is_relevant, job_name
 from flows.redaction import redact_config
@@ -121,7 +122,7 @@ class PlannerCrashed(Exception):
         self.result = result
 
     def __str__(self) -> str:
-        return f"planner error: {self.result.message}"
+        return f"planner error: {keyed_plan_result(self.result).message}"
 
 
 # ----------------------------------------------------------------- planner
@@ -367,7 +368,7 @@ def prefect_steps(stats: StepStats, submit: bool = False) -> Steps:
         state = _run(plan_task, submit, domain_pddl, problem_pddl, settings, call.name)
         outcome = state.result(raise_on_failure=False)
         if isinstance(outcome, PlannerCrashed):
-            result = outcome.result
+            result = keyed_plan_result(outcome.result)
         elif isinstance(outcome, BaseException):
             raise outcome
         else:

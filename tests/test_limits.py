@@ -25,12 +25,13 @@ from pathlib import Path
 
 import pytest
 
+from flows.build import keyed_plan_result
 from flows.identity import job_key
 from tests.conftest import DATA
 from twostep.pddl import load_problem
 from twostep.pddl.translator import GroundingLimits
 from twostep.planner import PlannerSettings, plan_pddl
-from twostep.programs.processes import ResourceLimitError
+from twostep.programs.processes import Limit, ResourceLimitError
 
 BIN = Path(sys.executable).parent
 BOOM_DOMAIN = """(define (domain boom) (:requirements :strips)
@@ -105,8 +106,17 @@ def test_the_explosive_grounding_stops_at_the_memory_limit(boom: Path, tmp_path:
     limit_mb = 300
     outcome = measured(boom_command(boom, out, f"planner.memory_limit_mb={limit_mb}"))
     line = limit_failure(outcome, "planner.memory_limit_mb", out)
-    assert "grounding ran out of memory" in line and f"{limit_mb} MB" in line
-    assert "p01.pddl" in line
+    # What the job prints and stores names the config key, word for word as before the
+    # library's limits named their own parameters (the message written out by hand).
+    files = f"{boom / 'x' / 'p01.pddl'} (domain {boom / 'x' / 'domain.pddl'})"
+    said = (
+        f"{files}: grounding ran out of memory: Fast Downward's translator needs more than "
+        "the 300 MB of planner.memory_limit_mb (raise it, e.g. planner.memory_limit_mb=600)"
+    )
+    assert line == f"error: {said}"
+    (result,) = out.glob("runs/*/*/result.json")
+    stored = json.loads(result.read_text())
+    assert (stored["message"], stored["error"]) == (said, said)
     assert int(str(outcome["max_rss_kb"])) <= limit_mb * 1024  # no process went over
 
 
@@ -120,15 +130,29 @@ def test_the_explosive_grounding_stops_at_the_time_limit(boom: Path, tmp_path: P
 
 
 def test_grounding_limits_in_the_library(tmp_path: Path) -> None:
+    """The library's error says which limit, its value and the library's own parameter.
+
+    100 MB is reached in about a second of CPU; the CPU limit (600 s) cannot come first,
+    however loaded the machine."""
     (tmp_path / "domain.pddl").write_text(BOOM_DOMAIN)
     (tmp_path / "p01.pddl").write_text(boom_problem(40))
-    with pytest.raises(ResourceLimitError, match=r"planner\.memory_limit_mb") as caught:
-        load_problem(tmp_path / "domain.pddl", tmp_path / "p01.pddl", limits=GroundingLimits(200))
-    assert caught.value.key == "planner.memory_limit_mb"
-    (tmp_path / "p02.pddl").write_text(boom_problem(3))  # 243 ground actions: well within
-    problem = load_problem(
-        tmp_path / "domain.pddl", tmp_path / "p02.pddl", limits=GroundingLimits(200)
+    limits = GroundingLimits(100, time_s=600)
+    with pytest.raises(ResourceLimitError) as caught:
+        load_problem(tmp_path / "domain.pddl", tmp_path / "p01.pddl", limits=limits)
+    files = f"{tmp_path / 'p01.pddl'} (domain {tmp_path / 'domain.pddl'})"
+    assert str(caught.value) == (
+        f"{files}: grounding ran out of memory: Fast Downward's translator needs more than "
+        "the 100 MB of GroundingLimits.memory_mb (raise it, e.g. GroundingLimits.memory_mb=200)"
     )
+    reached = caught.value.reached
+    assert (reached.limit, reached.value, reached.parameter) == (
+        Limit.MEMORY, 100, "GroundingLimits.memory_mb"
+    )  # fmt: skip
+    assert reached.message("memory") == str(caught.value).replace(
+        "GroundingLimits.memory_mb", "memory"
+    )
+    (tmp_path / "p02.pddl").write_text(boom_problem(3))  # 243 ground actions: well within
+    problem = load_problem(tmp_path / "domain.pddl", tmp_path / "p02.pddl", limits=limits)
     assert len(problem.grounded.actions) == 3**5
 
 
@@ -280,13 +304,42 @@ def test_the_planner_runs_under_the_memory_limit() -> None:
 
 
 def test_a_search_out_of_memory_names_the_limit() -> None:
-    """Fast Downward's search ends itself at the limit (exit 22): an error, not a proof."""
+    """Fast Downward's search ends itself at the limit (exit 22): an error, not a proof.
+    The library names its own parameter; a job (``flows/``) names the config key, as it
+    always has."""
     folder = DATA / "large" / "blocksworld"
     settings = PlannerSettings("astar-blind", 120, None, 100)  # blind search fills memory
     result = plan_pddl(
         (folder / "domain.pddl").read_text(), (folder / "p01.pddl").read_text(), settings
     )
     assert (result.status.value, result.exit_code) == ("error", 22)
-    assert (
-        result.message == "search out of memory (the 100 MB of planner.memory_limit_mb: raise it)"
+    assert result.message == (
+        "search out of memory (the 100 MB of PlannerSettings.memory_limit_mb: raise it)"
     )
+    assert result.limit is not None and (result.limit.limit, result.limit.value) == (
+        Limit.MEMORY, 100
+    )  # fmt: skip
+    assert (
+        keyed_plan_result(result).message
+        == "search out of memory (the 100 MB of planner.memory_limit_mb: raise it)"
+    )
+    assert result.to_dict() == {**keyed_plan_result(result).to_dict(), "message": result.message}
+
+
+def test_a_job_whose_search_runs_out_of_memory_names_the_config_key(tmp_path: Path) -> None:
+    """What a job stores of a planner call that reached the memory limit names the config
+    key, word for word as before the library named its own parameter."""
+    out = tmp_path / "out"
+    done = subprocess.run(
+        [str(BIN / "twostep"), f"data.root={DATA / 'large'}", "domain=blocksworld", "task=1",
+         "method=sa", "planner.alias=astar-blind", "planner.memory_limit_mb=100",
+         "compare_sa=false", f"output.root={out}", "mlflow.enabled=false",
+         "orchestration.prefect=false"],
+        capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    said = "search out of memory (the 100 MB of planner.memory_limit_mb: raise it)"
+    (result,) = out.glob("runs/*/*/result.json")
+    stored = json.loads(result.read_text())
+    assert (stored["status"], stored["message"]) == ("error", said), done.stderr[-2000:]
+    assert [c["message"] for c in stored["planner_calls"]] == [said]
+    assert f"(error: {said})" in done.stdout + done.stderr

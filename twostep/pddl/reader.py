@@ -122,7 +122,7 @@ def ground_problem(problem: Problem) -> GroundTask:
     except ResourceLimitError as error:
         if problem.source is None:
             raise
-        raise ResourceLimitError(f"{files}: {error}", error.key) from None
+        raise ResourceLimitError(error.reached.where(f"{files}: ")) from None
     if translation.goal_unreachable:
         open_goal = problem.with_state(goal=Goal()) if problem.goal else problem
         translation = translate(domain_text, problem_to_pddl(open_goal))

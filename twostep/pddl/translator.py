@@ -23,11 +23,12 @@ empty, unsolvable task; the grounding is then redone with an empty goal, so that
 actions are still there (a hand-off problem or a subgoal may well be solvable).
 
 Grounding is bounded (:class:`GroundingLimits`): the translator runs under the guard of
-:mod:`twostep.programs.processes` with a memory limit (``planner.memory_limit_mb``, default 4 GiB)
-and a CPU-time limit (``planner.grounding_time_limit_s``, default the planner's time
-limit), and never outlives the job; a limit it hits is a
-:class:`~twostep.programs.processes.ResourceLimitError` naming the limit and its key. The limits
-are set per job (:func:`grounding_limits`) and read by every grounding in the process.
+:mod:`twostep.programs.processes` with a memory limit (``GroundingLimits.memory_mb``, default
+4 GiB) and a CPU-time limit (``GroundingLimits.time_s``, default the planner's time limit),
+and never outlives the job; a limit it hits is a
+:class:`~twostep.programs.processes.ResourceLimitError` saying which limit, its value and
+the parameter that raises it. The limits are set per job (:func:`grounding_limits`) and
+read by every grounding in the process.
 """
 
 from __future__ import annotations
@@ -45,8 +46,9 @@ from pathlib import Path
 from twostep.pddl.errors import PDDLError
 from twostep.programs.downward import translator_path
 from twostep.programs.processes import (
-    GROUNDING_TIME_KEY,
-    MEMORY_KEY,
+    PARAMETER,
+    Limit,
+    LimitReached,
     ResourceLimitError,
     memory_limit_mb,
     run_guarded,
@@ -168,12 +170,23 @@ def _check_model_size(sas_bytes: int, limits: GroundingLimits) -> None:
     needed = sas_bytes * MODEL_BYTES_PER_SAS_BYTE / 2**20
     if needed > memory:
         raise ResourceLimitError(
-            f"the grounded task is too large: its {sas_bytes / 2**20:.0f} MB of Fast "
-            f"Downward's output would take about {needed:.0f} MB in twostep's model, more "
-            f"than the {memory} MB of {MEMORY_KEY} (raise it, e.g. "
-            f"{MEMORY_KEY}={2 * round(needed)})",
-            MEMORY_KEY,
+            _memory_reached(
+                memory,
+                needed,
+                f"the grounded task is too large: its {sas_bytes / 2**20:.0f} MB of Fast "
+                f"Downward's output would take about {needed:.0f} MB in twostep's model, more "
+                f"than the {memory} MB of {PARAMETER} (raise it, e.g. "
+                f"{PARAMETER}={2 * round(needed)})",
+            )
         )
+
+
+MEMORY_PARAMETER, TIME_PARAMETER = "GroundingLimits.memory_mb", "GroundingLimits.time_s"
+"""The parameters a grounding's limit messages name (:class:`GroundingLimits`)."""
+
+
+def _memory_reached(memory: int, needed: float | None, words: str) -> LimitReached:
+    return LimitReached(Limit.MEMORY, memory, needed, words, MEMORY_PARAMETER)
 
 
 def _limit_hit(
@@ -187,24 +200,29 @@ def _limit_hit(
         code not in (0, None) and any(words in output for words in no_memory)
     ):
         return ResourceLimitError(
-            f"grounding ran out of memory: Fast Downward's translator needs more than the "
-            f"{memory} MB of {MEMORY_KEY} (raise it, e.g. {MEMORY_KEY}={2 * memory})",
-            MEMORY_KEY,
+            _memory_reached(
+                memory,
+                None,
+                f"grounding ran out of memory: Fast Downward's translator needs more than the "
+                f"{memory} MB of {PARAMETER} (raise it, e.g. {PARAMETER}={2 * memory})",
+            )
         )
     seconds = f"{limits.time_s:g}"
     killed = code == -signal.SIGKILL and wall_s >= limits.time_s  # the hard CPU limit
     if code in (TRANSLATE_OUT_OF_TIME, -signal.SIGXCPU) or killed:
-        return ResourceLimitError(
+        words = (
             f"grounding ran out of time: Fast Downward's translator needs more than the "
-            f"{seconds} s of CPU time of {GROUNDING_TIME_KEY} (raise it, e.g. "
-            f"{GROUNDING_TIME_KEY}={2 * limits.time_s:g})",
-            GROUNDING_TIME_KEY,
+            f"{seconds} s of CPU time of {PARAMETER} (raise it, e.g. "
+            f"{PARAMETER}={2 * limits.time_s:g})"
         )
-    if code is None:
-        return ResourceLimitError(
+    elif code is None:
+        words = (
             f"grounding did not finish in {limits.wall_s:g} s of wall-clock time (the "
             f"machine gave the translator too little of its {seconds} s of CPU time; raise "
-            f"{GROUNDING_TIME_KEY}, or run fewer jobs at once)",
-            GROUNDING_TIME_KEY,
+            f"{PARAMETER}, or run fewer jobs at once)"
         )
-    return None
+    else:
+        return None
+    return ResourceLimitError(
+        LimitReached(Limit.GROUNDING_TIME, limits.time_s, None, words, TIME_PARAMETER)
+    )

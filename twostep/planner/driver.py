@@ -1,10 +1,11 @@
 """Running Fast Downward's driver (shipped in the ``up-fast-downward`` wheel) on a task.
 
 It writes the problem as PDDL into a private temporary folder, runs the driver with a CPU
-search time limit, a memory limit for its translator and search (``planner.memory_limit_mb``,
-default 4 GiB) and a wall-clock guard, under the guard process of :mod:`twostep.programs.processes`
+search time limit, a memory limit for its translator and search
+(``PlannerSettings.memory_limit_mb``, default 4 GiB) and a wall-clock guard, under the guard process of :mod:`twostep.programs.processes`
 (nothing of it outlives the job), reads the last complete plan file and turns the
-exit code into a :class:`~twostep.planner.results.Status`. The planner's own limit ends a
+exit code into a :class:`~twostep.planner.results.Status` (a search or translator out of
+memory: an error whose :attr:`~twostep.planner.results.PlanResult.limit` says so). The planner's own limit ends a
 search (its exit code says so); the guard is a safety net whose stops are flagged apart
 (:attr:`~twostep.planner.results.PlanResult.guard_stopped`).
 """
@@ -24,9 +25,17 @@ from twostep.planner.plan_files import PlanFile, complete_plans, plan_files
 from twostep.planner.results import PlanResult, Status
 from twostep.planner.settings import PlannerSettings
 from twostep.programs.downward import driver_path
-from twostep.programs.processes import MEMORY_KEY, memory_limit_mb, run_guarded
+from twostep.programs.processes import (
+    PARAMETER,
+    Limit,
+    LimitReached,
+    memory_limit_mb,
+    run_guarded,
+)
 
 _PLANNER_TIME = re.compile(r"Planner time: ([0-9.]+)s")
+MEMORY_PARAMETER = "PlannerSettings.memory_limit_mb"
+"""The parameter a planner call's memory-limit message names (:class:`PlannerSettings`)."""
 
 
 def status_for(code: int | None, plan: PlanFile | None) -> tuple[Status, str]:
@@ -91,8 +100,11 @@ def run_driver(
     incomplete = len(plan_files(workdir)) - len(plans)
     if incomplete and status is not Status.SOLVED:
         message = f"{message} ({incomplete} incomplete plan file(s) ignored)"
+    limit = None
     if status is Status.ERROR and code in returncodes.OUT_OF_MEMORY:
-        message = f"{message} (the {memory} MB of {MEMORY_KEY}: raise it)"
+        words = f"{message} (the {memory} MB of {PARAMETER}: raise it)"
+        limit = LimitReached(Limit.MEMORY, memory, None, words, MEMORY_PARAMETER)
+        message = limit.message()
     elif status is Status.ERROR:
         tail = [line for line in output.splitlines() if line.strip()][-3:]
         message = f"{message}: {' | '.join(tail)}" if tail else message
@@ -108,6 +120,7 @@ def run_driver(
         len(plans),
         best.cost if solved and best is not None else None,
         guard_stopped=code is None,
+        limit=limit,
     )
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from twostep.programs.processes import LimitReached
 from twostep.util.outcome import PlannerStatus
 
 Status = PlannerStatus  # the outcome vocabulary's planner statuses (twostep.util.outcome)
@@ -33,6 +34,8 @@ class PlanResult:
     # The wall-clock guard stopped the planner (a safety net, not the planner's own time
     # limit: on a machine that gives the search too little CPU the guard can come first).
     guard_stopped: bool = False
+    # The resource limit that ended the call (its message says so), or None.
+    limit: LimitReached | None = None
 
     def __post_init__(self) -> None:
         if self.cost is None and self.plan is not None:

@@ -11,15 +11,19 @@ program runs under a small guard process (``twostep/programs/_guard.py``) that
 - is stopped, with the program, by a wall-clock guard for a machine too loaded to give
   the program its CPU time.
 
-The limits, their defaults and the config keys that raise them:
+The limits (:class:`Limit`) and the parameters that set them:
 
-- ``planner.memory_limit_mb`` (default :data:`DEFAULT_MEMORY_LIMIT_MB`): each of Fast
-  Downward's processes (the translator that grounds the task, and the planner's own
-  translator and search);
-- ``planner.grounding_time_limit_s`` (default: ``planner.time_limit_s``): CPU seconds of
-  the translator that grounds the task.
+- memory (default :data:`DEFAULT_MEMORY_LIMIT_MB`): each of Fast Downward's processes,
+  the translator that grounds the task (``GroundingLimits.memory_mb``) and the planner's
+  own translator and search (``PlannerSettings.memory_limit_mb``);
+- grounding time (``GroundingLimits.time_s``): CPU seconds of the translator that grounds
+  the task.
 
-A limit that ends a run is a :class:`ResourceLimitError` naming the limit and its key.
+A limit that ends a run is a :class:`LimitReached`: which limit, its value, what was
+needed when known, and a message naming the parameter that raises it. The message names
+the library's own parameter; a caller with settings of its own names them instead
+(:meth:`LimitReached.message`). A grounding that reaches a limit raises it as a
+:class:`ResourceLimitError`; a planner call returns it on its result.
 """
 
 from __future__ import annotations
@@ -32,25 +36,58 @@ import sys
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from enum import Enum
 from pathlib import Path
 
 DEFAULT_MEMORY_LIMIT_MB = 4096
 """The memory limit of each Fast Downward process when none is set (4 GiB)."""
 MIN_MEMORY_LIMIT_MB = 64
 """The smallest memory limit that can be set: Python and the translator start in 32 MB."""
-MEMORY_KEY = "planner.memory_limit_mb"
-GROUNDING_TIME_KEY = "planner.grounding_time_limit_s"
+PARAMETER = "{parameter}"
+"""Where a :class:`LimitReached`'s words name the parameter that raises the limit."""
 _GUARD = Path(__file__).with_name("_guard.py")
 _STOP_WAIT_S = 10.0  # how long the guard may take to end its program and clean up
 
 
-class ResourceLimitError(Exception):
-    """A run that a resource limit ended: the message names the limit and the config key
-    that raises it (:attr:`key`); the job fails with status ``resource_limit``."""
+class Limit(Enum):
+    """Which resource limit a run reached."""
 
-    def __init__(self, message: str, key: str) -> None:
-        super().__init__(message)
-        self.key = key
+    MEMORY = "memory"  # MB of address space of a Fast Downward process
+    GROUNDING_TIME = "grounding_time"  # CPU seconds of the translator that grounds a task
+
+
+@dataclass(frozen=True)
+class LimitReached:
+    """A run that a resource limit ended: which :attr:`limit`, its :attr:`value` (MB or
+    CPU seconds), what was :attr:`needed` when known (MB), and the :attr:`words` that say
+    so, with :data:`PARAMETER` where the setting that raises it is named (by default
+    :attr:`parameter`, the library's own, e.g. ``GroundingLimits.memory_mb``)."""
+
+    limit: Limit
+    value: float
+    needed: float | None
+    words: str
+    parameter: str
+
+    def message(self, parameter: str | None = None) -> str:
+        """The words, naming ``parameter`` (None: the library's :attr:`parameter`)."""
+        return self.words.replace(PARAMETER, parameter or self.parameter)
+
+    def where(self, prefix: str) -> LimitReached:
+        """The same limit, its message after ``prefix`` (e.g. the task's files)."""
+        return LimitReached(
+            self.limit, self.value, self.needed, f"{prefix}{self.words}", self.parameter
+        )
+
+
+class ResourceLimitError(Exception):
+    """A grounding that a resource limit ended (:attr:`reached`: which limit, its value,
+    what was needed); its message names the library's parameter that raises the limit.
+    A job fails with status ``resource_limit``."""
+
+    def __init__(self, reached: LimitReached) -> None:
+        super().__init__(reached.message())
+        self.reached = reached
 
 
 @dataclass(frozen=True)
