@@ -104,10 +104,10 @@ PLANNER_GRID = ["domain=termes", "method=sa", "task=5,6,9,10,14", "planner.time_
 
 def paper_grid(domain: str) -> list[str]:
     """The paper's grid (``experiment=paper``: 20 tasks x N = 1..4 x SA, MA, TwoStep x 3
-    seeds) on one domain, offline: ``lama-first`` and plan-deal subgoals stand in for
-    anytime LAMA and GPT-4o. 720 jobs; SA's and the planner's repeats over N and the seeds
+    seeds) on one domain, offline: ``lama-first`` and plan-deal stand in for anytime LAMA
+    and TwoStep with GPT-4o. 720 jobs; SA's and the planner's repeats over N and the seeds
     are the planner cache's, as in the paper's grid."""
-    return ["experiment=paper", f"domain={domain}", "planner=lama-first", "decomposer=plan-deal"]
+    return ["experiment=paper", f"domain={domain}", "planner=lama-first", "method=sa,ma,plan-deal"]
 
 
 def grid(jobs: int) -> list[str]:

@@ -400,14 +400,14 @@ def test_the_grid_is_what_the_bundle_answers(two_runs: Path) -> None:
         "domain=blocksworld task=1 method=sa agents=2 seed=0",
         "domain=blocksworld task=1 agents=2 method=ma seed=0",
         "domain=blocksworld task=1 agents=2 method=twostep decomposer=llm seed=0",
-        "domain=blocksworld task=1 agents=2 method=twostep decomposer=plan-deal seed=0",
+        "domain=blocksworld task=1 agents=2 method=plan-deal seed=0",
         "domain=blocksworld task=1 agents=3 method=ma seed=0",
         "domain=blocksworld task=1 agents=3 method=twostep decomposer=llm seed=0",
-        "domain=blocksworld task=1 agents=3 method=twostep decomposer=plan-deal seed=0",
+        "domain=blocksworld task=1 agents=3 method=plan-deal seed=0",
         "domain=blocksworld task=2 method=sa agents=2 seed=0",
         "domain=blocksworld task=2 agents=2 method=ma seed=0",
         "domain=blocksworld task=2 agents=2 method=twostep decomposer=llm seed=0",
-        "domain=blocksworld task=2 agents=2 method=twostep decomposer=plan-deal seed=0",
+        "domain=blocksworld task=2 agents=2 method=plan-deal seed=0",
     ]
     assert len(replay_jobs(bundle, "gpt-4o", ["twostep"], agents=[3])) == 1
     assert replay_jobs(bundle, "o1-mini") == []

@@ -4,7 +4,8 @@ For every (domain, task, N) the bundle answers with the chosen model:
 
 * ``twostep``: TwoStep on the replayed answers (``decomposer=llm``), one job per run of
   the bundle for that domain and N (the seed picks the run: the paper's runs are seeds);
-* ``plan-deal``: twostep's own method on the same task and N (deterministic: seed 0);
+* ``plan-deal``: twostep's own method (``method=plan-deal``) on the same task and N
+  (deterministic: seed 0);
 * ``ma``: multi-agent planning at that N (seed 0);
 * ``sa``: single-agent planning, once per (domain, task) (N plays no part in it).
 
@@ -71,5 +72,5 @@ def replay_jobs(
                             {**cell, "method": "twostep", "decomposer": "llm", "seed": str(seed)}
                         )
             if "plan-deal" in methods and keep_seed(0):
-                jobs.append({**cell, "method": "twostep", "decomposer": "plan-deal", "seed": "0"})
+                jobs.append({**cell, "method": "plan-deal", "seed": "0"})
     return jobs
