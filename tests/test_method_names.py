@@ -90,6 +90,25 @@ def test_the_new_spelling_is_recorded_as_the_old_one(
         assert job_name(config) == f"blocksworld-p05-twostep-{name}-n{config['agents']}-s0"
 
 
+@pytest.mark.parametrize("portfolio", ["portfolio", "portfolio-lite"])
+def test_the_old_spelling_of_a_portfolio_with_a_cut_is_recorded_as_before(
+    conf: None, portfolio: str
+) -> None:
+    """The portfolios read no ``cut``; the old spelling that set one anyway
+    (``decomposer.cut=free``) keeps the record, hence the job key, it always had: the
+    composed config, cut included, not the new spelling's (whose plan-deal cut is
+    ``best``: the portfolios have no cut option)."""
+    old = ["method=twostep", f"decomposer={portfolio}", "decomposer.cut=free"]
+    reference = _raw(*old)
+    assert reference["decomposer"]["cut"] == "free"  # type: ignore[index]
+    config = job_config(compose("config", overrides=[*PLACES, *old]))
+    assert config == reference
+    assert job_key(config, job_inputs(config)) == job_key(reference, job_inputs(reference))
+    new = job_config(compose("config", overrides=[*PLACES, f"method={portfolio}"]))
+    assert new["decomposer"]["cut"] == "best"
+    assert job_key(new, job_inputs(new)) != job_key(config, job_inputs(config))
+
+
 def test_the_new_spelling_names_the_method_and_its_options(conf: None) -> None:
     cfg = compose("config", overrides=[*PLACES, "method=plan-deal", "method.cut=holding"])
     assert cfg.method.name == "plan-deal" and cfg.decomposer.name is None
@@ -203,19 +222,26 @@ def run_toy(request: MethodRequest, label: str = "plain", rounds: int = 1) -> Ru
 '''
 
 
-def test_a_method_is_one_module_one_registry_line_and_one_config_file(
-    data_root: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
+@pytest.fixture
+def toy(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """The toy method added the way a user adds one; returns the folder of its config
+    file, ``method/toy.yaml``, which a test writes (a ``--config-dir`` of the user's own)."""
     # 1. one module
     (tmp_path / "toy_method.py").write_text(TOY_MODULE)
     monkeypatch.syspath_prepend(str(tmp_path))
     # 2. one registry line
     monkeypatch.setitem(METHODS, "toy", MethodEntry("toy_method:run_toy"))
-    # 3. one config file, in a folder of the user's own (--config-dir)
+    # 3. one config file, in a folder of the user's own
     configs = tmp_path / "configs"
     (configs / "method").mkdir(parents=True)
-    (configs / "method" / "toy.yaml").write_text("name: toy\nlabel: plain\nrounds: 1\n")
+    return configs
 
+
+def test_a_method_is_one_module_one_registry_line_and_one_config_file(
+    toy: Path, data_root: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    configs = toy
+    (configs / "method" / "toy.yaml").write_text("name: toy\nlabel: plain\nrounds: 1\n")
     out = tmp_path / "out"
     arguments = ["--config-dir", str(configs), "method=toy", "method.label=shiny",
                  "domain=blocksworld", "task=1", "agents=2", f"data.root={data_root}",
@@ -249,14 +275,8 @@ def test_a_method_is_one_module_one_registry_line_and_one_config_file(
     assert job_name(config) == "blocksworld-p01-toy-n2-s0"
 
 
-def test_a_wrong_option_of_an_added_method_is_one_line(
-    data_root: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    (tmp_path / "toy_method.py").write_text(TOY_MODULE)
-    monkeypatch.syspath_prepend(str(tmp_path))
-    monkeypatch.setitem(METHODS, "toy", MethodEntry("toy_method:run_toy"))
-    configs = tmp_path / "configs"
-    (configs / "method").mkdir(parents=True)
+def test_a_wrong_option_of_an_added_method_is_one_line(toy: Path, data_root: Path) -> None:
+    configs = toy
     (configs / "method" / "toy.yaml").write_text("name: toy\nrounds: many\n")
     from flows.build import build_job
     from flows.checks import JobError
