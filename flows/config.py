@@ -366,8 +366,10 @@ def _chosen(overrides: Sequence[Any], group: str, default: str | None) -> list[s
 
 
 def _methods_chosen(overrides: Sequence[Any]) -> list[str]:
-    """The methods a command line runs (``method=twostep`` without a decomposer, the
-    default, is plan-deal: :func:`flows.spelling.new_spelling`)."""
+    """The methods a command line runs. With no method given: the schema's ``twostep``,
+    read as both methods the command can compose, plan-deal (``conf/config.yaml``'s
+    default; ``method=twostep`` without a decomposer, :func:`flows.spelling.new_spelling`)
+    and twostep (a decomposer given without a method: ``conf/decomposer/*.yaml``)."""
     from flows.spelling import new_spelling
 
     methods = _chosen(overrides, METHOD_GROUP, TwostepConfig().method.name)

@@ -4,7 +4,9 @@
 ``method=twostep decomposer=plan-deal``, still runs it for one release, with a one-line
 notice (:func:`respell`, :func:`notice`); ``method=twostep`` without a decomposer (whose
 default was plan-deal) runs plan-deal as it did, without one (its commands' output stays
-as it was; the docs and the changelog say it).
+as it was; the docs and the changelog say it). The config's default is now
+``method: plan-deal`` by name; a decomposer given without a method composes
+``method=twostep`` (``conf/decomposer/*.yaml``), as when twostep was the default.
 
 Such a job is *recorded* as the old spelling recorded it (:func:`recorded`): its job key,
 its name (``blocksworld-p06-twostep-plan-deal-n2-s0``), its stored ``config.json`` and its

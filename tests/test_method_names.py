@@ -26,6 +26,7 @@ from flows.config import register
 from flows.identity import job_name
 from flows.spelling import notice, respell, sweep_notice
 from flows.store import job_config, job_inputs, job_key
+from flows.tracking.contents import config_tags, job_params
 from twostep.methods.registry import METHODS, MethodEntry, UnknownMethod, method_for
 
 REPO = Path(__file__).resolve().parent.parent
@@ -88,6 +89,53 @@ def test_the_new_spelling_is_recorded_as_the_old_one(
         assert job_key(config, job_inputs(config)) == job_key(reference, job_inputs(reference))
         name = str(reference["decomposer"]["name"])  # type: ignore[index]
         assert job_name(config) == f"blocksworld-p05-twostep-{name}-n{config['agents']}-s0"
+
+
+def _record(*overrides: str) -> tuple[object, ...]:
+    """What a job of ``overrides`` is recorded as: its key, name, MLflow params and tags."""
+    config = job_config(compose("config", overrides=[*PLACES, *overrides]))
+    return (job_key(config, job_inputs(config)), job_name(config), job_params(config),
+            config_tags(config), config)  # fmt: skip
+
+
+def test_the_default_method_is_plan_deal_by_name_recorded_as_before(conf: None) -> None:
+    """With no method given the config composes ``method: plan-deal`` (what runs), and the
+    job is recorded exactly as ``method=plan-deal`` and as the old spellings were: the
+    old default ``method=twostep`` without a decomposer, and ``decomposer=plan-deal``."""
+    for extra in ([], ["agents=3"], ["domain=grippers", "task=2"]):
+        cfg = compose("config", overrides=[*PLACES, *extra])
+        assert (cfg.method.name, cfg.decomposer.name) == ("plan-deal", None)
+        default = _record(*extra)
+        assert default == _record("method=plan-deal", *extra)
+        assert default == _record("method=twostep", *extra)
+        assert default == _record("method=twostep", "decomposer=plan-deal", *extra)
+        agents = 3 if extra == ["agents=3"] else 2
+        assert default[1] == f"{cfg.domain.name}-p{cfg.task:02d}-twostep-plan-deal-n{agents}-s0"
+    # The run folder names the method, as method=plan-deal's always did (make demo).
+    with_hydra = compose("config", overrides=PLACES, return_hydra_config=True)
+    assert str(with_hydra.hydra.run.dir).endswith("_blocksworld_p5_plan-deal_n2")
+
+
+@pytest.mark.parametrize(
+    ("overrides", "method"),
+    [
+        (["decomposer=llm"], "twostep"),
+        (["decomposer=goal-split", "agents=3"], "twostep"),
+        (["experiment=paper"], "twostep"),  # its subgoal source is llm
+        (["method=sa", "decomposer=goal-split"], "sa"),
+        (["method=plan-deal", "decomposer=goal-split"], "plan-deal"),
+        (["decomposer=plan-deal", "decomposer.cut=free"], "twostep"),  # the old spelling
+    ],
+)
+def test_a_decomposer_given_without_a_method_runs_twostep(
+    conf: None, overrides: list[str], method: str
+) -> None:
+    """A subgoal source is TwoStep's: given without a method it composes method=twostep
+    (conf/decomposer/*.yaml), as when twostep was the default; a method given wins."""
+    cfg = compose("config", overrides=[*PLACES, *overrides])
+    assert cfg.method.name == method
+    if method == "twostep":
+        assert _record(*overrides) == _record("method=twostep", *overrides)
 
 
 @pytest.mark.parametrize("portfolio", ["portfolio", "portfolio-lite"])
