@@ -34,13 +34,13 @@ def make(*overrides: str, hydra: bool = False) -> DictConfig:
 def test_defaults() -> None:
     cfg = make()
     # issue 11: the offline method that wins the methods bench is the default; issue 40:
-    # method twostep without a decomposer (no decomposer names a method any more) runs it,
-    # recorded as before (method twostep, decomposer plan-deal: the same job key and name).
+    # composed by its name, plan-deal, recorded as before (method twostep, decomposer
+    # plan-deal: the same job key and name).
     from flows.store import job_config
 
     assert (cfg.domain.name, cfg.method.name, cfg.decomposer.name) == (
         "blocksworld",
-        "twostep",
+        "plan-deal",
         None,
     )
     config = job_config(cfg)

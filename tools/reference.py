@@ -235,6 +235,22 @@ def config_keys() -> list[ConfigKey]:
                 comment=comment,
             )
         )
+    # The default method's options (conf/method/<default>.yaml): keys of its file, not of
+    # the schema (a method's options are its own: flows.config.MethodConfig).
+    known = {key.name for key in keys}
+    for name, value in composed.items():
+        if name.startswith("method.") and name not in known:
+            comment = yaml_comments.get(name, "")
+            keys.append(
+                ConfigKey(
+                    name=name,
+                    type=_type_name(type(value)),
+                    allowed=ranges.get(name) or _allowed(type(value), comment),
+                    schema_default=_plain(value),
+                    default=_plain(value),
+                    comment="" if _LIST.fullmatch(comment) else comment,
+                )
+            )
     return keys
 
 
