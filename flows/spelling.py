@@ -6,7 +6,10 @@ notice (:func:`respell`, :func:`notice`); ``method=twostep`` without a decompose
 default was plan-deal) runs plan-deal as it did, without one (its commands' output stays
 as it was; the docs and the changelog say it). The config's default is now
 ``method: plan-deal`` by name; a decomposer given without a method composes
-``method=twostep`` (``conf/decomposer/*.yaml``), as when twostep was the default.
+``method=twostep`` (``conf/decomposer/*.yaml``), as when twostep was the default, and an
+option of the default method given the old way, ``decomposer.cut=free`` without a
+decomposer, is still read (:func:`_default_options`; silent, as ``method=twostep``
+without a decomposer was).
 
 Such a job is *recorded* as the old spelling recorded it (:func:`recorded`): its job key,
 its name (``blocksworld-p06-twostep-plan-deal-n2-s0``), its stored ``config.json`` and its
@@ -61,6 +64,28 @@ def notice(method: str | None, decomposer: str | None) -> str | None:
     )
 
 
+def _default_options(method: Any, decomposer: Any) -> dict[str, Any]:
+    """The options the old spelling sets under ``decomposer`` for the default method with
+    no decomposer (``decomposer.cut=free``, which ``method=twostep`` without a decomposer
+    read): those ``decomposer`` sets away from their defaults while ``method`` leaves them
+    at theirs (a ``method.cut=...`` given wins)."""
+    name = _name(method)
+    if _name(decomposer) is not None or name != OLD_DEFAULT:
+        return {}
+    if not isinstance(method, Mapping) or not isinstance(decomposer, Mapping):
+        return {}
+    from flows.config import DecomposerConfig
+
+    default = DecomposerConfig()
+    return {
+        option: decomposer[option]
+        for option in RECORDED_AS_TWOSTEP[name]
+        if option in decomposer
+        and decomposer[option] != getattr(default, option)
+        and method.get(option, getattr(default, option)) == getattr(default, option)
+    }
+
+
 def respell(cfg: Any) -> str | None:
     """Rewrite a job's composed config (Hydra's DictConfig) from the old spelling to the new,
     in place: ``method.name`` the method, its options copied from ``decomposer`` to
@@ -69,6 +94,13 @@ def respell(cfg: Any) -> str | None:
     method, decomposer = _name(cfg.method), _name(cfg.decomposer)
     name = new_spelling(method, decomposer)
     if name is None:
+        options = _default_options(cfg.method, cfg.decomposer)
+        if options:  # the default method's options given as decomposer.<option>: silent
+            from omegaconf import open_dict
+
+            with open_dict(cfg.method):
+                for option, value in options.items():
+                    cfg.method[option] = value
         return None
     text = notice(method, decomposer)
     from omegaconf import open_dict
@@ -85,6 +117,8 @@ def respelled(config: Mapping[str, Any]) -> dict[str, Any]:
     """:func:`respell` of a plain config: a new dict, ``config`` untouched."""
     method, decomposer = config.get("method"), config.get("decomposer")
     name = new_spelling(_name(method), _name(decomposer))
+    if name is None and isinstance(method, Mapping):
+        return {**config, "method": {**method, **_default_options(method, decomposer)}}
     if name is None or not isinstance(method, Mapping):
         return dict(config)
     fields = decomposer if isinstance(decomposer, Mapping) else {}

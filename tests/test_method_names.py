@@ -111,6 +111,16 @@ def test_the_default_method_is_plan_deal_by_name_recorded_as_before(conf: None) 
         assert default == _record("method=twostep", "decomposer=plan-deal", *extra)
         agents = 3 if extra == ["agents=3"] else 2
         assert default[1] == f"{cfg.domain.name}-p{cfg.task:02d}-twostep-plan-deal-n{agents}-s0"
+    # The default method's options given the old way (decomposer.<option>, which
+    # method=twostep without a decomposer read) still count, silently, as they did.
+    old_way = ["decomposer.cut=free", "decomposer.rebind=false"]
+    assert _record(*old_way) == _record(
+        "method=plan-deal", "method.cut=free", "method.rebind=false"
+    )
+    assert _record(*old_way) == _record("method=twostep", *old_way)
+    cfg = compose("config", overrides=[*PLACES, *old_way])
+    assert respell(cfg) is None and (cfg.method.cut, cfg.method.rebind) == ("free", False)
+    assert _record("method=portfolio", "decomposer.rebind=false") == _record("method=portfolio")
     # The run folder names the method, as method=plan-deal's always did (make demo).
     with_hydra = compose("config", overrides=PLACES, return_hydra_config=True)
     assert str(with_hydra.hydra.run.dir).endswith("_blocksworld_p5_plan-deal_n2")
