@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import os
+import pickle
 import signal
 import subprocess
 import sys
@@ -151,6 +152,8 @@ def test_grounding_limits_in_the_library(tmp_path: Path) -> None:
     assert reached.message("memory") == str(caught.value).replace(
         "GroundingLimits.memory_mb", "memory"
     )
+    again = pickle.loads(pickle.dumps(caught.value))  # whole across processes (Dask)
+    assert (str(again), again.reached) == (str(caught.value), reached)
     (tmp_path / "p02.pddl").write_text(boom_problem(3))  # 243 ground actions: well within
     problem = load_problem(tmp_path / "domain.pddl", tmp_path / "p02.pddl", limits=limits)
     assert len(problem.grounded.actions) == 3**5

@@ -89,6 +89,9 @@ class ResourceLimitError(Exception):
         super().__init__(reached.message())
         self.reached = reached
 
+    def __reduce__(self) -> tuple[type[ResourceLimitError], tuple[LimitReached]]:
+        return type(self), (self.reached,)  # pickled whole (a Dask worker's error)
+
 
 @dataclass(frozen=True)
 class Finished:
