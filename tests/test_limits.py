@@ -346,3 +346,18 @@ def test_a_job_whose_search_runs_out_of_memory_names_the_config_key(tmp_path: Pa
     assert (stored["status"], stored["message"]) == ("error", said), done.stderr[-2000:]
     assert [c["message"] for c in stored["planner_calls"]] == [said]
     assert f"(error: {said})" in done.stdout + done.stderr
+
+
+def test_a_prefect_planner_crash_names_the_config_key() -> None:
+    """The Prefect task's failure (a planner error is raised there, not cached) words the
+    limit with the config key too."""
+    from flows.prefect_flow import PlannerCrashed
+    from twostep.planner import PlanResult, Status
+    from twostep.programs.processes import LimitReached
+
+    words = "search out of memory (the 100 MB of {parameter}: raise it)"
+    limit = LimitReached(Limit.MEMORY, 100, None, words, "PlannerSettings.memory_limit_mb")
+    result = PlanResult(Status.ERROR, None, 1.0, 1.0, limit.message(), 22, limit=limit)
+    assert str(PlannerCrashed(result)) == (
+        "planner error: search out of memory (the 100 MB of planner.memory_limit_mb: raise it)"
+    )
