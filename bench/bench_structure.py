@@ -45,6 +45,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from tools.import_scan import bench_importers_among_tests, bench_scripts_importing_another
 from tools.status_scan import bare_status_comparisons
 
 
@@ -310,13 +311,24 @@ def layout(root: Path, package: str, modules: Mapping[str, Path]) -> None:
     for module, line, text in bare:
         print(f"  {module}:{line} {text!r}")
     places = method_places(root)
-    old = {m: [f for f in files if f.startswith(OLD_SPELLING)] for m, files in places.items()}
+    # The old spelling's shim (a tree with flows/spelling.py) is not where a method lives;
+    # before it existed, conf/decomposer/ was where the methods were configured.
+    shim = OLD_SPELLING if (root / OLD_SPELLING[0]).exists() else ()
+    old = {m: [f for f in files if shim and f.startswith(shim)] for m, files in places.items()}
     places = {m: [f for f in files if f not in old[m]] for m, files in places.items()}
     fewest = min(NEW_METHODS, key=lambda m: (len(places[m]), m))
-    print(f"places a new method touches (as {fewest}, the fewest of {', '.join(NEW_METHODS)}): "
-          f"{len(places[fewest])}")  # fmt: skip
+    most = max(NEW_METHODS, key=lambda m: (len(places[m]), m))
+    print(f"places a new method touches (the fewest of {', '.join(NEW_METHODS)}, as {fewest}): "
+          f"{len(places[fewest])}; the most (as {most}): {len(places[most])}")  # fmt: skip
     for method, files in places.items():
         print(f"  {method}: {len(files)}: {' '.join(files)}")
+    for title, found in (
+        ("test files importing a bench script", bench_importers_among_tests(root)),
+        ("bench scripts importing another", bench_scripts_importing_another(root)),
+    ):
+        print(f"{title}: {len(found)}")
+        for path, names in found.items():
+            print(f"  {path}: {' '.join(n for n in names if '.' not in n.removeprefix('bench.'))}")
     spelled = {m: files for m, files in old.items() if files}
     if spelled:
         print(f"old spelling (for one release): {sum(map(len, spelled.values()))} places")

@@ -8,70 +8,34 @@ to catch a planted import."""
 
 from __future__ import annotations
 
-import ast
-from collections.abc import Callable, Iterable
 from pathlib import Path
+
+from tools.import_scan import (
+    bench_importers_among_tests,
+    bench_module_names,
+    bench_script_names,
+    bench_scripts_importing_another,
+    imported_modules,
+    module_names_of_tests,
+    offenders,
+)
 
 TESTS = Path(__file__).resolve().parent
 REPO = TESTS.parent
 BENCH = REPO / "bench"
 
 
-def imported_modules(source: str, package: str = "tests") -> set[str]:
-    """Every module an import statement names (relative imports made absolute within
-    ``package``; ``from a import b`` names ``a`` and ``a.b``)."""
-    names = set()
-    for node in ast.walk(ast.parse(source)):
-        if isinstance(node, ast.Import):
-            names.update(alias.name for alias in node.names)
-        elif isinstance(node, ast.ImportFrom):
-            base = f"{package}.{node.module or ''}".rstrip(".") if node.level else node.module
-            if base:
-                names.add(base)
-                names.update(f"{base}.{alias.name}" for alias in node.names)
-    return names
-
-
-def module_names_of_tests(names: set[str]) -> set[str]:
-    return {n for n in names if any(p.startswith("test_") for p in n.split("."))}
-
-
-def bench_module_names(names: set[str]) -> set[str]:
-    return {n for n in names if n == "bench" or n.startswith("bench.")}
-
-
-def bench_script_names(names: set[str]) -> set[str]:
-    """The bench scripts among ``names``: ``bench``, ``bench.<x>``, or ``bench_<x>`` (a
-    script beside it, imported by name once ``bench/`` is on the path)."""
-    scripts = {p.stem for p in BENCH.glob("*.py")}
-    return bench_module_names(names) | {n for n in names if n.split(".")[0] in scripts}
-
-
-def offenders(
-    paths: Iterable[Path], rule: Callable[[set[str]], set[str]], package: str
-) -> dict[str, list[str]]:
-    """Each file among ``paths`` whose imports ``rule`` picks, with what it picks."""
-    found = {}
-    for path in paths:
-        names = rule(imported_modules(path.read_text(), package))
-        if names:
-            found[path.relative_to(REPO).as_posix()] = sorted(names)
-    return found
-
-
 def test_no_test_module_imports_another() -> None:
-    found = offenders(sorted(TESTS.rglob("*.py")), module_names_of_tests, "tests")
+    found = offenders(sorted(TESTS.rglob("*.py")), module_names_of_tests, "tests", REPO)
     assert not found, found
 
 
 def test_no_test_imports_a_bench_script() -> None:
-    found = offenders(sorted(TESTS.rglob("*.py")), bench_module_names, "tests")
-    assert not found, found
+    assert not bench_importers_among_tests(REPO)
 
 
 def test_no_bench_script_imports_another() -> None:
-    found = offenders(sorted(BENCH.glob("*.py")), bench_script_names, "bench")
-    assert not found, found
+    assert not bench_scripts_importing_another(REPO)
 
 
 def test_the_repository_code_beside_the_benches_imports_none() -> None:
@@ -81,7 +45,7 @@ def test_the_repository_code_beside_the_benches_imports_none() -> None:
     from tools.results import PAGES
 
     for folder in ("evaluation", "tools", "checkers"):
-        found = offenders(sorted((REPO / folder).rglob("*.py")), bench_module_names, folder)
+        found = offenders(sorted((REPO / folder).rglob("*.py")), bench_module_names, folder, REPO)
         assert not found, found
     assert not bench_module_names({page.render.partition(":")[0] for page in PAGES})
 
@@ -114,7 +78,7 @@ def test_the_rules_catch_a_planted_import() -> None:
         "from evaluation.tracks import build\n"
         "from tools import record\n"
     )
-    assert bench_script_names(imported_modules(in_bench, package="bench")) == {
+    assert bench_script_names(BENCH)(imported_modules(in_bench, package="bench")) == {
         "bench_execution", "bench_execution.CASES", "bench", "bench.record",
         "bench.bench_sweep", "bench.bench_sweep.targets", "bench.bench_load",
     }  # fmt: skip
