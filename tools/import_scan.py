@@ -14,7 +14,7 @@ from pathlib import Path
 def imported_modules(source: str, package: str = "tests") -> set[str]:
     """Every module an import statement names (relative imports made absolute within
     ``package``; ``from a import b`` names ``a`` and ``a.b``)."""
-    names = set()
+    names: set[str] = set()
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.Import):
             names.update(alias.name for alias in node.names)
