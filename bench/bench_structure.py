@@ -26,27 +26,41 @@ With ``--layout`` (the default package only) it prints the house's shape as well
   it, a config file named after it, or its own module), the old spelling's aside
   (``method=twostep decomposer=plan-deal``: :data:`OLD_SPELLING`, kept for one release).
   A new method touches what the method that nothing else names touches (the fewest of
-  :data:`NEW_METHODS`): the others are named by features built on them (plan-deal is
-  the default and the replay's baseline).
+  :data:`NEW_METHODS`); the most is shown too: the others are named by features built on
+  them (plan-deal is the default and the replay's baseline). A count of names, not of
+  edits: ``tests/test_method_names.py`` adds a toy method with one module, one registry
+  line and one config file;
+- *imports among the folders*: test files importing a bench script, bench scripts
+  importing another (:mod:`tools.import_scan`).
+
+With ``--before REVISION`` the same is printed first for that revision's tree (``git
+archive``), then for this checkout, then a table of the counts side by side; ``--json
+FILE`` writes that output as a record (``tools/record.py``) for the results page.
 
     .venv/bin/python bench/bench_structure.py                 # twostep/ of this checkout
     .venv/bin/python bench/bench_structure.py --root /path/to/checkout --package flows
     .venv/bin/python bench/bench_structure.py --layout        # + root modules, config, ...
+    .venv/bin/python bench/bench_structure.py --layout --before 2869c6e --json docs/bench/structure.json
 """
 
 from __future__ import annotations
 
 import argparse
 import ast
+import subprocess
 import sys
+import tempfile
 from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
 
-from tools.import_scan import bench_importers_among_tests, bench_scripts_importing_another
-from tools.status_scan import bare_status_comparisons
+from tools import record  # noqa: E402
+from tools.import_scan import bench_importers_among_tests, bench_scripts_importing_another  # noqa: E402
+from tools.status_scan import bare_status_comparisons  # noqa: E402
 
 
 @dataclass(frozen=True)
@@ -292,7 +306,8 @@ def method_places(root: Path) -> dict[str, list[str]]:
     return {m: sorted(found) for m, found in places.items()}
 
 
-def layout(root: Path, package: str, modules: Mapping[str, Path]) -> None:
+def layout(root: Path, package: str, modules: Mapping[str, Path]) -> dict[str, object]:
+    """Print the house's shape; return its counts by name (the record's rows)."""
     top = sorted(p.name for p in (root / package).glob("*.py") if p.name != "__init__.py")
     print(f"root modules: {len(top)}")
     if top:
@@ -334,16 +349,26 @@ def layout(root: Path, package: str, modules: Mapping[str, Path]) -> None:
         print(f"old spelling (for one release): {sum(map(len, spelled.values()))} places")
         for method, files in spelled.items():
             print(f"  {method}: {' '.join(files)}")
+    imports_of = {
+        "tests importing bench": len(bench_importers_among_tests(root)),
+        "bench scripts importing another": len(bench_scripts_importing_another(root)),
+    }
+    return {
+        "root modules": len(top),
+        "config mentions in the library": len(mentions),
+        "modules defining a status vocabulary": len(owners),
+        "bare status-string comparisons": len(bare),
+        "places a new method touches (fewest)": len(places[fewest]),
+        "places a new method touches (most)": len(places[most]),
+        **imports_of,
+    }
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--root", default=str(Path(__file__).resolve().parent.parent))
-    parser.add_argument("--package", default="twostep")
-    parser.add_argument("--longest", type=int, default=10)
-    parser.add_argument("--layout", action="store_true", help="also the house's shape")
-    args = parser.parse_args(argv)
-    modules = module_names(Path(args.root), args.package)
+def report(
+    root: Path, package: str, longest: int, shown: str, with_layout: bool
+) -> dict[str, object]:
+    """Print the shape of ``package`` under ``root`` (named ``shown``); return its counts."""
+    modules = module_names(root, package)
     graph: dict[str, set[str]] = {m: set() for m in modules}
     private: list[tuple[str, str, str]] = []
     for module, path in modules.items():
@@ -353,7 +378,7 @@ def main(argv: list[str] | None = None) -> int:
                 private.append((module, target, name))
     cycles = cycles_of(graph)
     arrows = back_arrows(graph)
-    print(f"package {args.package} under {args.root}")
+    print(f"package {package} under {shown}")
     print(f"modules: {len(modules)}, imports between them: {sum(map(len, graph.values()))}")
     print(f"cycles: {len(cycles)}")
     for cycle in cycles:
@@ -368,11 +393,54 @@ def main(argv: list[str] | None = None) -> int:
     every.sort(key=lambda f: (-f.length, f.module, f.line))
     print(f"functions: {len(every)}; over 60 lines: {sum(f.length > 60 for f in every)}, "
           f"over 100 lines: {sum(f.length > 100 for f in every)}")  # fmt: skip
-    print(f"{args.longest} longest:")
-    for f in every[: args.longest]:
+    print(f"{longest} longest:")
+    for f in every[:longest]:
         print(f"  {f.length:4d}  {f.module}.{f.name} (line {f.line})")
-    if args.layout:
-        layout(Path(args.root), args.package, modules)
+    counts: dict[str, object] = {"modules": len(modules), "cycles": len(cycles)}
+    if with_layout:
+        counts.update(layout(root, package, modules))
+    return counts
+
+
+@contextmanager
+def checkout_of(revision: str) -> Iterator[Path]:
+    """The tree of ``revision`` of this repository in a temporary folder (``git archive``)."""
+    with tempfile.TemporaryDirectory(prefix="structure-") as tmp:
+        archive = subprocess.run(
+            ["git", "-C", str(REPO), "archive", revision], capture_output=True, check=True
+        ).stdout
+        subprocess.run(["tar", "-x", "-C", tmp], input=archive, check=True)
+        yield Path(tmp)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--root", default=str(REPO))
+    parser.add_argument("--package", default="twostep")
+    parser.add_argument("--longest", type=int, default=10)
+    parser.add_argument("--layout", action="store_true", help="also the house's shape")
+    parser.add_argument(
+        "--before",
+        metavar="REVISION",
+        help="first the same for this git revision (e.g. 2869c6e), then a table",
+    )
+    parser.add_argument("--json", type=Path, help="write the record (counts and printed text)")
+    args = parser.parse_args(argv)
+    with record.capture(args.json, title="The library's shape"):
+        columns: dict[str, dict[str, object]] = {}
+        if args.before:
+            with checkout_of(args.before) as before:
+                print(f"## before: {args.before}\n")
+                columns[args.before] = report(before, args.package, args.longest,
+                                              f"<{args.before}>", args.layout)  # fmt: skip
+            print("\n## after: this checkout\n")
+        shown = "<this checkout>" if args.before else args.root
+        columns["now"] = report(Path(args.root), args.package, args.longest, shown, args.layout)
+        if args.before:
+            print()
+            rows = [[name, *(c.get(name, "") for c in columns.values())] for name in columns["now"]]
+            for line in record.table(["measure", *columns], rows):
+                print(line)
     return 0
 
 
