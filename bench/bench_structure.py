@@ -47,11 +47,12 @@ from __future__ import annotations
 
 import argparse
 import ast
+import io
 import subprocess
 import sys
 import tempfile
 from collections.abc import Iterator, Mapping
-from contextlib import contextmanager
+from contextlib import contextmanager, redirect_stdout
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -428,19 +429,22 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     with record.capture(args.json, title="The library's shape"):
         columns: dict[str, dict[str, object]] = {}
+        printed = io.StringIO()  # the counts' table first, then the reports it sums up
+        with redirect_stdout(printed):
+            if args.before:
+                with checkout_of(args.before) as before:
+                    print(f"## before: {args.before}\n")
+                    columns[args.before] = report(before, args.package, args.longest,
+                                                  f"<{args.before}>", args.layout)  # fmt: skip
+                print("\n## after: this checkout\n")
+            shown = "<this checkout>" if args.before else args.root
+            columns["now"] = report(Path(args.root), args.package, args.longest, shown, args.layout)
         if args.before:
-            with checkout_of(args.before) as before:
-                print(f"## before: {args.before}\n")
-                columns[args.before] = report(before, args.package, args.longest,
-                                              f"<{args.before}>", args.layout)  # fmt: skip
-            print("\n## after: this checkout\n")
-        shown = "<this checkout>" if args.before else args.root
-        columns["now"] = report(Path(args.root), args.package, args.longest, shown, args.layout)
-        if args.before:
-            print()
             rows = [[name, *(c.get(name, "") for c in columns.values())] for name in columns["now"]]
             for line in record.table(["measure", *columns], rows):
                 print(line)
+            print()
+        print(printed.getvalue(), end="")
     return 0
 
 

@@ -182,8 +182,8 @@ PAGES: tuple[Page, ...] = (
         "structure",
         "The library's shape",
         "issue 40's before and after: modules at the root of twostep/, import cycles, config "
-        "keys named in the library, status vocabularies, bare status comparisons, and the "
-        "places a new method touches",
+        "keys named in the library, status vocabularies, bare status comparisons, the "
+        "places a new method touches, and tests and bench scripts importing bench scripts",
         ("structure.json",),
         "tools.record:printed_page",
     ),
@@ -254,7 +254,6 @@ BENCH_FILES: tuple[BenchFile, ...] = (
     BenchFile("methods_n2.txt", "python bench/bench_methods.py --report docs/bench/methods_n2.json", "the printed report of methods_n2.json"),
     BenchFile("methods_n34.txt", "python bench/bench_methods.py --report docs/bench/methods_n34.json", "the printed report of methods_n34.json"),
     BenchFile("methods_portfolio.txt", "python bench/bench_methods.py --report docs/bench/methods_portfolio.json", "the printed report of the portfolio's rows"),
-    BenchFile("structure.txt", "python bench/bench_structure.py --layout", "the printed output of structure.json"),
     BenchFile("sweep.txt", "python bench/bench_sweep.py --jobs 20 100 400 --variants on off --launchers all basic --basic-max-jobs 20 --on-max-jobs 400 --no-small-scaling --save docs/bench/sweep.txt --json docs/bench/sweep.json", "the printed output of sweep.json, with the phases of a job"),
     BenchFile("sweep_grid.txt", "python bench/bench_sweep.py --jobs --scaling --servers 0 --paper-grid blocksworld --save docs/bench/sweep_grid.txt --json docs/bench/sweep_grid.json", "the printed output of sweep_grid.json"),
 )  # fmt: skip
