@@ -8,9 +8,10 @@ is the planner's ``search_time_limit_s``; :func:`llm_settings` maps the ``llm`` 
 the LLM client's settings; :func:`search_budget` maps ``score_max_nodes`` and
 ``score_time_limit_s`` to the scorer's budget; a resource limit the library reports
 (:class:`~twostep.programs.processes.LimitReached`, naming the library's parameter) is
-worded with the config key that raises it (:func:`limit_message`, :data:`LIMIT_KEYS`). The method is the registry's
-(:func:`twostep.methods.method_for`), named by ``method`` with the keys of its config
-file as its options; ``decomposer`` is TwoStep's subgoal source (the old spelling,
+worded with the config key that raises it (:func:`limit_message`), and so are the
+library's other messages where they reach the user (:mod:`flows.wording`). The method is
+the registry's (:func:`twostep.methods.method_for`), named by ``method`` with the keys of
+its config file as its options; ``decomposer`` is TwoStep's subgoal source (the old spelling,
 ``method=twostep decomposer=plan-deal``, is respelled first: :mod:`flows.spelling`).
 """
 
@@ -28,6 +29,7 @@ from flows.checks import JobError, check_values
 from flows.config import TwostepConfig
 from flows.identity import job_input_files
 from flows.spelling import METHOD_KEYS, respell
+from flows.wording import setting_key, worded, worded_run
 from twostep.decomposers.base import Decomposer
 from twostep.embodied import ExecutorSettings
 from twostep.makespan import SearchBudget
@@ -47,7 +49,7 @@ from twostep.methods.steps import SA_CALL, PlanCall
 from twostep.pddl import Problem
 from twostep.pddl.translator import GroundingLimits
 from twostep.planner import PlannerSettings, PlanResult
-from twostep.programs.processes import Limit, LimitReached
+from twostep.programs.processes import LimitReached
 from twostep.tasks.benchmark import BenchmarkTask, load_task, task_path
 from twostep.util.files import exists, file_problem, yaml_problem
 from twostep.util.outcome import EmbodiedStatus
@@ -74,17 +76,10 @@ def grounding_limits(cfg: TwostepConfig) -> GroundingLimits:
     )
 
 
-LIMIT_KEYS = {
-    Limit.MEMORY: "planner.memory_limit_mb",
-    Limit.GROUNDING_TIME: "planner.grounding_time_limit_s",
-}
-"""The config key that raises each resource limit (:func:`planner_settings`,
-:func:`grounding_limits`)."""
-
-
 def limit_message(reached: LimitReached) -> str:
-    """What a job says of a limit it reached: the library's words, naming the config key."""
-    return reached.message(LIMIT_KEYS[reached.limit])
+    """What a job says of a limit it reached: the library's words, naming the config key
+    of the library's parameter (:data:`flows.wording.SETTING_KEYS`)."""
+    return reached.message(setting_key(reached.parameter))
 
 
 def keyed_plan_result(result: PlanResult) -> PlanResult:
@@ -196,7 +191,7 @@ def check_replay(cfg: TwostepConfig, problem_path: Path) -> None:
         bundle.entry(cfg.domain.name, int(cfg.task), int(cfg.agents), cfg.llm.model, int(cfg.seed))
         bundle.check_task_file(cfg.domain.name, int(cfg.task), problem_path)
     except (BundleError, BundleMiss) as error:
-        raise JobError(str(error)) from None
+        raise JobError(worded(str(error))) from None
 
 
 def check_task(cfg: TwostepConfig, task: BenchmarkTask) -> None:
@@ -298,7 +293,11 @@ class Job:
     def run(self, steps: Steps = DIRECT) -> RunResult:
         """The method's result through ``steps``; with ``compare_sa`` the SA plan is
         solved first (its length is reported beside the result, and TwoStep reuses the
-        plan), then the embodied executor runs the plans when configured."""
+        plan), then the embodied executor runs the plans when configured; its messages
+        name the config keys (:func:`flows.wording.worded_run`)."""
+        return worded_run(self._run(steps))
+
+    def _run(self, steps: Steps) -> RunResult:
         request = replace(self.request, steps=keyed_steps(steps))
         if self.method_name == MethodName.SA:
             return self.execute(self.method(request))

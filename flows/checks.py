@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from flows.locations import local_folder, write_problem
+from flows.wording import worded
 
 
 class JobError(Exception):
@@ -141,7 +142,8 @@ def between(low: float, high: float, low_open: bool = False, optional: bool = Fa
 def _not_a_key(key: str, value: Any) -> str | None:
     from twostep.llm.client import key_env_problem
 
-    return key_env_problem(None if value is None else str(value))
+    problem = key_env_problem(None if value is None else str(value))
+    return None if problem is None else worded(problem)
 
 
 def _score_modes() -> Iterable[str]:
@@ -399,7 +401,7 @@ def secret_problem(cfg: Any) -> str | None:
     for key, value in values:
         problem = checks[key](None if value is None else str(value))
         if problem:
-            return problem
+            return worded(problem)
     return None
 
 

@@ -56,6 +56,7 @@ from flows.tracking.runs import (
     missing_artifacts,
     run_exists,
 )
+from flows.wording import worded
 from twostep.embodied.run import draws_pictures
 from twostep.llm.client import LLMScriptError
 from twostep.pddl import PDDLError
@@ -309,7 +310,7 @@ def _input_problem(cfg: TwostepConfig) -> str | None:
     try:
         check_job(cfg)
     except INPUT_ERRORS as exc:
-        return one_line(exc, name_type=False)
+        return worded(one_line(exc, name_type=False))
     return None
 
 
@@ -338,12 +339,12 @@ def _run_or_reuse(
         try:
             result, compute_timings = compute_job(cfg, config, name, sweep, stats)
         except INPUT_ERRORS as exc:
-            error, input_error = one_line(exc, name_type=False), True
+            error, input_error = worded(one_line(exc, name_type=False)), True
         except ResourceLimitError as exc:  # worded with the limit's key; never stored
-            worded = RuntimeError(limit_message(exc.reached))
-            error, status = one_line(worded, name_type=False), RunStatus.RESOURCE_LIMIT.value
-        except Exception as exc:
-            error, details = one_line(exc), traceback.format_exc()
+            said = RuntimeError(limit_message(exc.reached))
+            error, status = one_line(said, name_type=False), RunStatus.RESOURCE_LIMIT.value
+        except Exception as exc:  # the library's words name the config keys (flows.wording)
+            error, details = worded(one_line(exc)), traceback.format_exc()
         store_start = time.perf_counter()
         phases["compute_s"] = store_start - compute_start
         if error is None:

@@ -83,6 +83,7 @@ from flows.identity import is_relevant, job_name
 from flows.redaction import redact_config
 from flows.status import JobStatus, job_status, reason_line
 from flows.step_stats import StepStats
+from flows.wording import worded, worded_error
 from twostep import planner
 from twostep.makespan import DEFAULT_SEARCH_BUDGET, ParallelExecution, SearchBudget
 from twostep.methods import Steps
@@ -193,7 +194,7 @@ def _llm_call_outcome(call: Callable[[], LLMStepResult]) -> Any:
     try:
         return call()
     except LLMError as error:
-        return Completed(name=LLM_ERROR_STATE, message=str(error), data=error)
+        return Completed(name=LLM_ERROR_STATE, message=worded(str(error)), data=error)
 
 
 def _helper_run_name(step: str) -> Callable[..., str]:
@@ -276,8 +277,8 @@ def _llm_step(task_fn: Any, stats: StepStats) -> Callable[..., LLMStepResult]:
         helper = kwargs.get("helper", args[1] if task_fn.name == "generate" else 1)
         said = "failed" if failed else "answered" + (" (cached)" if cached else "")
         flow_log(f"{task_fn.name} helper agent{helper}: {said}", failed)
-        if failed:
-            raise outcome
+        if failed:  # the flow run's state says it with the config keys
+            raise worded_error(outcome)
         text, exchange = outcome
         return text, exchange
 

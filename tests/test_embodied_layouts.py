@@ -98,7 +98,7 @@ def test_the_scene_is_found_four_ways(task: BenchmarkTask, tmp_path: Path) -> No
     assert find_scene(locations, receptacles, None, "trial_FloorPlan14_x") == "FloorPlan14"
     assert find_scene(locations, receptacles, None, "x") == "FloorPlan14"
     assert find_scene(locations, [], None, "x") == "FloorPlan14"
-    with pytest.raises(FloorPlanError, match=r"executor.layout=FloorPlanN"):
+    with pytest.raises(FloorPlanError, match=r"choose one with layout=FloorPlanN"):
         find_scene(["loc|0|0|0|30"], [], None, "x")  # the centre point: many scenes
     # an explicit layout wins; a wrong one names the locations it cannot place
     chosen = floor_plan_for_task(locations, None, "FloorPlan14", receptacles)

@@ -195,16 +195,6 @@ def _config_keys() -> tuple[set[str], dict[str, set[str]]]:
     return dotted, groups
 
 
-def _docstrings(tree: ast.AST) -> set[int]:
-    found = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef):
-            body = node.body
-            if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant):
-                found.add(id(body[0].value))
-    return found
-
-
 def _key_of(node: ast.AST) -> tuple[ast.AST, str] | None:
     """``(object, key)`` of a lookup by a literal: ``x["k"]`` or ``x.get("k", ...)``."""
     if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant):
@@ -223,29 +213,36 @@ def _key_of(node: ast.AST) -> tuple[ast.AST, str] | None:
 
 
 def config_leaks(source: str) -> list[tuple[int, str]]:
-    """``(line, what)`` for every place a module's code uses the job config's shape:
+    """``(line, what)`` for every place a module's text holds the job config's shape:
 
-    - a string that *is* a dotted config key (``"llm.model"``), or the run-table column of
-      one (``"param.planner.alias"``): the way code looks a key up (a message that tells
-      the user which setting to change, ``"... with llm.mode=live"``, is not a lookup);
+    - a string or docstring that holds a dotted config key as a whole token (``"llm.model"``,
+      ``"... record it with llm.mode=live"``), or the run-table column of one
+      (``"param.planner.alias"``): the library names its own parameters
+      (``LLMSettings.mode``) and ``flows/`` words them with the keys (``flows.wording``);
+      code is not text (``domain.name``, an attribute, in an f-string's braces is code);
     - a string that is a group only the orchestration has (``"mlflow"``, ``"hydra"``, ...);
     - a group's field looked up in that group: ``config["llm"]["script"]``,
       ``config.get("data").get("root")``, or ``llm.get("script")`` on a variable named
       after the group;
-    - ``.hydra`` anywhere in the text (Hydra's run-directory layout), docstrings too.
-
-    Docstrings are documentation: only ``.hydra`` counts there."""
+    - ``.hydra`` anywhere in the text (Hydra's run-directory layout), comments too."""
     dotted, groups = _config_keys()
+    token = re.compile(
+        r"(?<![\w.])(?:param\.)?("
+        + "|".join(re.escape(k) for k in sorted(dotted, key=len, reverse=True))
+        + r")(?!\w)"
+    )
     tree = ast.parse(source)
-    docstrings = _docstrings(tree)
     found = [(n, ".hydra") for n, line in enumerate(source.splitlines(), 1) if ".hydra" in line]
     for node in ast.walk(tree):
         if isinstance(node, ast.Constant) and isinstance(node.value, str):
-            if id(node) in docstrings:
-                continue
             text = node.value
-            match = re.fullmatch(r"(?:param\.)?(\w+\.\w+)(?:\.\w+)*", text)
-            if (match and match.group(1) in dotted) or text in HYDRA_ONLY:
+            keys = [m.group(0) for m in token.finditer(text)]
+            # a key in a string of many lines: the line it is on
+            lines = [node.lineno + text[: m.start()].count("\n") for m in token.finditer(text)]
+            if isinstance(node.end_lineno, int) and node.end_lineno == node.lineno:
+                lines = [node.lineno] * len(keys)
+            found += list(zip(lines, keys, strict=True))
+            if text in HYDRA_ONLY:
                 found.append((node.lineno, text))
             continue
         lookup = _key_of(node)
@@ -284,13 +281,14 @@ def test_the_library_uses_no_config_key_group_or_hydra_folder() -> None:
 
 def test_the_config_leak_finder_finds_planted_leaks() -> None:
     """Each kind of leak, planted in a module's text, is found on its line (so the test
-    above can fail); the canonical columns and result fields the library reads, and a
-    message that names a setting, are not leaks."""
-    planted = '''"""A module; its docstring may say llm.model."""
+    above can fail): a message or docstring that names a config key too; the canonical
+    columns and result fields the library reads, its own parameters in a message and an
+    attribute in an f-string's braces are not leaks."""
+    planted = '''"""A module; its docstring may not say llm.model."""
 NOT_IDENTITY = ("hydra", "mlflow")
 KEY = "llm.cache_dir"
 COLUMN = "param.planner.alias"
-def f(config, runs, result):
+def f(config, runs, result, domain):
     llm = config.get("llm")
     script = llm.get("script")
     root = config["data"]["root"]
@@ -298,8 +296,13 @@ def f(config, runs, result):
     folder = runs / ".hydra"
     ok = runs["method"], result.get("decomposer"), result["domain"], runs["param." + KEY]
     raise ValueError(f"no answer: record it with llm.mode=live, not {runs['seed']}")
+def g(domain, decomposer):
+    """Words a message: with LLMSettings.mode=live, not with
+    planner.time_limit_s=10."""
+    return f"{domain.name} {decomposer.name}: set LLMSettings.model" + "data.rooted"
 '''
     assert config_leaks(planted) == [
+        (1, "llm.model"),
         (2, "hydra"),
         (2, "mlflow"),
         (3, "llm.cache_dir"),
@@ -308,4 +311,6 @@ def f(config, runs, result):
         (8, "data.root"),
         (9, "method.name"),
         (10, ".hydra"),
+        (12, "llm.mode"),
+        (15, "planner.time_limit_s"),
     ]

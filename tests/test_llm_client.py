@@ -123,8 +123,8 @@ def test_replay_miss_is_a_clear_error(settings: LLMSettings, no_network: list[An
     with pytest.raises(LLMCacheMiss) as info:
         replay.complete(MESSAGES, seed=2)
     message = str(info.value)
-    assert "llm.mode=replay" in message and "seed 2" in message and "Goal?" in message
-    assert "openai/gpt-4o" in message and "llm.mode=live" in message
+    assert "LLMSettings.mode=replay" in message and "seed 2" in message and "Goal?" in message
+    assert "openai/gpt-4o" in message and "LLMSettings.mode=live" in message
     assert not no_network and not settings.cache_dir.exists()
 
 
@@ -142,7 +142,7 @@ def test_scripted_answers_in_order(tmp_path: Path, no_network: list[Any]) -> Non
 
 
 def test_scripted_needs_a_valid_script(tmp_path: Path) -> None:
-    with pytest.raises(LLMScriptError, match=r"needs llm\.script"):
+    with pytest.raises(LLMScriptError, match=r"needs LLMSettings\.script"):
         LLMClient(LLMSettings(mode="scripted"))
     bad = tmp_path / "bad.yaml"
     bad.write_text("answer: oops\n")
@@ -152,7 +152,7 @@ def test_scripted_needs_a_valid_script(tmp_path: Path) -> None:
 
 
 def test_unknown_mode() -> None:
-    with pytest.raises(Exception, match=r"llm\.mode must be one of live, replay, scripted"):
+    with pytest.raises(Exception, match=r"LLMSettings\.mode must be one of live, replay, scripted"):
         LLMSettings(mode="offline")
 
 
@@ -225,7 +225,7 @@ def test_auth_error_is_one_line_naming_the_variable(
     message = str(info.value)
     assert len(calls) == 1 and "\n" not in message and FAKE_KEY not in message
     assert "OPENAI_API_KEY" in message
-    assert "decomposer=goal-split" in message and "llm.mode=replay" in message
+    assert "GoalSplitDecomposer" in message and "LLMSettings.mode=replay" in message
     assert info.value.__cause__ is None and info.value.__suppress_context__
 
 
@@ -330,7 +330,7 @@ def test_corrupt_cache_entry_fails_a_replay_naming_the_file(
     path.write_text('{"key": "x", "text": "(on-tab')  # an entry cut off mid-write
     with pytest.raises(LLMCacheCorrupt) as info:
         replay.complete(MESSAGES, seed=0)
-    assert str(path) in str(info.value) and "llm.mode=live" in str(info.value)
+    assert str(path) in str(info.value) and "LLMSettings.mode=live" in str(info.value)
     assert not no_network
 
 
@@ -422,7 +422,8 @@ def test_rejected_credentials_name_the_real_cause(tmp_path: Path) -> None:
             LLMClient(settings).complete(MESSAGES, seed=0)
     message = str(info.value)
     assert message.startswith(f"LLM credentials rejected by {server.api_base} (HTTP 401)")
-    assert "llm.api_key_env=<VARIABLE>" in message and "the API key variable of" not in message
+    assert "LLMSettings.api_key_env=<VARIABLE>" in message
+    assert "the API key variable of" not in message
     assert "missing" not in message
 
 
@@ -433,7 +434,9 @@ def test_a_key_given_as_the_variable_name_is_refused_without_echoing_it(value: s
     with pytest.raises(client_module.LLMError) as info:
         LLMSettings(api_key_env=value)
     assert value not in str(info.value)
-    assert str(info.value).startswith("llm.api_key_env looks like a key, not a variable name")
+    assert str(info.value).startswith(
+        "LLMSettings.api_key_env looks like a key, not a variable name"
+    )
     for name in ("OPENAI_API_KEY", "my_gateway_key", "TWOSTEP_TEST_CANARY_KEY"):
         assert LLMSettings(api_key_env=name).key_env == name
 

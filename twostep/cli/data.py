@@ -8,8 +8,9 @@ folder of the same layout; ``example-plan`` re-plans an in-context example (whos
 is a static file of the package). Hand-written files (``expert.yaml``) are never touched.
 
 ``import-answers`` reads logs of real model answers (the official TwoStep code's run
-logs: ``--format twostep-official``) into a replay bundle (:mod:`twostep.replay`), which
-``twostep ... decomposer=llm llm=replay llm.bundle=DIR`` replays; ``check-answers``
+logs: ``--format twostep-official``) into a replay bundle (:mod:`twostep.replay`), whose
+answers the LLM client replays (``LLMSettings.mode="bundle"``; running a job or the
+paper's grid on it: docs/how-to/reproduce-paper.md); ``check-answers``
 checks the rules translator on a bundle against the helper costs its logs record
 (:mod:`twostep.replay.check`) and writes ``translation_check.json`` beside it.
 """
@@ -344,7 +345,8 @@ def build_parser() -> argparse.ArgumentParser:
     example.set_defaults(run=_example_plan)
     answers = commands.add_parser(
         "import-answers",
-        help="read logs of real model answers into a replay bundle (llm=replay llm.bundle=DIR)",
+        help="read logs of real model answers into a replay bundle, which twostep's jobs "
+        "can replay (docs/how-to/reproduce-paper.md)",
     )
     answers.add_argument("logs", nargs="+", metavar="LOG", help="log files, in run order")
     answers.add_argument(

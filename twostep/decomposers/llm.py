@@ -3,10 +3,10 @@
 For helpers 1..N-1: :func:`generate_subgoal` asks for the helper's English subgoal (the
 answer "none" ends the loop), :func:`translate_subgoal` turns it into a PDDL goal and
 checks it against the task (:mod:`twostep.plans.subgoals`, the rules that need no state). With
-``llm.translator=rules`` the translation is the model-free grammar's
+``LLMSettings.translator="rules"`` the translation is the model-free grammar's
 (:mod:`twostep.english`): a sentence it cannot read is a discarded proposal whose reason
-starts with :data:`TRANSLATION_FAILED`. Answers replayed from a bundle (``llm.mode=bundle``)
-carry their source (model, file, line) in the exchange.
+starts with :data:`TRANSLATION_FAILED`. Answers replayed from a bundle
+(``LLMSettings.mode="bundle"``) carry their source (model, file, line) in the exchange.
 Every prompt and raw answer is kept in the proposal's ``exchanges``; an answer that
 gives no usable subgoal becomes a ``discarded`` proposal with the reason.
 

@@ -153,7 +153,7 @@ def find_scene(
     found = ", ".join(holding[:5]) + (" ..." if len(holding) > 5 else "") or "none"
     raise FloorPlanError(
         f"cannot tell the scene of this problem ({len(points)} location points; scenes "
-        f"that hold them all: {found}): choose one with executor.layout=FloorPlanN"
+        f"that hold them all: {found}): choose one with layout=FloorPlanN"
     )
 
 

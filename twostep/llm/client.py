@@ -54,7 +54,7 @@ os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 MODES = ("live", "replay", "scripted", "bundle")
 TRANSLATORS = ("llm", "rules")
 CACHE_FORMAT = 1
-OFFLINE_HINT = "or run offline with decomposer=goal-split or llm.mode=replay (cached answers)"
+OFFLINE_HINT = "or run offline with GoalSplitDecomposer or LLMSettings.mode=replay (cached answers)"
 
 # Environment variable that litellm reads for each provider prefix.
 PROVIDER_KEY_ENV = {
@@ -164,20 +164,22 @@ class LLMSettings:
     backoff_s: float = 1.0
     timeout_s: float = 60.0
     use_cache: bool = True
-    local: bool = False  # serve `model` from the in-process llama.cpp server (llm=local)
+    local: bool = False  # serve `model` from the in-process llama.cpp server
     bundle: Path | None = None  # a replay bundle's folder (mode=bundle)
     translator: str = "llm"  # llm | rules: who turns English subgoals into PDDL
     extra: dict[str, Any] = field(default_factory=dict)  # more litellm.completion kwargs
 
     def __post_init__(self) -> None:
         if self.mode not in MODES:
-            raise LLMError(f"llm.mode must be one of {', '.join(MODES)}, got '{self.mode}'")
+            raise LLMError(f"LLMSettings.mode must be one of {', '.join(MODES)}, got '{self.mode}'")
         if self.translator not in TRANSLATORS:
             raise LLMError(
-                f"llm.translator must be one of {', '.join(TRANSLATORS)}, got '{self.translator}'"
+                f"LLMSettings.translator must be one of {', '.join(TRANSLATORS)}, got '{self.translator}'"
             )
         if self.mode == "bundle" and self.bundle is None:
-            raise LLMError("llm.mode=bundle needs llm.bundle=<folder of a replay bundle>")
+            raise LLMError(
+                "LLMSettings.mode=bundle needs LLMSettings.bundle=<folder of a replay bundle>"
+            )
         if self.bundle is not None:
             self.bundle = Path(self.bundle)
         problem = key_env_problem(self.api_key_env)
@@ -220,26 +222,26 @@ class LLMResponse:
 
 
 def key_env_problem(name: str | None) -> str | None:
-    """Why ``name`` cannot be ``llm.api_key_env`` (None: it can). The value is never
+    """Why ``name`` cannot be :attr:`LLMSettings.api_key_env` (None: it can). The value is never
     repeated: it may be a key pasted where the variable's name belongs."""
     if name is None or not looks_like_a_key(name):
         return None
     return (
-        "llm.api_key_env looks like a key, not a variable name: give the name of the "
-        "environment variable that holds the key (e.g. llm.api_key_env=OPENAI_API_KEY); "
+        "LLMSettings.api_key_env looks like a key, not a variable name: give the name of the "
+        "environment variable that holds the key (e.g. LLMSettings.api_key_env=OPENAI_API_KEY); "
         "the value is not shown"
     )
 
 
 def model_problem(model: str | None) -> str | None:
-    """Why ``model`` cannot be ``llm.model`` (None: it can): it holds something shaped
+    """Why ``model`` cannot be :attr:`LLMSettings.model` (None: it can): it holds something shaped
     like a key (:func:`~twostep.util.redaction.holds_a_key`). The value is never repeated."""
     if model is None or not holds_a_key(model):
         return None
     return (
-        "llm.model looks like it holds a key: give the model's name only "
-        "(e.g. llm.model=openai/gpt-4o) and the key in the environment variable named by "
-        "llm.api_key_env; the value is not shown"
+        "LLMSettings.model looks like it holds a key: give the model's name only "
+        "(e.g. LLMSettings.model=openai/gpt-4o) and the key in the environment variable "
+        "named by LLMSettings.api_key_env; the value is not shown"
     )
 
 
@@ -254,7 +256,7 @@ def credentials_message(settings: LLMSettings) -> str:
     return (
         f"LLM credentials missing {where}: no API key variable is known for provider "
         f"'{settings.provider or 'unknown'}'; put the key in an environment variable and "
-        f"name it with llm.api_key_env=<VARIABLE>, {OFFLINE_HINT}."
+        f"name it with LLMSettings.api_key_env=<VARIABLE>, {OFFLINE_HINT}."
     )
 
 
@@ -270,7 +272,10 @@ def rejected_message(settings: LLMSettings, status: int | None) -> str:
     else:
         placeholder = (settings.api_base or settings.local) and settings.provider == "openai"
         sent = "a placeholder key (no key variable is set)" if placeholder else "no API key"
-        fix = "if it needs a key, name the variable that holds it with llm.api_key_env=<VARIABLE>"
+        fix = (
+            "if it needs a key, name the variable that holds it with "
+            "LLMSettings.api_key_env=<VARIABLE>"
+        )
     return (
         f"LLM credentials rejected by {server}{code} for model {settings.model}: "
         f"it was sent {sent}; {fix}, {OFFLINE_HINT}."
@@ -311,7 +316,9 @@ class LLMClient:
         if settings.mode == "scripted":
             if answers is None:
                 if settings.script is None:
-                    raise LLMScriptError("llm.mode=scripted needs llm.script=<file.yaml>")
+                    raise LLMScriptError(
+                        "LLMSettings.mode=scripted needs LLMSettings.script=<file.yaml>"
+                    )
                 answers = load_script(settings.script)
             self._answers = list(answers)
 
@@ -367,9 +374,9 @@ class LLMClient:
             last = str(request["messages"][-1]["content"]) if request["messages"] else ""
             snippet = " ".join(last.split())[-80:]
             raise LLMCacheMiss(
-                f"llm.mode=replay: no cached answer in {s.cache_dir} for model {s.model}, "
+                f"LLMSettings.mode=replay: no cached answer in {s.cache_dir} for model {s.model}, "
                 f"seed {seed} (request {key[:12]}, prompt ending '...{snippet}'); "
-                "record it once with llm.mode=live"
+                "record it once with LLMSettings.mode=live"
             )
         kwargs, secret = self._call_arguments(request)  # missing credentials: at once
         # Importing litellm (seconds, once per process) is not the call's time: it would be
@@ -409,7 +416,7 @@ class LLMClient:
             agents, helper = int(about["agents"]), int(about["helper"])
         except (KeyError, TypeError, ValueError):
             raise LLMBundleMiss(
-                "llm.mode=bundle: the call does not say which task, N and helper it is for"
+                "LLMSettings.mode=bundle: the call does not say which task, N and helper it is for"
             ) from None
         try:
             entry = bundle.entry(domain, task, agents, s.model, seed)
@@ -420,8 +427,8 @@ class LLMClient:
             recorded = entry.translations[helper - 1] if helper <= len(entry.translations) else None
             if recorded is None:
                 raise LLMBundleMiss(
-                    f"{run.file} logs no translations of its model (llm.translator=llm "
-                    "replays them): use llm.translator=rules"
+                    f"{run.file} logs no translations of its model (LLMSettings.translator=llm "
+                    "replays them): use LLMSettings.translator=rules"
                 )
             text, line = recorded, entry.line
         else:
@@ -513,8 +520,8 @@ class LLMClient:
             problem = "no answer text in it"
         if replay:
             raise LLMCacheCorrupt(
-                f"llm.mode=replay: the cache entry {path} is corrupt ({problem}); delete it "
-                "and record it again with llm.mode=live"
+                f"LLMSettings.mode=replay: the cache entry {path} is corrupt ({problem}); "
+                "delete it and record it again with LLMSettings.mode=live"
             )
         log.warning("LLM cache entry %s is corrupt (%s): asking the model again", path, problem)
         return None

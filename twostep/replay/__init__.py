@@ -6,11 +6,11 @@ multi-agent execution length. :mod:`twostep.replay.official` reads logs of that 
 into a *replay bundle* (:mod:`twostep.replay.bundle`): per run, domain, task and N the
 answers with their provenance (file and line, the model the user names) and the official
 numbers (:mod:`twostep.replay.importer`, ``twostep-data import-answers``). The LLM client
-answers the generate step from a bundle (``llm.mode=bundle``: :class:`twostep.llm.
-LLMClient`); :mod:`twostep.replay.check` checks how the model-free translator
+answers the generate step from a bundle (``LLMSettings.mode="bundle"``:
+:class:`twostep.llm.LLMClient`); :mod:`twostep.replay.check` checks how the model-free translator
 (:mod:`twostep.english`) does against the helper costs the logs record (``twostep-data
 check-answers``), and :mod:`twostep.replay.grid` lists the jobs a bundle calls for
-(``experiment=paper_replay``); :mod:`twostep.report.replay` draws Table I and Fig. 3.
+(the paper replay's sweep); :mod:`twostep.report.replay` draws Table I and Fig. 3.
 """
 
 from twostep.replay.bundle import (

@@ -154,8 +154,8 @@ class Entry:
 
 
 def same_model(asked: str, recorded: str) -> bool:
-    """Whether the config's ``llm.model`` names the model the answers were imported for
-    (``openai/gpt-4o`` and ``gpt-4o`` are the same model)."""
+    """Whether ``asked`` (the model a job asks for: ``LLMSettings.model``) names the model
+    the answers were imported for (``openai/gpt-4o`` and ``gpt-4o`` are the same model)."""
     return asked == recorded or asked.split("/", 1)[-1] == recorded.split("/", 1)[-1]
 
 
@@ -206,7 +206,7 @@ class Bundle:
         if not any(same_model(model, m) for m in self.models):
             raise BundleMiss(
                 f"{where} holds no answers of model '{model}' "
-                f"(models: {', '.join(self.models) or 'none'}; set llm.model)"
+                f"(models: {', '.join(self.models) or 'none'}; set LLMSettings.model)"
             )
         runs = self.runs_for(domain, agents, model)
         if not runs:
@@ -257,7 +257,7 @@ class Bundle:
             raise BundleMiss(
                 f"{problem_path} is not the task file the bundle's answers for "
                 f"{task_name(domain, task)} refer to (imported with --tasks): point "
-                "data.root at the folder the answers were given for"
+                "load_task(root=...) at the folder the answers were given for"
             )
 
     # ------------------------------------------------------------------ writing

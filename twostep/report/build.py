@@ -5,9 +5,10 @@
 * **Series.** A line in Fig. 3 is a *series*: SA, MA, or TwoStep with one decomposer
   ("TwoStep (goal-split)"). When runs of one job cell (domain, task, method, decomposer,
   N, seed) differ in a config value (two planner time limits, two LLM models), that
-  param is a *variant param*: the series are split by it ("... [planner.time_limit_s=10]")
-  and the report says so. ``llm.*`` params only count for TwoStep with the ``llm``
-  decomposer, ``decomposer.*`` only for TwoStep.
+  param is a *variant param*: the series are split by it ("... [<param>=10]", the param
+  named as the run table names it) and the report says so. A param only counts for the
+  runs that read it (``params.read_by``: e.g. the LLM's settings only for TwoStep with the
+  LLM decomposer).
 * **Means.** Only successful runs with the metric recorded enter a mean. For each
   (domain, series, N, seed) the metric is averaged over tasks; the table shows the mean
   and the sample standard deviation (ddof = 1) of those per-seed averages over seeds, as

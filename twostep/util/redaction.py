@@ -4,14 +4,14 @@
   (:func:`redact_text`), in any text: a config value, an error line, a file's content;
   so does the value of a query parameter named like a credential
   (``?api_key=...``, ``&token=...``, ``&sig=...``: ``?api_key=***``).
-* A setting that names an environment variable (``llm.api_key_env``) must hold a variable
+* A setting that names an environment variable (``LLMSettings.api_key_env``) must hold a variable
   *name*; a value that is not one, or that looks like a random token, is taken for a
   pasted key (:func:`looks_like_a_key`): refused before any work, and written as ``***``
   wherever a config is stored (``flows.redaction.redact_config``, the config's side).
 * A secret the caller knows (the API key of a call) is replaced wherever it appears, and
   so is anything shaped like a provider key (``sk-...``, Google's ``AIza...``) or a
   bearer token (``Bearer ...``).
-* A name (``llm.model``) that holds a key-shaped part (:func:`holds_a_key`) is refused
+* A name (``LLMSettings.model``) that holds a key-shaped part (:func:`holds_a_key`) is refused
   before any work, with a message that does not repeat it.
 
 Plain functions on text and plain data; nothing here reads the environment.
