@@ -15,6 +15,7 @@ module              what it is for
 ``store``           the store of finished jobs (keys: :mod:`flows.identity`)
 ``artifacts``       the files a job writes (and logs as artifacts)
 ``console``         what the commands print: summary, schedule, progress, one-line errors
+``wording``         the library's messages with the config keys (one table of names)
 ``sweep_callback``  the Hydra callback of a sweep (start, summary, exit code)
 ``sweep_state``     what a sweep's jobs share on disk: state, identity, job records
 ``sweep_report``    the sweep's report, drawn in a process of its own at its end

@@ -41,13 +41,15 @@ SETTING_KEYS: dict[str, str] = {
 _NAMES = re.compile(
     r"(?<![\w.])("
     + "|".join(re.escape(name) for name in sorted(SETTING_KEYS, key=len, reverse=True))
-    + r")(?!\w)"
+    + r")(?!\w|\.\w|\()"  # not a longer name, an attribute of it or a call
 )
 
 
 def worded(message: str) -> str:
-    """``message`` with each library name of :data:`SETTING_KEYS` (a whole token) replaced
-    by its config key."""
+    """``message`` with each library name of :data:`SETTING_KEYS` replaced by its config
+    key: a whole name (``LLMSettings.mode=live``, ``... set LLMSettings.model.``), not part
+    of a longer one, an attribute of it or a call (``GoalSplitDecomposer.__init__()``,
+    ``GoalSplitDecomposer(facts)``: a traceback's words)."""
     return _NAMES.sub(lambda match: SETTING_KEYS[match.group(1)], message)
 
 

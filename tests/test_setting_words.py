@@ -171,6 +171,9 @@ def test_worded_replaces_whole_names_only() -> None:
     )
     kept = "MyLLMSettings.mode, x.LLMSettings.model, LLMSettings.models, GoalSplitDecomposers"
     assert worded(kept) == kept
+    called = "GoalSplitDecomposer.__init__() got 3 arguments; GoalSplitDecomposer(facts)"
+    assert worded(called) == called
+    assert worded("set LLMSettings.model.") == "set llm.model."
 
 
 def test_a_run_s_message_and_reasons_are_worded() -> None:
