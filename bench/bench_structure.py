@@ -13,9 +13,10 @@ from ``def`` to the function's last line (docstring and comments included).
 With ``--layout`` (the default package only) it prints the house's shape as well:
 
 - *root modules*: the modules at the root of the library package besides ``__init__.py``;
-- *config mentions*: string literals in the library (docstrings aside) that name the
-  Hydra job config: a dotted key ``group.field`` of ``conf/``, a Hydra-only group
-  (``hydra``, ``orchestration``, ``mlflow``, ``output``, ``experiment``) or ``.hydra``;
+- *config mentions*: where the library's text or code holds the Hydra job config's shape
+  (:func:`tools.config_scan.config_leaks`, the finder ``tests/test_layout.py`` uses): a
+  dotted config key or a group's override (``decomposer=llm``) in a string or docstring,
+  a Hydra-only group, a config lookup by group and field, ``.hydra``;
 - *status vocabularies*: the ``*Status`` enums and ``*STATUSES`` constants in the library
   and ``flows/`` and the modules defining them, and the comparisons of a value with a
   bare status string (``==``, ``!=``, ``in`` a literal tuple/list/set, ``.isin``,
@@ -60,6 +61,7 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from tools import record  # noqa: E402
+from tools.config_scan import library_leaks  # noqa: E402
 from tools.import_scan import bench_importers_among_tests, bench_scripts_importing_another  # noqa: E402
 from tools.status_scan import bare_status_comparisons  # noqa: E402
 
@@ -182,63 +184,10 @@ def back_arrows(graph: Mapping[str, set[str]]) -> list[tuple[str, str]]:
     return found
 
 
-HYDRA_ONLY_GROUPS = ("hydra", "orchestration", "mlflow", "output", "experiment")
 METHODS = ("sa", "ma", "twostep", "plan-deal", "portfolio", "portfolio-lite")
 NEW_METHODS = ("plan-deal", "portfolio", "portfolio-lite")  # the headline: methods added
 # after the paper's (the paper's own are named all over: "twostep" is also the project)
 OLD_SPELLING = ("flows/spelling.py", "conf/decomposer/")  # method=twostep decomposer=<method>
-
-
-def _strings(tree: ast.AST) -> Iterator[ast.Constant]:
-    """The string literals of a module, docstrings aside."""
-    docstrings = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef):
-            body = node.body
-            if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant):
-                docstrings.add(id(body[0].value))
-    for node in ast.walk(tree):
-        is_text = isinstance(node, ast.Constant) and isinstance(node.value, str)
-        if is_text and id(node) not in docstrings:
-            yield node
-
-
-def config_keys(root: Path) -> dict[str, set[str]]:
-    """``group -> fields`` of the job config as ``conf/`` writes it (top-level keys of
-    ``config.yaml`` and of every group's files)."""
-    import yaml
-
-    conf = root / "conf"
-    groups: dict[str, set[str]] = {}
-    main = yaml.safe_load((conf / "config.yaml").read_text()) or {}
-    for key, value in main.items():
-        if key != "defaults":
-            groups.setdefault(key, set()).update(value if isinstance(value, dict) else ())
-    for folder in sorted(p for p in conf.iterdir() if p.is_dir() and p.name != "hydra"):
-        fields = groups.setdefault(folder.name, set())
-        for path in folder.rglob("*.yaml"):
-            data = yaml.safe_load(path.read_text()) or {}
-            inner = data.get(folder.name, data) if isinstance(data, dict) else {}
-            fields.update(k for k in (inner if isinstance(inner, dict) else {}) if k != "defaults")
-            fields.update(k for k in data if isinstance(data, dict) and k not in groups)
-    return groups
-
-
-def config_mentions(root: Path, modules: Mapping[str, Path]) -> list[tuple[str, int, str]]:
-    groups = config_keys(root)
-    found = []
-    for module, path in modules.items():
-        for node in _strings(ast.parse(path.read_text(), str(path))):
-            text = node.value
-            head, _, rest = text.partition(".")
-            field = rest.split(".")[0]
-            if (
-                ".hydra" in text
-                or text in HYDRA_ONLY_GROUPS
-                or (head in groups and field and field in groups[head])
-            ):
-                found.append((module, node.lineno, text))
-    return found
 
 
 # Words that are statuses besides the enums' values (the report's, the unfinished set's).
@@ -313,7 +262,7 @@ def layout(root: Path, package: str, modules: Mapping[str, Path]) -> dict[str, o
     print(f"root modules: {len(top)}")
     if top:
         print(f"  {' '.join(top)}")
-    mentions = config_mentions(root, modules)
+    mentions = library_leaks(root, package)
     print(f"config mentions in the library: {len(mentions)} "
           f"in {len({m for m, _, _ in mentions})} modules")  # fmt: skip
     for module, line, text in mentions:

@@ -4,7 +4,7 @@ Hydra's basic sweeper launches the product of its parameters; a bundle's grid is
 product (SA once per task, TwoStep once per run of the bundle at each N, no job for a
 task or N the logs do not answer). :class:`ReplaySweeperBase` (the Hydra plugin
 ``hydra_plugins.twostep_replay.BundleSweeper``, selected by ``hydra/sweeper=bundle``)
-launches :func:`twostep.replay.grid.replay_jobs` of the bundle named by ``llm.bundle``
+launches :func:`flows.replay_grid.replay_jobs` of the bundle named by ``llm.bundle``
 instead. ``domain=``, ``task=``, ``agents=`` and ``seed=`` on the command line (one value
 or a comma list) narrow the grid; every other override goes to every job;
 ``hydra.sweeper.methods`` picks the methods (default: sa, ma, twostep, plan-deal).
@@ -44,8 +44,8 @@ def _values(override: Any) -> list[str]:
 
 def planned_jobs(config: DictConfig, arguments: list[str] | None = None) -> list[list[str]]:
     """Each job's overrides: the bundle's grid (narrowed by the filters), then the rest."""
+    from flows.replay_grid import METHODS, replay_jobs
     from twostep.replay import BundleError, load_bundle
-    from twostep.replay.grid import METHODS, replay_jobs
 
     arguments = list(config.hydra.overrides.task) if arguments is None else arguments
     parser = OverridesParser.create()

@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 
 import twostep
+from tools.config_scan import config_leaks, library_leaks
 
 ROOT = Path(__file__).resolve().parent.parent
 LIBRARY = ROOT / "twostep"
@@ -177,86 +178,6 @@ def test_a_moved_function_still_imports_under_its_old_name_with_a_warning() -> N
 
 # ----------------------------------------------------------------- the config stays in flows/
 
-#: Groups only the orchestration has (never a field of a result, a column of a run table).
-HYDRA_ONLY = ("hydra", "orchestration", "mlflow", "output", "experiment")
-
-
-def _config_keys() -> tuple[set[str], dict[str, set[str]]]:
-    """(every dotted key of the config schema, group -> its fields), read from the schema
-    Hydra checks every config against (``flows.config``)."""
-    from flows.config import schema_keys
-
-    keys = set(schema_keys())
-    dotted = {k for k in keys if "." in k}
-    groups: dict[str, set[str]] = {"hydra": set()}
-    for key in dotted:
-        group, field = key.split(".", 1)
-        groups.setdefault(group, set()).add(field.split(".")[0])
-    return dotted, groups
-
-
-def _key_of(node: ast.AST) -> tuple[ast.AST, str] | None:
-    """``(object, key)`` of a lookup by a literal: ``x["k"]`` or ``x.get("k", ...)``."""
-    if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant):
-        key = node.slice.value
-        return (node.value, key) if isinstance(key, str) else None
-    if (
-        isinstance(node, ast.Call)
-        and isinstance(node.func, ast.Attribute)
-        and node.func.attr == "get"
-        and node.args
-        and isinstance(node.args[0], ast.Constant)
-        and isinstance(node.args[0].value, str)
-    ):
-        return node.func.value, node.args[0].value
-    return None
-
-
-def config_leaks(source: str) -> list[tuple[int, str]]:
-    """``(line, what)`` for every place a module's text holds the job config's shape:
-
-    - a string or docstring that holds a dotted config key as a whole token (``"llm.model"``,
-      ``"... record it with llm.mode=live"``), or the run-table column of one
-      (``"param.planner.alias"``): the library names its own parameters
-      (``LLMSettings.mode``) and ``flows/`` words them with the keys (``flows.wording``);
-      code is not text (``domain.name``, an attribute, in an f-string's braces is code);
-    - a string that is a group only the orchestration has (``"mlflow"``, ``"hydra"``, ...);
-    - a group's field looked up in that group: ``config["llm"]["script"]``,
-      ``config.get("data").get("root")``, or ``llm.get("script")`` on a variable named
-      after the group;
-    - ``.hydra`` anywhere in the text (Hydra's run-directory layout), comments too."""
-    dotted, groups = _config_keys()
-    token = re.compile(
-        r"(?<![\w.])(?:param\.)?("
-        + "|".join(re.escape(k) for k in sorted(dotted, key=len, reverse=True))
-        + r")(?!\w)"
-    )
-    tree = ast.parse(source)
-    found = [(n, ".hydra") for n, line in enumerate(source.splitlines(), 1) if ".hydra" in line]
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Constant) and isinstance(node.value, str):
-            text = node.value
-            keys = [m.group(0) for m in token.finditer(text)]
-            # a key in a string of many lines: the line it is on
-            lines = [node.lineno + text[: m.start()].count("\n") for m in token.finditer(text)]
-            if isinstance(node.end_lineno, int) and node.end_lineno == node.lineno:
-                lines = [node.lineno] * len(keys)
-            found += list(zip(lines, keys, strict=True))
-            if text in HYDRA_ONLY:
-                found.append((node.lineno, text))
-            continue
-        lookup = _key_of(node)
-        if lookup is None:
-            continue
-        inner, field = lookup
-        group = inner.id if isinstance(inner, ast.Name) else None
-        outer = _key_of(inner)
-        if outer is not None:
-            group = outer[1]
-        if group in groups and field in groups[group]:
-            found.append((node.lineno, f"{group}.{field}"))
-    return sorted(set(found))
-
 
 def test_the_library_imports_no_orchestration() -> None:
     """``twostep/`` imports nothing from ``flows/`` (where the config's rules live), nor
@@ -270,10 +191,7 @@ def test_the_library_imports_no_orchestration() -> None:
 
 
 def test_the_library_uses_no_config_key_group_or_hydra_folder() -> None:
-    found = []
-    for path in sorted(LIBRARY.rglob("*.py")):
-        name = str(path.relative_to(ROOT))
-        found += [f"{name}:{line} {what}" for line, what in config_leaks(path.read_text())]
+    found = [f"{name}:{line} {what}" for name, line, what in library_leaks(ROOT)]
     assert not found, "the config's shape in the library (it belongs in flows/):\n" + "\n".join(
         found
     )
@@ -283,7 +201,8 @@ def test_the_config_leak_finder_finds_planted_leaks() -> None:
     """Each kind of leak, planted in a module's text, is found on its line (so the test
     above can fail): a message or docstring that names a config key too; the canonical
     columns and result fields the library reads, its own parameters in a message and an
-    attribute in an f-string's braces are not leaks."""
+    attribute in an f-string's braces are not leaks; a group's override (``decomposer=llm``)
+    is one, a keyword argument or a longer word is not."""
     planted = '''"""A module; its docstring may not say llm.model."""
 NOT_IDENTITY = ("hydra", "mlflow")
 KEY = "llm.cache_dir"
@@ -300,6 +219,9 @@ def g(domain, decomposer):
     """Words a message: with LLMSettings.mode=live, not with
     planner.time_limit_s=10."""
     return f"{domain.name} {decomposer.name}: set LLMSettings.model" + "data.rooted"
+def h():
+    """Sweep it with experiment=paper_replay; GoalSplitDecomposer(decomposer=llm)."""
+    return "run(decomposer=GoalSplitDecomposer()), method=plan-dealer, llm=local-ish"
 '''
     assert config_leaks(planted) == [
         (1, "llm.model"),
@@ -313,4 +235,6 @@ def g(domain, decomposer):
         (10, ".hydra"),
         (12, "llm.mode"),
         (15, "planner.time_limit_s"),
+        (18, "decomposer=llm"),
+        (18, "experiment=paper_replay"),
     ]

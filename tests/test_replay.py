@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 
+from flows.replay_grid import replay_jobs
 from tests.replay_logs import SEPARATOR, block
 from twostep.cli.data import main as data_main
 from twostep.decomposers.llm import LLMDecomposer, generate_subgoal, translate_subgoal
@@ -22,7 +23,6 @@ from twostep.methods import MethodRequest, check_run, run_twostep
 from twostep.planner import PlannerSettings
 from twostep.replay import BUNDLE_FILE, BundleMiss, load_bundle
 from twostep.replay.check import DIFFERS, MATCH, UNTRANSLATED, check_entry, summarise
-from twostep.replay.grid import replay_jobs
 from twostep.replay.importer import AnswerImportError, import_logs
 from twostep.tasks.benchmark import load_task
 

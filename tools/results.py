@@ -183,7 +183,9 @@ PAGES: tuple[Page, ...] = (
         "The library's shape",
         "issue 40's before and after: modules at the root of twostep/, import cycles, config "
         "keys named in the library, status vocabularies, bare status comparisons, the "
-        "places a new method touches, and tests and bench scripts importing bench scripts",
+        "places a new method touches (files naming it: plan-deal, the most, is named by the "
+        "features built on it; tests/test_method_names.py adds a toy method with one module, one "
+        "registry line and one config file), and tests and bench scripts importing bench scripts",
         ("structure.json",),
         "tools.record:printed_page",
     ),

@@ -64,7 +64,8 @@ MOVED_MODULES = {
     "twostep.redaction": "twostep.util.redaction",
     "twostep.identity": "flows.identity",
     "twostep.params": "flows.tracking.params",
-    "twostep.jobs.identity": "flows.identity",  # the config's rules live in flows/
+    "twostep.jobs.identity": "flows.identity",
+    "twostep.replay.grid": "flows.replay_grid",  # the config's rules live in flows/
     "twostep.jobs.params": "flows.tracking.params",
     "twostep.jobs": "flows",  # (after its modules: the first name that matches wins)
     "twostep.validation": "twostep.verify.validation",

@@ -234,7 +234,7 @@ NONE_REASON = "the LLM answered none: no further helper"
 
 
 class LLMDecomposer:
-    """TwoStep's LLM decomposer (``decomposer=llm``): generate, translate, check."""
+    """TwoStep's LLM decomposer (the subgoal source named ``llm``): generate, translate, check."""
 
     name = "llm"
 

@@ -1,4 +1,4 @@
-"""A real local model for offline runs of the HTTP path (``llm=local``, optional extra).
+"""A real local model for offline runs of the HTTP path (optional extra).
 
 :func:`local_server` starts llama.cpp's OpenAI-compatible server inside this process
 (the prebuilt ``xllamacpp`` wheel) on 127.0.0.1 with a free port, serving the

@@ -181,7 +181,7 @@ class Portfolio:
 def run_full_portfolio(
     request: MethodRequest, link_degree: int = 2, rebind: bool = True, owner_search: bool = True
 ) -> RunResult:
-    """``method=portfolio``: :func:`run_portfolio` with every member of
+    """The method ``portfolio``: :func:`run_portfolio` with every member of
     :func:`default_members` (``link_degree`` for goal-split's) and N, N-1, ..., 2 agents;
     ``rebind`` and ``owner_search`` are its plan-deal's."""
     portfolio = Portfolio(link_degree, rebind=rebind, owner_search=owner_search)
@@ -191,7 +191,7 @@ def run_full_portfolio(
 def run_portfolio_lite(
     request: MethodRequest, link_degree: int = 2, rebind: bool = True, owner_search: bool = True
 ) -> RunResult:
-    """``method=portfolio-lite``: :func:`run_portfolio` with :meth:`Portfolio.lite`."""
+    """The method ``portfolio-lite``: :func:`run_portfolio` with :meth:`Portfolio.lite`."""
     return run_portfolio(request, Portfolio.lite(link_degree, rebind, owner_search))
 
 

@@ -53,8 +53,8 @@ METHODS: dict[str, MethodEntry] = {
 SUBGOAL_SOURCES = ("goal-split", "expert", "llm", "plan-split")
 """Decomposers that propose helper subgoals for TwoStep's hand-off (the request's)."""
 TWOSTEP_METHODS = ("plan-deal", "portfolio", "portfolio-lite")
-"""Methods that the old spelling named as ``twostep``'s decomposer (``method=twostep
-decomposer=plan-deal``); result.json records them so (``method`` twostep, ``decomposer``
+"""Methods that the old spelling named as ``twostep``'s decomposer (the method ``twostep``
+with the decomposer ``plan-deal``); result.json records them so (``method`` twostep, ``decomposer``
 the method's name): :func:`method_for` still answers to that spelling."""
 DECOMPOSERS = (*SUBGOAL_SOURCES, *TWOSTEP_METHODS)
 """The names ``decomposer`` takes: the subgoal sources, and the old spelling's methods."""

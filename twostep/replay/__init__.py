@@ -9,7 +9,7 @@ numbers (:mod:`twostep.replay.importer`, ``twostep-data import-answers``). The L
 answers the generate step from a bundle (``LLMSettings.mode="bundle"``:
 :class:`twostep.llm.LLMClient`); :mod:`twostep.replay.check` checks how the model-free translator
 (:mod:`twostep.english`) does against the helper costs the logs record (``twostep-data
-check-answers``), and :mod:`twostep.replay.grid` lists the jobs a bundle calls for
+check-answers``), and :mod:`flows.replay_grid` lists the jobs a bundle calls for
 (the paper replay's sweep); :mod:`twostep.report.replay` draws Table I and Fig. 3.
 """
 

@@ -1,10 +1,10 @@
-"""The paper's Table I and Fig. 3 from replayed answers (``experiment=paper_replay``).
+"""The paper's Table I and Fig. 3 from replayed answers (the replay sweep's runs).
 
 Three rows per domain and N, all on the same model answers:
 
 * ``official``: the official TwoStep code's own execution length, read from the bundle
   (its logs: anytime LAMA, its single-agent plan ``sa_cost``);
-* ``twostep``: twostep's TwoStep on the replayed answers (``decomposer=llm``, the job's
+* ``twostep``: twostep's TwoStep on the replayed answers (the ``llm`` subgoal source, the job's
   seed is the bundle's run);
 * ``plan-deal``: twostep's plan-deal on the same task and N.
 
@@ -80,7 +80,7 @@ def official_values(bundle: Bundle, model: str) -> pd.DataFrame:
 
 
 def twostep_values(runs: pd.DataFrame) -> pd.DataFrame:
-    """twostep's TwoStep (``decomposer=llm``) and plan-deal runs that succeeded, counted
+    """twostep's TwoStep (the ``llm`` subgoal source) and plan-deal runs that succeeded, counted
     once (a run superseded by a later run of the same job is left out)."""
     if runs.empty:
         return pd.DataFrame(columns=list(VALUE_COLUMNS))

@@ -1,4 +1,5 @@
-"""The jobs a replay bundle calls for (``experiment=paper_replay``): :func:`replay_jobs`.
+"""The jobs a replay bundle calls for (``experiment=paper_replay``), as each job's
+overrides: :func:`replay_jobs` (the replay sweeper, :mod:`flows.replay_sweeper`, launches them).
 
 For every (domain, task, N) the bundle answers with the chosen model:
 
