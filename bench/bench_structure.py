@@ -256,7 +256,7 @@ def method_places(root: Path) -> dict[str, list[str]]:
     return {m: sorted(found) for m, found in places.items()}
 
 
-def layout(root: Path, package: str, modules: Mapping[str, Path]) -> dict[str, object]:
+def layout(root: Path, package: str) -> dict[str, object]:
     """Print the house's shape; return its counts by name (the record's rows)."""
     top = sorted(p.name for p in (root / package).glob("*.py") if p.name != "__init__.py")
     print(f"root modules: {len(top)}")
@@ -348,7 +348,7 @@ def report(
         print(f"  {f.length:4d}  {f.module}.{f.name} (line {f.line})")
     counts: dict[str, object] = {"modules": len(modules), "cycles": len(cycles)}
     if with_layout:
-        counts.update(layout(root, package, modules))
+        counts.update(layout(root, package))
     return counts
 
 

@@ -65,7 +65,10 @@ def _key_of(node: ast.AST) -> tuple[ast.AST, str] | None:
     return None
 
 
-def _token(names: ConfigNames) -> re.Pattern[str]:
+@cache
+def _token() -> re.Pattern[str]:
+    """The dotted keys and group overrides as one pattern (built once)."""
+    names = config_names()
     keys = sorted(names.dotted, key=len, reverse=True)
     overrides = sorted(
         (f"{group}={option}" for group, found in names.options.items() for option in found),
@@ -80,7 +83,7 @@ def _token(names: ConfigNames) -> re.Pattern[str]:
     )  # fmt: skip
 
 
-def config_leaks(source: str, names: ConfigNames | None = None) -> list[tuple[int, str]]:
+def config_leaks(source: str) -> list[tuple[int, str]]:
     """``(line, what)`` for every place a module's text holds the job config's shape:
 
     - a string or docstring that holds a dotted config key as a whole token (``"llm.model"``,
@@ -96,8 +99,8 @@ def config_leaks(source: str, names: ConfigNames | None = None) -> list[tuple[in
       ``config.get("data").get("root")``, or ``llm.get("script")`` on a variable named
       after the group;
     - ``.hydra`` anywhere in the text (Hydra's run-directory layout), comments too."""
-    names = names or config_names()
-    token = _token(names)
+    names = config_names()
+    token = _token()
     tree = ast.parse(source)
     found = [(n, ".hydra") for n, line in enumerate(source.splitlines(), 1) if ".hydra" in line]
     for node in ast.walk(tree):
